@@ -1,0 +1,284 @@
+//! Stable data types of a model: sparse matrices, sparse polynomials, forcing,
+//! states, outputs and the first-order [`Model`] itself.
+
+use abi_stable::std_types::{ROption, RString, RVec};
+use abi_stable::StableAbi;
+
+/// One stored entry `(row, col, value)` of a [`SparseMatrix`].
+#[repr(C)]
+#[derive(StableAbi, Clone, Copy, Debug, PartialEq)]
+pub struct Triplet {
+    /// 0-based row index.
+    pub row: u32,
+    /// 0-based column index.
+    pub col: u32,
+    /// Entry value; duplicates of the same `(row, col)` are summed.
+    pub value: f64,
+}
+
+/// A sparse real matrix in coordinate (triplet) form.
+#[repr(C)]
+#[derive(StableAbi, Clone, Debug, PartialEq)]
+pub struct SparseMatrix {
+    /// Number of rows.
+    pub nrows: u32,
+    /// Number of columns.
+    pub ncols: u32,
+    /// Stored entries; duplicates are summed, explicit zeros are allowed.
+    pub entries: RVec<Triplet>,
+}
+
+impl SparseMatrix {
+    /// An empty (all-zero) `nrows x ncols` matrix.
+    pub fn zeros(nrows: usize, ncols: usize) -> Self {
+        Self {
+            nrows: nrows as u32,
+            ncols: ncols as u32,
+            entries: RVec::new(),
+        }
+    }
+
+    /// A diagonal matrix with the given diagonal.
+    pub fn diagonal(diag: &[f64]) -> Self {
+        let mut m = Self::zeros(diag.len(), diag.len());
+        for (i, &d) in diag.iter().enumerate() {
+            m.push(i, i, d);
+        }
+        m
+    }
+
+    /// Adds `value` at `(row, col)` (summed with any earlier entry there).
+    pub fn push(&mut self, row: usize, col: usize, value: f64) {
+        if value != 0.0 {
+            self.entries.push(Triplet {
+                row: row as u32,
+                col: col as u32,
+                value,
+            });
+        }
+    }
+
+    /// Iterates over the stored entries as `(row, col, value)`.
+    pub fn iter(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        self.entries
+            .iter()
+            .map(|t| (t.row as usize, t.col as usize, t.value))
+    }
+}
+
+/// A variable raised to a power inside a monomial.
+#[repr(C)]
+#[derive(StableAbi, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VarPower {
+    /// 0-based variable index.
+    pub var: u32,
+    /// Exponent (at least 1).
+    pub power: u32,
+}
+
+/// One term `coeff * prod_k z[var_k]^power_k` of equation `eq`.
+#[repr(C)]
+#[derive(StableAbi, Clone, Debug, PartialEq)]
+pub struct PolyTerm {
+    /// 0-based equation (component) index.
+    pub eq: u32,
+    /// Coefficient.
+    pub coeff: f64,
+    /// Sparse exponents: only variables with a non-zero power are listed.
+    pub factors: RVec<VarPower>,
+}
+
+impl PolyTerm {
+    /// Total degree of the monomial.
+    pub fn degree(&self) -> u32 {
+        self.factors.iter().map(|f| f.power).sum()
+    }
+}
+
+/// A vector of sparse multivariate polynomials: component `eq` is the sum of the
+/// terms with that `eq`.
+#[repr(C)]
+#[derive(StableAbi, Clone, Debug, PartialEq)]
+pub struct PolyVector {
+    /// Number of components (equations).
+    pub n_eq: u32,
+    /// Number of variables the monomials are written in.
+    pub n_vars: u32,
+    /// Terms, in any order; repeated monomials are summed.
+    pub terms: RVec<PolyTerm>,
+}
+
+impl PolyVector {
+    /// The zero polynomial vector with `n_eq` components in `n_vars` variables.
+    pub fn zeros(n_eq: usize, n_vars: usize) -> Self {
+        Self {
+            n_eq: n_eq as u32,
+            n_vars: n_vars as u32,
+            terms: RVec::new(),
+        }
+    }
+
+    /// Adds `coeff * prod z[var]^power` to component `eq`; `factors` lists
+    /// `(var, power)` pairs (a variable may appear more than once; powers add).
+    pub fn push(&mut self, eq: usize, coeff: f64, factors: &[(usize, u32)]) {
+        if coeff == 0.0 {
+            return;
+        }
+        let mut merged: Vec<VarPower> = Vec::with_capacity(factors.len());
+        for &(var, power) in factors {
+            if power == 0 {
+                continue;
+            }
+            match merged.iter_mut().find(|f| f.var as usize == var) {
+                Some(f) => f.power += power,
+                None => merged.push(VarPower {
+                    var: var as u32,
+                    power,
+                }),
+            }
+        }
+        merged.sort_by_key(|f| f.var);
+        self.terms.push(PolyTerm {
+            eq: eq as u32,
+            coeff,
+            factors: merged.into_iter().collect(),
+        });
+    }
+
+    /// Highest total degree of any term (0 when empty).
+    pub fn degree(&self) -> u32 {
+        self.terms.iter().map(PolyTerm::degree).max().unwrap_or(0)
+    }
+}
+
+/// One harmonic of the external forcing: `cos * cos(multiple * Omega t) + sin * sin(multiple * Omega t)`,
+/// each a polynomial vector in the states (usually constant).
+#[repr(C)]
+#[derive(StableAbi, Clone, Debug, PartialEq)]
+pub struct Harmonic {
+    /// Frequency of this harmonic as a multiple of the forcing frequency `Omega`.
+    pub multiple: f64,
+    /// Coefficient of `cos(multiple * Omega t)`.
+    pub cos: PolyVector,
+    /// Coefficient of `sin(multiple * Omega t)`.
+    pub sin: PolyVector,
+}
+
+/// What a state variable is, for reducers and reports that need it.
+#[repr(u8)]
+#[derive(StableAbi, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StateKind {
+    /// A generalized displacement `x_i`.
+    Displacement,
+    /// A generalized velocity `x_i'`.
+    Velocity,
+    /// A Lagrange multiplier of a configuration constraint.
+    Multiplier,
+    /// An auxiliary variable introduced by a recast of non-polynomial terms.
+    Auxiliary,
+    /// Anything else (e.g. a state of a map).
+    Other,
+}
+
+/// Physical nature of a displacement (or of its velocity).
+#[repr(u8)]
+#[derive(StableAbi, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MotionKind {
+    /// A translation.
+    Translational,
+    /// A rotation (angle).
+    Rotational,
+    /// A flexible (elastic) coordinate.
+    Flexible,
+    /// Not specified.
+    Unspecified,
+}
+
+/// Name and tags of one state variable.
+#[repr(C)]
+#[derive(StableAbi, Clone, Debug, PartialEq)]
+pub struct StateInfo {
+    /// Name, unique within the model (e.g. `x1`, `x1_dot`, `mu1`).
+    pub name: RString,
+    /// What the state is.
+    pub kind: StateKind,
+    /// Physical nature (for displacements and velocities).
+    pub motion: MotionKind,
+}
+
+/// One weight `value * z[state]` of an [`Output`].
+#[repr(C)]
+#[derive(StableAbi, Clone, Copy, Debug, PartialEq)]
+pub struct Weight {
+    /// 0-based state index.
+    pub state: u32,
+    /// Weight.
+    pub value: f64,
+}
+
+/// A named output: the linear functional `sum_k weights[k].value * z[weights[k].state]`.
+#[repr(C)]
+#[derive(StableAbi, Clone, Debug, PartialEq)]
+pub struct Output {
+    /// Name used in scenes (`[outputs] coordinates = [...]`).
+    pub name: RString,
+    /// Sparse weights.
+    pub weights: RVec<Weight>,
+}
+
+/// Continuous (flow) or discrete (map) time.
+#[repr(u8)]
+#[derive(StableAbi, Clone, Copy, Debug, PartialEq)]
+pub enum TimeKind {
+    /// `B z' = A z + F(z) + eps Fext(z, Omega t)`.
+    Flow,
+    /// `z_{k+1} = A z_k + F(z_k)` with sampling period `period`.
+    Map {
+        /// Sampling period `T` of the map.
+        period: f64,
+    },
+}
+
+/// Structure kept from a mechanical model built by [`crate::MechanicalSystem`]:
+/// `z = (x, x', mu)` with `n_dof` displacements and `n_constraints` multipliers.
+#[repr(C)]
+#[derive(StableAbi, Clone, Debug, PartialEq)]
+pub struct MechanicalInfo {
+    /// Number of generalized displacements `n`.
+    pub n_dof: u32,
+    /// Number of configuration constraints `n_c`.
+    pub n_constraints: u32,
+    /// Mass matrix `M` (`n x n`), for mass normalization of modes.
+    pub mass: SparseMatrix,
+}
+
+/// A model in first-order form, as it crosses the plugin boundary.
+#[repr(C)]
+#[derive(StableAbi, Clone, Debug, PartialEq)]
+pub struct Model {
+    /// Model name (as listed in [`crate::ModelInfo`]).
+    pub name: RString,
+    /// Linear part `A` (`N x N`).
+    pub a: SparseMatrix,
+    /// Left-hand-side matrix `B` (`N x N`), possibly singular; identity for maps.
+    pub b: SparseMatrix,
+    /// Nonlinearity `F(z)`: `N` components in `N` variables, no constant or linear terms.
+    pub nonlinearity: PolyVector,
+    /// External forcing `Fext(z, Omega t)` as harmonics (empty when unforced).
+    pub forcing: RVec<Harmonic>,
+    /// Names and tags of the `N` states.
+    pub states: RVec<StateInfo>,
+    /// Named outputs (linear functionals of `z`).
+    pub outputs: RVec<Output>,
+    /// Flow or map.
+    pub time: TimeKind,
+    /// Mechanical structure, when the model came from [`crate::MechanicalSystem`].
+    pub mechanical: ROption<MechanicalInfo>,
+}
+
+impl Model {
+    /// Number of states `N`.
+    pub fn n_states(&self) -> usize {
+        self.states.len()
+    }
+}

@@ -1,0 +1,221 @@
+//! Running a scene: load the plugin, build and validate the model, compute the
+//! spectrum and master modes, check resonances, assemble the outputs.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use serde_json::json;
+
+use crate::plugin::{PluginLoadError, Registry};
+use crate::report::{spectrum_csv, OutputError, OutputSet};
+use crate::scene::{SceneError, SceneFile, SpectrumMethod};
+use crate::spectrum::{self, MasterMode, Method, Spectrum, SpectrumError, SpectrumOptions};
+use crate::system::{ModelError, System};
+
+/// Anything that stops a run; each variant says where.
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    /// The scene is malformed or inconsistent with the model.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// A plugin could not be loaded, or returned an error or panicked.
+    #[error(transparent)]
+    Plugin(#[from] PluginLoadError),
+    /// The plugin's model is inconsistent.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The spectrum could not be computed.
+    #[error("spectrum: {0}")]
+    Spectrum(#[from] SpectrumError),
+    /// Outputs could not be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+}
+
+/// Stages reported to a progress display.
+pub trait Progress {
+    /// A new stage begins.
+    fn stage(&self, name: &str);
+}
+
+/// No progress display.
+pub struct Quiet;
+
+impl Progress for Quiet {
+    fn stage(&self, _name: &str) {}
+}
+
+/// Everything a run computed.
+#[derive(Debug)]
+pub struct JobResult {
+    /// The validated system.
+    pub system: System,
+    /// Finite spectrum.
+    pub spectrum: Spectrum,
+    /// Master modes.
+    pub masters: Vec<MasterMode>,
+    /// Warnings (resonances, ...).
+    pub warnings: Vec<String>,
+    /// Files to write.
+    pub outputs: OutputSet,
+}
+
+/// Loads and validates the model a scene names.
+pub fn build_system(scene: &SceneFile, registry: &mut Registry) -> Result<System, JobError> {
+    let m = &scene.scene.model;
+    let plugin = registry.resolve(m.plugin.get_ref()).map_err(|e| match e {
+        PluginLoadError::NotFound { .. } => {
+            JobError::Scene(scene.invalid(m.plugin.span(), "model.plugin", e.to_string()))
+        }
+        other => JobError::Plugin(other),
+    })?;
+    let name = m.name.as_ref().map_or("", |n| n.get_ref().as_str());
+    let params = toml::to_string(m.params.get_ref()).unwrap_or_default();
+    let model = plugin.build_model(name, &params)?;
+    Ok(System::from_model(plugin.name(), model)?)
+}
+
+/// Runs a scene and assembles its outputs (nothing is written here).
+pub fn run(
+    scene: &SceneFile,
+    registry: &mut Registry,
+    progress: &dyn Progress,
+) -> Result<JobResult, JobError> {
+    let t0 = Instant::now();
+    progress.stage("building model");
+    let system = build_system(scene, registry)?;
+    let sc = &scene.scene;
+    let mut warnings = Vec::new();
+    for name in sc.outputs.coordinates.get_ref() {
+        if system.output(name).is_none() {
+            let known: Vec<&str> = system
+                .outputs
+                .iter()
+                .map(|o| o.name.as_str())
+                .take(40)
+                .collect();
+            return Err(scene
+                .invalid(
+                    sc.outputs.coordinates.span(),
+                    "outputs.coordinates",
+                    format!(
+                        "model '{}' has no output '{name}'; it has: {}",
+                        system.name,
+                        known.join(", ")
+                    ),
+                )
+                .into());
+        }
+    }
+    progress.stage("spectrum");
+    let t_spec = Instant::now();
+    let pairs = sc.ssm.master_pairs.get_ref();
+    let max_pair = pairs.iter().copied().max().unwrap_or(1);
+    let opts = SpectrumOptions {
+        method: match sc.spectrum.method {
+            SpectrumMethod::Auto => None,
+            SpectrumMethod::Dense => Some(Method::Dense),
+            SpectrumMethod::Sparse => Some(Method::Sparse),
+        },
+        modes: sc
+            .spectrum
+            .modes
+            .as_ref()
+            .map_or(2 * max_pair + 10, |m| *m.get_ref())
+            .max(2 * max_pair),
+        shift: sc.spectrum.shift.unwrap_or(0.0),
+        normalization: sc.ssm.normalization,
+    };
+    let spectrum = spectrum::compute(system.a.as_ref(), system.b.as_ref(), &opts)?;
+    if let (true, Some(mech)) = (spectrum.complete, &system.mechanical) {
+        let expected = 2 * (mech.n_dof - mech.n_constraints.min(mech.n_dof));
+        let aux = system.n_states() - 2 * mech.n_dof - mech.n_constraints;
+        if aux == 0 && spectrum.eigenvalues.len() != expected {
+            warnings.push(format!(
+                "found {} finite eigenvalues where a mechanical system with {} dofs and {} constraints has {expected}: check that M is non-singular and G0 has full rank",
+                spectrum.eigenvalues.len(),
+                mech.n_dof,
+                mech.n_constraints
+            ));
+        }
+    }
+    let masters = spectrum::master_modes(&system, &spectrum, pairs, opts.normalization).map_err(
+        |e| match e {
+            SpectrumError::PairOutOfRange { .. } => JobError::Scene(scene.invalid(
+                sc.ssm.master_pairs.span(),
+                "ssm.master_pairs",
+                e.to_string(),
+            )),
+            other => JobError::Spectrum(other),
+        },
+    )?;
+    let spectrum_s = t_spec.elapsed().as_secs_f64();
+    let master_indices: Vec<usize> = masters.iter().map(|m| m.index).collect();
+    let res = spectrum::check_resonances(
+        &spectrum.eigenvalues,
+        &master_indices,
+        *sc.ssm.order.get_ref(),
+        *sc.ssm.resonance_tol.get_ref(),
+        spectrum.complete,
+    );
+    warnings.extend(res.warnings.iter().cloned());
+    if !spectrum.complete {
+        warnings.push(format!(
+            "sparse path: {} finite modes nearest sigma = {} were computed; resonance checks and spectral quotients cover only those",
+            spectrum.eigenvalues.len(),
+            opts.shift
+        ));
+    }
+
+    progress.stage("writing outputs");
+    let n_finite = match (&system.mechanical, spectrum.complete) {
+        (_, true) => spectrum.eigenvalues.len(),
+        (Some(m), false) if system.n_states() == 2 * m.n_dof + m.n_constraints => {
+            2 * (m.n_dof - m.n_constraints.min(m.n_dof))
+        }
+        _ => spectrum.eigenvalues.len(),
+    };
+    let mut outputs = OutputSet::default();
+    let pair_index: Vec<(usize, usize)> = masters.iter().map(|m| (m.pair, m.index)).collect();
+    outputs.add("spectrum.csv", spectrum_csv(&spectrum, &pair_index));
+    let summary = json!({
+        "model": {
+            "plugin": system.plugin,
+            "name": system.name,
+            "n_states": system.n_states(),
+            "n_finite_modes": n_finite,
+        },
+        "spectrum": spectrum.eigenvalues.iter().map(|l| json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
+        "spectrum_method": spectrum.method.as_str(),
+        "spectrum_complete": spectrum.complete,
+        "master_pairs": pairs,
+        "master_modes": masters.iter().map(|m| json!({
+            "pair": m.pair,
+            "lambda": {"re": m.lambda.re, "im": m.lambda.im},
+            "residual": m.residual,
+        })).collect::<Vec<_>>(),
+        "spectral_quotients": {
+            "relative": res.quotients.relative,
+            "absolute": res.quotients.absolute,
+            "complete": res.quotients.complete,
+        },
+        "warnings": warnings,
+        "timing_s": {"spectrum": spectrum_s, "total": t0.elapsed().as_secs_f64()},
+    });
+    outputs.add(
+        "summary.json",
+        serde_json::to_string_pretty(&summary).expect("JSON values are serializable"),
+    );
+    Ok(JobResult {
+        system,
+        spectrum,
+        masters,
+        warnings,
+        outputs,
+    })
+}
+
+/// Default output directory of a scene: `./out/<scene name>`.
+pub fn default_out_dir(scene: &SceneFile) -> PathBuf {
+    PathBuf::from("out").join(scene.name())
+}

@@ -1,0 +1,23 @@
+//! # ssm-engine
+//!
+//! Nonlinear model reduction of mechanical systems, possibly with configuration
+//! constraints (DAEs), on spectral submanifolds (SSMs). Models arrive as
+//! plugins through the stable ABI of [`ssm_api`].
+//!
+//! Modules, one concern each:
+//! - [`plugin`]: finding and loading plugins, ABI/version checks;
+//! - [`scene`]: the TOML scene format, validated with line numbers;
+//! - [`system`]: the engine-side first-order system built from a plugin's model;
+//! - [`spectrum`]: finite spectrum of the (possibly singular) pencil `(A, B)`,
+//!   master modes, normalization, spectral quotients and non-resonance checks;
+//! - [`report`]: `summary.json` and CSV tables, written atomically;
+//! - [`job`]: running a scene end to end.
+
+pub mod job;
+pub mod plugin;
+pub mod report;
+pub mod scene;
+pub mod spectrum;
+pub mod system;
+
+pub use num_complex::Complex64 as C64;

@@ -1,0 +1,160 @@
+//! `ssm-engine`: run a scene, or list plugins.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use ssm_engine::job::{self, Progress};
+use ssm_engine::plugin::Registry;
+use ssm_engine::scene::SceneFile;
+
+const SCENE_HELP: &str = "\
+SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
+
+  [model]
+  plugin = \"spatial-oscillator\"   # a name listed by `ssm-engine plugins`, or a path to a .so
+  # name = \"oscillator\"           # which model, when a plugin offers several
+  [model.params]                  # the model's parameters (paper symbols; defaults = paper)
+  constraint = \"cubic\"
+
+  [ssm]
+  master_pairs = [1]              # 1-based underdamped mode pairs, slowest first
+  order = 13                      # expansion order; non-resonance checks go up to it
+  normalization = \"unit\"          # \"unit\" (||v|| = 1) or \"mass\" (x^H M x = 1)
+  resonance_tol = 0.02            # relative distance counted as a near resonance
+
+  [spectrum]
+  method = \"auto\"                 # \"dense\", \"sparse\", or \"auto\" (dense up to 2000 states)
+  modes = 12                      # finite modes computed on the sparse path
+  shift = 0.0                     # sparse path: modes nearest this real shift
+
+  [outputs]
+  coordinates = [\"x1\"]            # named outputs of the model
+
+OUTPUTS (in --out DIR, default ./out/<scene file stem>): summary.json, spectrum.csv.
+Files are written to temporary names and renamed; a failed run writes nothing.
+
+PLUGINS are found from --plugin PATH, from SSM_PLUGIN_PATH (':'-separated files or
+directories), and from the directory of this binary.";
+
+#[derive(Parser)]
+#[command(
+    name = "ssm-engine",
+    version,
+    about = "Nonlinear model reduction on spectral submanifolds (SSMs) for mechanical systems and DAEs",
+    after_help = SCENE_HELP,
+    args_conflicts_with_subcommands = true
+)]
+struct Cli {
+    /// Load a plugin library (repeatable).
+    #[arg(long = "plugin", value_name = "PATH", global = true)]
+    plugins: Vec<PathBuf>,
+    /// Scene file to run.
+    #[arg(value_name = "SCENE.toml")]
+    scene: Option<PathBuf>,
+    /// Output directory (default ./out/<scene name>).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List every plugin found, its version, and its models with parameters and defaults.
+    Plugins,
+}
+
+struct Spinner(ProgressBar);
+
+impl Progress for Spinner {
+    fn stage(&self, name: &str) {
+        self.0.set_message(name.to_owned());
+    }
+}
+
+fn spinner() -> Spinner {
+    let interactive = std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
+    if !interactive {
+        return Spinner(ProgressBar::hidden());
+    }
+    let bar = ProgressBar::new_spinner();
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"),
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(100));
+    Spinner(bar)
+}
+
+fn list_plugins(registry: &Registry) -> anyhow::Result<()> {
+    if registry.plugins.is_empty() {
+        println!("no plugins found (pass --plugin PATH or set SSM_PLUGIN_PATH)");
+    }
+    for (path, p) in &registry.plugins {
+        println!("{} {} ({})", p.name(), p.version(), path.display());
+        println!("  {}", p.description());
+        match p.models() {
+            Ok(models) => {
+                for m in models {
+                    println!("  model '{}': {}", m.name, m.description);
+                    for par in m.params.iter() {
+                        println!(
+                            "    {:<12} = {:<10} [{}] {}",
+                            par.name, par.default, par.kind, par.description
+                        );
+                    }
+                }
+            }
+            Err(e) => println!("  cannot list models: {e}"),
+        }
+    }
+    for e in &registry.rejected {
+        println!("not loadable: {e}");
+    }
+    Ok(())
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    let mut registry = Registry::discover(&cli.plugins)?;
+    if let Some(Command::Plugins) = cli.command {
+        return list_plugins(&registry);
+    }
+    let Some(scene_path) = cli.scene else {
+        anyhow::bail!(
+            "no scene given: ssm-engine SCENE.toml [--out DIR], or ssm-engine plugins (see --help)"
+        );
+    };
+    let scene = SceneFile::load(&scene_path)?;
+    let progress = spinner();
+    let result = job::run(&scene, &mut registry, &progress);
+    progress.0.finish_and_clear();
+    let result = result?;
+    let out = cli.out.unwrap_or_else(|| job::default_out_dir(&scene));
+    result.outputs.write(&out)?;
+    for w in &result.warnings {
+        eprintln!("warning: {w}");
+    }
+    println!(
+        "{}: {} states, {} finite eigenvalues ({}), master pairs {:?}; wrote {}",
+        scene.name(),
+        result.system.n_states(),
+        result.spectrum.eigenvalues.len(),
+        result.spectrum.method.as_str(),
+        scene.scene.ssm.master_pairs.get_ref(),
+        out.display()
+    );
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,242 @@
+//! Finding and loading plugins.
+//!
+//! Plugins are found (in this order) from `--plugin PATH` arguments, from the
+//! directories and files listed in `SSM_PLUGIN_PATH` (`:`-separated), and from
+//! the directory of the running `ssm-engine` binary (so that after
+//! `cargo build --release` every workspace plugin is found with no setup).
+//!
+//! Each library is loaded with `abi_stable::library::lib_header_from_path` and
+//! `init_root_module`, not `RootModule::load_from_file`: the latter caches one
+//! module per root-module type, so a second plugin would silently return the
+//! first.
+
+use std::path::{Path, PathBuf};
+
+use abi_stable::library::{lib_header_from_path, LibraryError};
+use ssm_api::{Model, ModelInfo, PluginError, SsmPluginRef, API_VERSION};
+
+/// What went wrong while loading or calling a plugin.
+#[derive(Debug, thiserror::Error)]
+pub enum PluginLoadError {
+    /// The file does not exist.
+    #[error("plugin file {path} does not exist")]
+    Missing {
+        /// The path given.
+        path: PathBuf,
+    },
+    /// The library was built against an incompatible `ssm-api`.
+    #[error("plugin {path} was built against ssm-api {found}, but this engine uses ssm-api {expected}: rebuild the plugin against ssm-api {expected}")]
+    VersionMismatch {
+        /// The library.
+        path: PathBuf,
+        /// Version the plugin was built against.
+        found: String,
+        /// Version of this engine's API.
+        expected: String,
+    },
+    /// The library is not a loadable ssm plugin (not a shared library, no root
+    /// module, incompatible layout).
+    #[error("cannot load plugin {path}: {detail}")]
+    Invalid {
+        /// The library.
+        path: PathBuf,
+        /// abi_stable's explanation.
+        detail: String,
+    },
+    /// No plugin with this name was found.
+    #[error("no plugin named '{name}' was found (searched: {searched}); list them with `ssm-engine plugins`, or pass --plugin PATH")]
+    NotFound {
+        /// Name asked for.
+        name: String,
+        /// Where it looked.
+        searched: String,
+    },
+    /// The plugin returned an error or panicked.
+    #[error("plugin '{plugin}' failed: {error}")]
+    Plugin {
+        /// Plugin name.
+        plugin: String,
+        /// The plugin's error.
+        error: PluginError,
+    },
+}
+
+/// A loaded plugin.
+#[derive(Clone, Copy)]
+pub struct Plugin {
+    module: SsmPluginRef,
+}
+
+impl std::fmt::Debug for Plugin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Plugin({})", self.name())
+    }
+}
+
+impl Plugin {
+    /// Loads the plugin library at `path`, checking the API version and layout.
+    pub fn load(path: &Path) -> Result<Self, PluginLoadError> {
+        if !path.exists() {
+            return Err(PluginLoadError::Missing {
+                path: path.to_owned(),
+            });
+        }
+        let invalid = |e: LibraryError| PluginLoadError::Invalid {
+            path: path.to_owned(),
+            detail: e.to_string(),
+        };
+        let header = lib_header_from_path(path).map_err(invalid)?;
+        let module = header
+            .init_root_module::<SsmPluginRef>()
+            .map_err(|e| match e {
+                LibraryError::IncompatibleVersionNumber { actual_version, .. } => {
+                    PluginLoadError::VersionMismatch {
+                        path: path.to_owned(),
+                        found: actual_version.to_string(),
+                        expected: API_VERSION.to_owned(),
+                    }
+                }
+                other => invalid(other),
+            })?;
+        Ok(Self { module })
+    }
+
+    /// Plugin name.
+    pub fn name(&self) -> &'static str {
+        self.module.name().as_str()
+    }
+
+    /// Plugin version.
+    pub fn version(&self) -> &'static str {
+        self.module.version().as_str()
+    }
+
+    /// One-line description.
+    pub fn description(&self) -> &'static str {
+        self.module.description().as_str()
+    }
+
+    /// The models offered, with parameters and defaults.
+    pub fn models(&self) -> Result<Vec<ModelInfo>, PluginLoadError> {
+        (self.module.models())()
+            .into_result()
+            .map(|v| v.into_iter().collect())
+            .map_err(|error| self.failed(error))
+    }
+
+    /// Builds model `name` (empty: the plugin's only/default model) from the TOML
+    /// text of the scene's `[model.params]`.
+    pub fn build_model(&self, name: &str, params_toml: &str) -> Result<Model, PluginLoadError> {
+        (self.module.build_model())(name.into(), params_toml.into())
+            .into_result()
+            .map_err(|error| self.failed(error))
+    }
+
+    fn failed(&self, error: PluginError) -> PluginLoadError {
+        PluginLoadError::Plugin {
+            plugin: self.name().to_owned(),
+            error,
+        }
+    }
+}
+
+/// Where plugins are searched for, and what was found there.
+#[derive(Debug, Default)]
+pub struct Registry {
+    /// Loaded plugins with the file each came from.
+    pub plugins: Vec<(PathBuf, Plugin)>,
+    /// Libraries found by directory search that could not be loaded.
+    pub rejected: Vec<PluginLoadError>,
+    searched: Vec<String>,
+}
+
+impl Registry {
+    /// Loads every explicitly given plugin (an error if any fails) and every
+    /// library found in `SSM_PLUGIN_PATH` and next to the running binary (those
+    /// that fail are kept in [`Registry::rejected`]).
+    pub fn discover(explicit: &[PathBuf]) -> Result<Self, PluginLoadError> {
+        let mut reg = Self::default();
+        for path in explicit {
+            let plugin = Plugin::load(path)?;
+            reg.add(path.clone(), plugin);
+            reg.searched.push(path.display().to_string());
+        }
+        let mut dirs: Vec<PathBuf> = Vec::new();
+        if let Some(var) = std::env::var_os("SSM_PLUGIN_PATH") {
+            dirs.extend(std::env::split_paths(&var).filter(|p| !p.as_os_str().is_empty()));
+        }
+        if let Some(dir) = std::env::current_exe()
+            .ok()
+            .and_then(|p| p.parent().map(Path::to_owned))
+        {
+            dirs.push(dir);
+        }
+        for dir in dirs {
+            reg.searched.push(dir.display().to_string());
+            for lib in libraries_in(&dir) {
+                if reg.plugins.iter().any(|(p, _)| same_file(p, &lib)) {
+                    continue;
+                }
+                match Plugin::load(&lib) {
+                    Ok(plugin) => reg.add(lib, plugin),
+                    Err(e) => reg.rejected.push(e),
+                }
+            }
+        }
+        Ok(reg)
+    }
+
+    fn add(&mut self, path: PathBuf, plugin: Plugin) {
+        // the first one found under a name wins (explicit paths come first)
+        if !self.plugins.iter().any(|(_, p)| p.name() == plugin.name()) {
+            self.plugins.push((path, plugin));
+        }
+    }
+
+    /// The plugin named `name`, or loaded from `name` if it is a path to a file.
+    pub fn resolve(&mut self, name: &str) -> Result<Plugin, PluginLoadError> {
+        if let Some((_, p)) = self.plugins.iter().find(|(_, p)| p.name() == name) {
+            return Ok(*p);
+        }
+        let as_path = Path::new(name);
+        if name.contains(std::path::MAIN_SEPARATOR) || name.ends_with(".so") {
+            let plugin = Plugin::load(as_path)?;
+            self.add(as_path.to_owned(), plugin);
+            return Ok(plugin);
+        }
+        Err(PluginLoadError::NotFound {
+            name: name.to_owned(),
+            searched: self.searched.join(", "),
+        })
+    }
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+/// Shared libraries (`*.so`, `*.dylib`, `*.dll`) directly inside `path` (or
+/// `path` itself when it is a file), sorted by name.
+fn libraries_in(path: &Path) -> Vec<PathBuf> {
+    if path.is_file() {
+        return vec![path.to_owned()];
+    }
+    let Ok(entries) = std::fs::read_dir(path) else {
+        return Vec::new();
+    };
+    let mut libs: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_file()
+                && matches!(
+                    p.extension().and_then(|e| e.to_str()),
+                    Some("so" | "dylib" | "dll")
+                )
+        })
+        .collect();
+    libs.sort();
+    libs
+}

@@ -1,0 +1,237 @@
+//! Finite spectrum of the linear pencil `A v = lambda B v` (eq. 6), with `B`
+//! possibly singular (constraint modes, recast auxiliaries), master modes with
+//! right and left eigenvectors, spectral quotients and non-resonance checks.
+//!
+//! Only finite eigenvalues count: the `3 n_c` infinite eigenvalues of a
+//! constrained mechanical system (eq. 87) are constraint modes, never master
+//! modes, and never enter resonance checks (Remark 1).
+//!
+//! Two paths, chosen automatically ([`DENSE_LIMIT`]) or by the scene:
+//! - [`dense`]: QZ of the whole pencil, all finite eigenvalues;
+//! - [`sparse`]: shift-invert Krylov-Schur on `(A - sigma B)^{-1} B` with a sparse
+//!   LU, only the requested modes nearest `sigma`, no dense `N x N` storage.
+//!
+//! Master modes are then polished by inverse iteration with a complex sparse LU
+//! of `A - lambda B` (right vector) and its adjoint (left vector), and scaled by
+//! the scene's [`Normalization`].
+//!
+//! # References
+//! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical systems
+//! via spectral submanifolds*, Nonlinear Dyn. 111 (2023), eqs. (6)-(7), (53)-(58),
+//! Appendix D.
+
+pub mod dense;
+pub mod modes;
+pub mod resonance;
+pub mod sparse;
+
+use crate::scene::Normalization;
+use crate::C64;
+
+pub use modes::{master_modes, MasterMode};
+pub use resonance::{check_resonances, ResonanceReport, SpectralQuotients};
+
+/// Largest number of states for which `auto` uses the dense path.
+pub const DENSE_LIMIT: usize = 2000;
+
+/// Why a spectrum could not be computed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SpectrumError {
+    /// The dense QZ iteration did not converge.
+    #[error("dense QZ iteration did not converge for the {n}x{n} pencil (A, B)")]
+    NoConvergence {
+        /// Pencil size.
+        n: usize,
+    },
+    /// The pencil is singular (`det(lambda B - A) = 0` for all lambda): e.g.
+    /// redundant constraints or a state that appears nowhere.
+    #[error("the pencil (A, B) is singular: {detail}. Check for redundant constraints (G0 must have full rank) or states that appear in no equation")]
+    SingularPencil {
+        /// What was observed.
+        detail: String,
+    },
+    /// `A - sigma B` is singular at the chosen shift.
+    #[error("A - sigma B is singular at sigma = {shift} ({detail}); set [spectrum] shift to a value that is not an eigenvalue (e.g. -0.01)")]
+    SingularShift {
+        /// The shift.
+        shift: f64,
+        /// Factorization detail.
+        detail: String,
+    },
+    /// The Krylov iteration found fewer modes than requested.
+    #[error("sparse eigen-solver converged on {found} of {requested} modes; raise [spectrum] modes or choose a shift closer to the wanted modes")]
+    NotConverged {
+        /// Modes found.
+        found: usize,
+        /// Modes requested.
+        requested: usize,
+    },
+    /// Fewer complex mode pairs than the master pairs ask for.
+    #[error("master pair {pair} requested, but only {available} underdamped mode pairs were found{hint}")]
+    PairOutOfRange {
+        /// 1-based pair asked for.
+        pair: usize,
+        /// Pairs available.
+        available: usize,
+        /// What to do.
+        hint: String,
+    },
+    /// Mass normalization needs a mechanical model.
+    #[error("normalization = \"mass\" needs a model with a mass matrix (built with the mechanical builder); use \"unit\"")]
+    NoMassMatrix,
+    /// Inverse iteration produced a non-finite or zero vector.
+    #[error("eigenvector of lambda = {lambda} could not be computed ({detail})")]
+    Eigenvector {
+        /// Eigenvalue.
+        lambda: C64,
+        /// What happened.
+        detail: String,
+    },
+}
+
+/// Which solver produced a spectrum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// Dense QZ.
+    Dense,
+    /// Sparse shift-invert Krylov-Schur.
+    Sparse,
+}
+
+impl Method {
+    /// Lower-case name for reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Dense => "dense",
+            Self::Sparse => "sparse",
+        }
+    }
+}
+
+/// Finite eigenvalues, sorted by real part descending (slowest first), complex
+/// conjugate pairs adjacent with the positive imaginary part first.
+#[derive(Debug, Clone)]
+pub struct Spectrum {
+    /// Finite eigenvalues in order.
+    pub eigenvalues: Vec<C64>,
+    /// True when every finite eigenvalue of the pencil is listed (dense path).
+    pub complete: bool,
+    /// Solver used.
+    pub method: Method,
+}
+
+/// Options for [`compute`].
+#[derive(Debug, Clone)]
+pub struct SpectrumOptions {
+    /// Force a path (`None`: dense up to [`DENSE_LIMIT`] states).
+    pub method: Option<Method>,
+    /// Number of finite eigenvalues wanted on the sparse path.
+    pub modes: usize,
+    /// Shift of the sparse path.
+    pub shift: f64,
+    /// Eigenvector scaling of master modes.
+    pub normalization: Normalization,
+}
+
+/// Computes the finite spectrum of `(A, B)`.
+pub fn compute(
+    a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    b: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    opts: &SpectrumOptions,
+) -> Result<Spectrum, SpectrumError> {
+    let n = a.nrows();
+    let method = opts.method.unwrap_or(if n <= DENSE_LIMIT {
+        Method::Dense
+    } else {
+        Method::Sparse
+    });
+    let mut eigenvalues = match method {
+        Method::Dense => dense::finite_eigenvalues(a, b)?,
+        Method::Sparse => sparse::eigenvalues_near_shift(a, b, opts.shift, opts.modes)?,
+    };
+    sort_spectrum(&mut eigenvalues);
+    Ok(Spectrum {
+        eigenvalues,
+        complete: method == Method::Dense,
+        method,
+    })
+}
+
+/// Relative size below which an imaginary part counts as zero (real eigenvalue).
+const REAL_TOL: f64 = 1e-10;
+
+/// True when `l` is (numerically) real.
+pub fn is_real(l: C64) -> bool {
+    l.im.abs() <= REAL_TOL * l.norm().max(f64::MIN_POSITIVE)
+}
+
+/// Sorts by real part descending; a conjugate pair is kept together with the
+/// positive imaginary part first, pairs with equal real parts by increasing
+/// frequency. Conjugate partners are made exact conjugates of each other.
+pub fn sort_spectrum(ev: &mut Vec<C64>) {
+    // keep one representative per pair (Im >= 0), then rebuild the partners
+    let mut reps: Vec<C64> = Vec::with_capacity(ev.len());
+    let mut negatives: Vec<C64> = Vec::new();
+    for &l in ev.iter() {
+        if is_real(l) {
+            reps.push(C64::new(l.re, 0.0));
+        } else if l.im > 0.0 {
+            reps.push(l);
+        } else {
+            negatives.push(l);
+        }
+    }
+    // a negative-imaginary eigenvalue whose partner is missing (sparse path at
+    // the edge of the computed set) brings its partner in
+    for l in negatives {
+        let partner = l.conj();
+        let tol = 1e-8 * l.norm();
+        if !reps.iter().any(|r| (r - partner).norm() <= tol) {
+            reps.push(partner);
+        }
+    }
+    reps.sort_by(|x, y| {
+        y.re.total_cmp(&x.re)
+            .then(x.im.abs().total_cmp(&y.im.abs()))
+    });
+    ev.clear();
+    for r in reps {
+        ev.push(r);
+        if r.im != 0.0 {
+            ev.push(r.conj());
+        }
+    }
+}
+
+/// Indices (into a sorted spectrum) of the first eigenvalue of each complex
+/// conjugate pair, in order: pair `p` (1-based) is `pairs[p - 1]`.
+pub fn pair_starts(ev: &[C64]) -> Vec<usize> {
+    ev.iter()
+        .enumerate()
+        .filter(|(_, l)| l.im > 0.0)
+        .map(|(i, _)| i)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sorting_puts_slow_first_and_pairs_adjacent() {
+        let mut ev = vec![
+            C64::new(-0.15, -2.9962),
+            C64::new(-0.02, -1.9999),
+            C64::new(-0.5, 0.0),
+            C64::new(-0.15, 2.9962),
+            C64::new(-0.02, 1.9999),
+        ];
+        sort_spectrum(&mut ev);
+        assert_eq!(ev[0], C64::new(-0.02, 1.9999));
+        assert_eq!(ev[1], C64::new(-0.02, -1.9999));
+        assert_eq!(ev[2], C64::new(-0.15, 2.9962));
+        assert_eq!(ev[3], C64::new(-0.15, -2.9962));
+        assert_eq!(ev[4], C64::new(-0.5, 0.0));
+        assert_eq!(pair_starts(&ev), vec![0, 2]);
+    }
+}

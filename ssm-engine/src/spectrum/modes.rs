@@ -1,0 +1,238 @@
+//! Master modes: right and left eigenvectors of the chosen pairs, polished by
+//! inverse iteration, normalized, with a residual check.
+//!
+//! For each master eigenvalue `lambda` (from the dense or sparse path), one
+//! complex sparse LU of `A - sigma B` with `sigma` within `1e-10 |lambda|` of
+//! `lambda` serves both inverse iterations:
+//! `v <- (A - sigma B)^{-1} B v` (right) and `u <- (A - sigma B)^{-H} B^H u` (left),
+//! followed by the two-sided Rayleigh quotient `lambda = u^* A v / u^* B v`.
+//!
+//! Normalization (scene `[ssm] normalization`):
+//! - `unit`: `||v||_2 = 1`;
+//! - `mass`: `x^H M x = 1` for the displacement part `x` of `v`;
+//!
+//! then the phase is fixed so that the largest-modulus component of `v` is real
+//! and positive (first such component on ties), and `u` is scaled so that
+//! `u^* B v = 1`. The conjugate mode is `(conj(lambda), conj(v), conj(u))`.
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::Mat;
+
+use super::sparse::pseudo_random;
+use super::{pair_starts, Spectrum, SpectrumError};
+use crate::scene::Normalization;
+use crate::system::System;
+use crate::C64;
+
+/// One master mode (the member of its pair with positive imaginary part).
+#[derive(Debug, Clone)]
+pub struct MasterMode {
+    /// 1-based pair number.
+    pub pair: usize,
+    /// 0-based position of `lambda` in the sorted finite spectrum.
+    pub index: usize,
+    /// Eigenvalue (refined).
+    pub lambda: C64,
+    /// Right eigenvector `A v = lambda B v`, normalized.
+    pub right: Vec<C64>,
+    /// Left eigenvector `u^* A = lambda u^* B`, with `u^* B v = 1`.
+    pub left: Vec<C64>,
+    /// Relative residual `||A v - lambda B v|| / ((||A|| + |lambda| ||B||) ||v||)`.
+    pub residual: f64,
+}
+
+/// `y = M x` for real sparse `M`, complex `x`.
+pub fn spmv(m: SparseColMatRef<'_, usize, f64>, x: &[C64]) -> Vec<C64> {
+    let mut y = vec![C64::new(0.0, 0.0); m.nrows()];
+    for (j, xj) in x.iter().enumerate() {
+        for (i, v) in m.row_idx_of_col(j).zip(m.val_of_col(j)) {
+            y[i] += xj * v;
+        }
+    }
+    y
+}
+
+/// `y = M^T x` for real sparse `M`, complex `x`.
+pub fn spmv_t(m: SparseColMatRef<'_, usize, f64>, x: &[C64]) -> Vec<C64> {
+    (0..m.ncols())
+        .map(|j| {
+            m.row_idx_of_col(j)
+                .zip(m.val_of_col(j))
+                .map(|(i, v)| x[i] * v)
+                .sum()
+        })
+        .collect()
+}
+
+fn dot_h(u: &[C64], v: &[C64]) -> C64 {
+    u.iter().zip(v).map(|(a, b)| a.conj() * b).sum()
+}
+
+fn norm2(v: &[C64]) -> f64 {
+    v.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt()
+}
+
+fn fro(m: SparseColMatRef<'_, usize, f64>) -> f64 {
+    (0..m.ncols())
+        .flat_map(|j| m.val_of_col(j).iter())
+        .map(|v| v * v)
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// `A - sigma B` as a complex sparse matrix.
+fn shifted(sys: &System, sigma: C64) -> SparseColMat<usize, C64> {
+    let (a, b) = (sys.a.as_ref(), sys.b.as_ref());
+    let mut trip = Vec::with_capacity(a.compute_nnz() + b.compute_nnz());
+    for j in 0..a.ncols() {
+        for (i, v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+            trip.push(Triplet::new(i, j, C64::new(*v, 0.0)));
+        }
+        for (i, v) in b.row_idx_of_col(j).zip(b.val_of_col(j)) {
+            trip.push(Triplet::new(i, j, -sigma * v));
+        }
+    }
+    SparseColMat::try_new_from_triplets(a.nrows(), a.ncols(), &trip)
+        .expect("indices come from valid matrices of equal shape")
+}
+
+/// Computes the master modes of `pairs` (1-based) from a sorted spectrum.
+pub fn master_modes(
+    sys: &System,
+    spectrum: &Spectrum,
+    pairs: &[usize],
+    normalization: Normalization,
+) -> Result<Vec<MasterMode>, SpectrumError> {
+    let starts = pair_starts(&spectrum.eigenvalues);
+    if normalization == Normalization::Mass && sys.mechanical.is_none() {
+        return Err(SpectrumError::NoMassMatrix);
+    }
+    pairs
+        .iter()
+        .map(|&p| {
+            let Some(&index) = starts.get(p - 1) else {
+                let hint = if spectrum.complete {
+                    String::new()
+                } else {
+                    format!(
+                        " among the {} modes computed on the sparse path; raise [spectrum] modes",
+                        spectrum.eigenvalues.len()
+                    )
+                };
+                return Err(SpectrumError::PairOutOfRange {
+                    pair: p,
+                    available: starts.len(),
+                    hint,
+                });
+            };
+            let mut mode = refine(sys, spectrum.eigenvalues[index], normalization)?;
+            mode.pair = p;
+            mode.index = index;
+            Ok(mode)
+        })
+        .collect()
+}
+
+fn refine(
+    sys: &System,
+    lambda0: C64,
+    normalization: Normalization,
+) -> Result<MasterMode, SpectrumError> {
+    let n = sys.n_states();
+    let (a, b) = (sys.a.as_ref(), sys.b.as_ref());
+    let fail = |detail: String| SpectrumError::Eigenvector {
+        lambda: lambda0,
+        detail,
+    };
+    let sigma = lambda0 + C64::new(1.0, 1.0) * (1e-10 * lambda0.norm().max(1e-300));
+    let lu = shifted(sys, sigma)
+        .sp_lu()
+        .map_err(|e| fail(format!("sparse LU of A - lambda B failed: {e:?}")))?;
+    let mut v: Vec<C64> = (0..n)
+        .map(|i| C64::new(pseudo_random(i), pseudo_random(i + n)))
+        .collect();
+    let mut u: Vec<C64> = (0..n)
+        .map(|i| C64::new(pseudo_random(i + 2 * n), pseudo_random(i + 3 * n)))
+        .collect();
+    for _ in 0..3 {
+        let bv = spmv(b, &v);
+        let mut rhs = Mat::<C64>::from_fn(n, 1, |i, _| bv[i]);
+        lu.solve_in_place(rhs.as_mut());
+        v = (0..n).map(|i| rhs[(i, 0)]).collect();
+        let s = norm2(&v);
+        if !(s.is_finite() && s > 0.0) {
+            return Err(fail(
+                "right inverse iteration produced a non-finite vector".into(),
+            ));
+        }
+        v.iter_mut().for_each(|c| *c /= s);
+
+        let btu = spmv_t(b, &u);
+        let mut rhs = Mat::<C64>::from_fn(n, 1, |i, _| btu[i]);
+        lu.solve_adjoint_in_place(rhs.as_mut());
+        u = (0..n).map(|i| rhs[(i, 0)]).collect();
+        let s = norm2(&u);
+        if !(s.is_finite() && s > 0.0) {
+            return Err(fail(
+                "left inverse iteration produced a non-finite vector".into(),
+            ));
+        }
+        u.iter_mut().for_each(|c| *c /= s);
+    }
+    let av = spmv(a, &v);
+    let bv = spmv(b, &v);
+    let ubv = dot_h(&u, &bv);
+    if ubv.norm() < 1e-14 {
+        return Err(fail(format!(
+            "u^* B v = {ubv:.3e}: the eigenvalue is defective or infinite, not a master-mode candidate"
+        )));
+    }
+    let lambda = dot_h(&u, &av) / ubv;
+    // normalization of v
+    let scale = match normalization {
+        Normalization::Unit => norm2(&v),
+        Normalization::Mass => {
+            let mech = sys.mechanical.as_ref().ok_or(SpectrumError::NoMassMatrix)?;
+            let x = &v[..mech.n_dof];
+            let mx = spmv(mech.mass.as_ref(), x);
+            let q = dot_h(x, &mx).re;
+            if !(q > 0.0) {
+                return Err(fail(format!("x^H M x = {q:.3e} is not positive")));
+            }
+            q.sqrt()
+        }
+    };
+    let imax = {
+        let m = v.iter().map(|c| c.norm()).fold(0.0, f64::max);
+        v.iter()
+            .position(|c| c.norm() >= m * (1.0 - 1e-8))
+            .unwrap_or(0)
+    };
+    let phase = v[imax] / v[imax].norm();
+    let factor = phase.conj() / scale;
+    v.iter_mut().for_each(|c| *c *= factor);
+    let bv = spmv(b, &v);
+    let s = dot_h(&u, &bv);
+    u.iter_mut().for_each(|c| *c /= s.conj());
+    let av = spmv(a, &v);
+    let r: Vec<C64> = av
+        .iter()
+        .zip(spmv(b, &v))
+        .map(|(x, y)| x - lambda * y)
+        .collect();
+    let residual = norm2(&r) / ((fro(a) + lambda.norm() * fro(b)) * norm2(&v));
+    if !residual.is_finite() || residual > 1e-8 {
+        return Err(fail(format!(
+            "relative residual {residual:.2e} after inverse iteration"
+        )));
+    }
+    Ok(MasterMode {
+        pair: 0,
+        index: 0,
+        lambda,
+        right: v,
+        left: u,
+        residual,
+    })
+}

@@ -1,0 +1,320 @@
+//! The engine-side first-order system `B z' = A z + F(z) + eps Fext(z, Omega t)`,
+//! validated and converted from a plugin's [`ssm_api::Model`].
+
+use faer::sparse::{SparseColMat, Triplet};
+use ssm_api::{Harmonic, PolyVector, StateInfo, TimeKind};
+
+/// A plugin's model that the engine cannot use.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// A matrix or polynomial has the wrong dimensions.
+    #[error("model '{model}': {what} is {found}, expected {expected}")]
+    Shape {
+        /// Model name.
+        model: String,
+        /// Which part.
+        what: String,
+        /// Dimensions found.
+        found: String,
+        /// Dimensions expected.
+        expected: String,
+    },
+    /// An index points outside the system.
+    #[error("model '{model}': {what} refers to index {index}, but the system has {size}")]
+    Index {
+        /// Model name.
+        model: String,
+        /// Which part.
+        what: String,
+        /// Offending index.
+        index: usize,
+        /// Valid size.
+        size: usize,
+    },
+    /// A NaN or infinite coefficient.
+    #[error("model '{model}': {what} has a non-finite value {value}")]
+    NonFinite {
+        /// Model name.
+        model: String,
+        /// Where.
+        what: String,
+        /// The value.
+        value: f64,
+    },
+    /// Two outputs or states share a name.
+    #[error("model '{model}': the name '{name}' is used twice")]
+    DuplicateName {
+        /// Model name.
+        model: String,
+        /// The repeated name.
+        name: String,
+    },
+    /// The nonlinearity has a constant or linear term.
+    #[error("model '{model}': F, equation {eq}, has a term of degree {degree}; F must start at degree 2 (linear terms belong in A)")]
+    LowDegree {
+        /// Model name.
+        model: String,
+        /// 0-based equation.
+        eq: usize,
+        /// Degree found.
+        degree: u32,
+    },
+}
+
+/// A named output `sum_k w_k z[s_k]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputMap {
+    /// Output name.
+    pub name: String,
+    /// `(state, weight)` pairs.
+    pub weights: Vec<(usize, f64)>,
+}
+
+/// Mechanical structure `z = (x, x', mu)`.
+#[derive(Debug, Clone)]
+pub struct Mechanical {
+    /// Number of displacements `n`.
+    pub n_dof: usize,
+    /// Number of constraints `n_c`.
+    pub n_constraints: usize,
+    /// Mass matrix.
+    pub mass: SparseColMat<usize, f64>,
+}
+
+/// A validated first-order system.
+#[derive(Debug, Clone)]
+pub struct System {
+    /// Plugin that built it.
+    pub plugin: String,
+    /// Model name.
+    pub name: String,
+    /// `A` (`N x N`).
+    pub a: SparseColMat<usize, f64>,
+    /// `B` (`N x N`).
+    pub b: SparseColMat<usize, f64>,
+    /// `F(z)`.
+    pub nonlinearity: PolyVector,
+    /// `Fext` harmonics.
+    pub forcing: Vec<Harmonic>,
+    /// States.
+    pub states: Vec<StateInfo>,
+    /// Outputs.
+    pub outputs: Vec<OutputMap>,
+    /// Flow or map.
+    pub time: TimeKind,
+    /// Mechanical structure, if any.
+    pub mechanical: Option<Mechanical>,
+}
+
+impl System {
+    /// Validates a plugin's model and converts its matrices to compressed form.
+    pub fn from_model(plugin: &str, m: ssm_api::Model) -> Result<Self, ModelError> {
+        let model = m.name.to_string();
+        let n = m.states.len();
+        let a = to_csc(&model, "A", &m.a, n, n)?;
+        let b = to_csc(&model, "B", &m.b, n, n)?;
+        check_poly(&model, "F", &m.nonlinearity, n)?;
+        if let Some(t) = m.nonlinearity.terms.iter().find(|t| t.degree() < 2) {
+            return Err(ModelError::LowDegree {
+                model,
+                eq: t.eq as usize,
+                degree: t.degree(),
+            });
+        }
+        for (k, h) in m.forcing.iter().enumerate() {
+            check_poly(
+                &model,
+                &format!("forcing harmonic {} (cos)", k + 1),
+                &h.cos,
+                n,
+            )?;
+            check_poly(
+                &model,
+                &format!("forcing harmonic {} (sin)", k + 1),
+                &h.sin,
+                n,
+            )?;
+            if !h.multiple.is_finite() {
+                return Err(ModelError::NonFinite {
+                    model,
+                    what: format!("forcing harmonic {} multiple", k + 1),
+                    value: h.multiple,
+                });
+            }
+        }
+        let mut names = std::collections::HashSet::new();
+        for s in m.states.iter() {
+            if !names.insert(s.name.as_str()) {
+                return Err(ModelError::DuplicateName {
+                    model,
+                    name: s.name.to_string(),
+                });
+            }
+        }
+        let mut outputs = Vec::with_capacity(m.outputs.len());
+        let mut out_names = std::collections::HashSet::new();
+        for o in m.outputs.iter() {
+            if !out_names.insert(o.name.as_str()) {
+                return Err(ModelError::DuplicateName {
+                    model,
+                    name: o.name.to_string(),
+                });
+            }
+            let mut weights = Vec::with_capacity(o.weights.len());
+            for w in o.weights.iter() {
+                let what = format!("output '{}'", o.name);
+                if w.state as usize >= n {
+                    return Err(ModelError::Index {
+                        model,
+                        what,
+                        index: w.state as usize,
+                        size: n,
+                    });
+                }
+                if !w.value.is_finite() {
+                    return Err(ModelError::NonFinite {
+                        model,
+                        what,
+                        value: w.value,
+                    });
+                }
+                weights.push((w.state as usize, w.value));
+            }
+            outputs.push(OutputMap {
+                name: o.name.to_string(),
+                weights,
+            });
+        }
+        let mechanical = match m.mechanical.into_option() {
+            Some(info) => {
+                let nd = info.n_dof as usize;
+                let nc = info.n_constraints as usize;
+                if 2 * nd + nc > n {
+                    return Err(ModelError::Shape {
+                        model,
+                        what: "mechanical structure (2 n_dof + n_constraints)".into(),
+                        found: format!("{}", 2 * nd + nc),
+                        expected: format!("at most {n}"),
+                    });
+                }
+                Some(Mechanical {
+                    n_dof: nd,
+                    n_constraints: nc,
+                    mass: to_csc(&model, "M", &info.mass, nd, nd)?,
+                })
+            }
+            None => None,
+        };
+        if let TimeKind::Map { period } = m.time {
+            if !(period.is_finite() && period > 0.0) {
+                return Err(ModelError::NonFinite {
+                    model,
+                    what: "map period".into(),
+                    value: period,
+                });
+            }
+        }
+        Ok(Self {
+            plugin: plugin.to_owned(),
+            name: model,
+            a,
+            b,
+            nonlinearity: m.nonlinearity,
+            forcing: m.forcing.into_iter().collect(),
+            states: m.states.into_iter().collect(),
+            outputs,
+            time: m.time,
+            mechanical,
+        })
+    }
+
+    /// Number of states `N`.
+    pub fn n_states(&self) -> usize {
+        self.states.len()
+    }
+
+    /// The output named `name`.
+    pub fn output(&self, name: &str) -> Option<&OutputMap> {
+        self.outputs.iter().find(|o| o.name == name)
+    }
+}
+
+fn to_csc(
+    model: &str,
+    what: &str,
+    m: &ssm_api::SparseMatrix,
+    nrows: usize,
+    ncols: usize,
+) -> Result<SparseColMat<usize, f64>, ModelError> {
+    if m.nrows as usize != nrows || m.ncols as usize != ncols {
+        return Err(ModelError::Shape {
+            model: model.to_owned(),
+            what: format!("matrix {what}"),
+            found: format!("{}x{}", m.nrows, m.ncols),
+            expected: format!("{nrows}x{ncols}"),
+        });
+    }
+    let mut trip = Vec::with_capacity(m.entries.len());
+    for t in m.entries.iter() {
+        let (r, c) = (t.row as usize, t.col as usize);
+        if r >= nrows || c >= ncols {
+            return Err(ModelError::Index {
+                model: model.to_owned(),
+                what: format!("matrix {what} entry ({r}, {c})"),
+                index: r.max(c),
+                size: nrows.max(ncols),
+            });
+        }
+        if !t.value.is_finite() {
+            return Err(ModelError::NonFinite {
+                model: model.to_owned(),
+                what: format!("matrix {what} entry ({r}, {c})"),
+                value: t.value,
+            });
+        }
+        trip.push(Triplet::new(r, c, t.value));
+    }
+    SparseColMat::try_new_from_triplets(nrows, ncols, &trip).map_err(|e| ModelError::Shape {
+        model: model.to_owned(),
+        what: format!("matrix {what}"),
+        found: format!("{e:?}"),
+        expected: "a valid sparse matrix".into(),
+    })
+}
+
+fn check_poly(model: &str, what: &str, p: &PolyVector, n: usize) -> Result<(), ModelError> {
+    if p.n_eq as usize != n || p.n_vars as usize != n {
+        return Err(ModelError::Shape {
+            model: model.to_owned(),
+            what: what.to_owned(),
+            found: format!("{} equations in {} variables", p.n_eq, p.n_vars),
+            expected: format!("{n} in {n}"),
+        });
+    }
+    for t in p.terms.iter() {
+        if t.eq as usize >= n {
+            return Err(ModelError::Index {
+                model: model.to_owned(),
+                what: format!("{what} term equation"),
+                index: t.eq as usize,
+                size: n,
+            });
+        }
+        if let Some(v) = t.factors.iter().find(|v| v.var as usize >= n) {
+            return Err(ModelError::Index {
+                model: model.to_owned(),
+                what: format!("{what} term variable"),
+                index: v.var as usize,
+                size: n,
+            });
+        }
+        if !t.coeff.is_finite() {
+            return Err(ModelError::NonFinite {
+                model: model.to_owned(),
+                what: format!("{what}, equation {}", t.eq),
+                value: t.coeff,
+            });
+        }
+    }
+    Ok(())
+}
