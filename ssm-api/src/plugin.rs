@@ -133,6 +133,10 @@ pub fn guard<T, F>(stage: &str, f: F) -> RResult<T, PluginError>
 where
     F: FnOnce() -> Result<T, PluginError>,
 {
+    // The panic is reported through the returned error; the plugin's own copy of
+    // std would otherwise also print it (with a backtrace) to stderr.
+    static QUIET_HOOK: std::sync::Once = std::sync::Once::new();
+    QUIET_HOOK.call_once(|| std::panic::set_hook(Box::new(|_| {})));
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(Ok(v)) => RResult::ROk(v),
         Ok(Err(e)) => RResult::RErr(e),

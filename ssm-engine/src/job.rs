@@ -71,8 +71,46 @@ pub fn build_system(scene: &SceneFile, registry: &mut Registry) -> Result<System
     })?;
     let name = m.name.as_ref().map_or("", |n| n.get_ref().as_str());
     let params = toml::to_string(m.params.get_ref()).unwrap_or_default();
-    let model = plugin.build_model(name, &params)?;
+    let model = plugin.build_model(name, &params).map_err(|e| match e {
+        PluginLoadError::Plugin { plugin, error }
+            if error.kind == ssm_api::ErrorKind::InvalidParameter =>
+        {
+            let line = param_line(&scene.text, error.context.as_str());
+            JobError::Scene(SceneError::Invalid {
+                path: scene.path.clone(),
+                line,
+                key: format!("model.params.{}", error.context),
+                message: format!("plugin '{plugin}': {}", error.message),
+            })
+        }
+        other => JobError::Plugin(other),
+    })?;
     Ok(System::from_model(plugin.name(), model)?)
+}
+
+/// Line of `key = ...` inside the `[model.params]` table (the table header's
+/// line when the key is not found there).
+fn param_line(text: &str, key: &str) -> usize {
+    let mut in_params = false;
+    let mut header = 0;
+    for (i, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.starts_with('[') {
+            in_params = t == "[model.params]";
+            if in_params {
+                header = i + 1;
+            }
+            continue;
+        }
+        if in_params {
+            if let Some((k, _)) = t.split_once('=') {
+                if k.trim().trim_matches('"') == key {
+                    return i + 1;
+                }
+            }
+        }
+    }
+    header
 }
 
 /// Runs a scene and assembles its outputs (nothing is written here).

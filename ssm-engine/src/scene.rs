@@ -147,10 +147,10 @@ impl Default for SsmSection {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum SpectrumMethod {
-    /// Dense QZ up to [`crate::spectrum::DENSE_LIMIT`] states, sparse above.
+    /// Dense path up to [`crate::spectrum::DENSE_LIMIT`] states, sparse above.
     #[default]
     Auto,
-    /// Dense QZ of the whole pencil.
+    /// Dense eigensolver of the whole shift-inverted pencil.
     Dense,
     /// Shift-invert Krylov-Schur with a sparse LU, only the requested modes.
     Sparse,

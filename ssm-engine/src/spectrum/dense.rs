@@ -1,63 +1,95 @@
-//! Dense path: QZ of the whole pencil.
+//! Dense path: all finite eigenvalues through the shift-inverted pencil,
+//! restricted to its finite invariant subspace.
 //!
-//! The pencil is scaled to `(A / ||A||_F, B / ||B||_F)` so that the test for an
-//! infinite eigenvalue is independent of units. QZ returns each eigenvalue as a
-//! ratio `alpha / beta`; an eigenvalue is finite when `|beta| > FINITE_TOL |alpha|`
-//! in the scaled pencil. Infinite eigenvalues of an index-3 mechanical DAE sit in
-//! Jordan blocks of size 3 and are perturbed by rounding to `|beta/alpha| ~ eps^(1/3)
-//! ~ 6e-6`, so the threshold must lie well above that; finite eigenvalues of the
-//! scaled pencil are O(1) for any model whose frequencies span less than about
-//! three decades around `||A|| / ||B||`. Models beyond that use the sparse path,
-//! which separates infinite modes exactly (they map to 0 under shift-invert).
+//! With a real shift `sigma` that is not an eigenvalue,
+//! `A v = lambda B v  <=>  T v = theta v`, `T = (A - sigma B)^{-1} B`,
+//! `theta = 1 / (lambda - sigma)`. Infinite eigenvalues of the pencil (constraint
+//! modes, eq. 87) form the nilpotent part of `T`; in an index-3 DAE its Jordan
+//! blocks have size 3, and rounding would perturb their zero eigenvalues to
+//! `|theta| ~ eps^(1/3) ||T|| ~ 1e-5 ||T||`, indistinguishable from fast finite
+//! modes by any magnitude threshold. So the nilpotent part is removed exactly:
+//! the finite invariant subspace is `range(T^nu)`, `nu` the index (the size of
+//! the largest nilpotent block), found as the first power at which the
+//! numerical rank of `T^k` stops falling. With `Q` an orthonormal basis of that
+//! range (leading left singular vectors), the finite `theta` are the eigenvalues
+//! of `Q^T T Q`. The rank uses a relative threshold [`RANK_TOL`] on singular
+//! values of `T^k`; finite modes are kept as long as
+//! `(|lambda_slowest| / |lambda_fastest|)^nu > RANK_TOL`, i.e. four decades of
+//! frequency for an index-3 DAE and twelve for an ODE. Larger spreads belong to
+//! the sparse path, which never needs the fast modes.
 
-use faer::linalg::solvers::GeneralizedEigen;
+use faer::linalg::solvers::Solve;
 use faer::sparse::SparseColMatRef;
 use faer::Mat;
 
 use super::SpectrumError;
 use crate::C64;
 
-/// Finite-eigenvalue threshold on `|beta / alpha|` of the scaled pencil.
-pub const FINITE_TOL: f64 = 1e-3;
+/// Relative singular-value threshold for the numerical rank of `T^k`.
+pub const RANK_TOL: f64 = 1e-12;
 
-/// Dense copy of a sparse matrix.
-pub fn to_dense(m: SparseColMatRef<'_, usize, f64>) -> Mat<f64> {
-    m.to_dense()
+/// Largest index of a pencil this path accepts.
+const MAX_INDEX: usize = 6;
+
+fn numerical_rank(m: &Mat<f64>) -> Result<(usize, Mat<f64>), SpectrumError> {
+    let svd = m
+        .svd()
+        .map_err(|_| SpectrumError::NoConvergence { n: m.nrows() })?;
+    let s = svd.S().column_vector();
+    let smax = (0..s.nrows()).map(|i| s[i]).fold(0.0, f64::max);
+    let rank = (0..s.nrows()).filter(|&i| s[i] > RANK_TOL * smax).count();
+    Ok((rank, svd.U().subcols(0, rank).to_owned()))
 }
 
 /// All finite eigenvalues of `(A, B)`, unsorted.
 pub fn finite_eigenvalues(
     a: SparseColMatRef<'_, usize, f64>,
     b: SparseColMatRef<'_, usize, f64>,
+    shift: f64,
 ) -> Result<Vec<C64>, SpectrumError> {
     let n = a.nrows();
-    let mut ad = to_dense(a);
-    let mut bd = to_dense(b);
-    let na = ad.norm_l2();
-    let nb = bd.norm_l2();
-    if na == 0.0 || nb == 0.0 {
-        return Err(SpectrumError::SingularPencil {
-            detail: format!("||A|| = {na}, ||B|| = {nb}"),
+    let shifted = super::sparse::combine(a, b, -shift).to_dense();
+    let lu = shifted.partial_piv_lu();
+    let mut t: Mat<f64> = b.to_dense();
+    lu.solve_in_place(t.as_mut());
+    let norm = t.norm_l2();
+    if !norm.is_finite() {
+        return Err(SpectrumError::SingularShift {
+            shift,
+            detail: "A - sigma B is numerically singular".into(),
         });
     }
-    ad /= faer::Scale(na);
-    bd /= faer::Scale(nb);
-    let ge = GeneralizedEigen::new_from_real(ad.as_ref(), bd.as_ref())
-        .map_err(|_| SpectrumError::NoConvergence { n })?;
-    let (sa, sb) = (ge.S_a(), ge.S_b());
-    let mut out = Vec::new();
-    for i in 0..n {
-        let alpha = sa[i];
-        let beta = sb[i];
-        if alpha.norm() <= 1e-13 && beta.norm() <= 1e-13 {
-            return Err(SpectrumError::SingularPencil {
-                detail: format!("QZ returned alpha = beta = 0 at position {i}"),
-            });
-        }
-        if beta.norm() > FINITE_TOL * alpha.norm() {
-            let l = alpha / beta * (na / nb);
-            out.push(C64::new(l.re, l.im));
-        }
+    if norm == 0.0 {
+        return Err(SpectrumError::SingularPencil {
+            detail: "B = 0: the model has no dynamics".into(),
+        });
     }
-    Ok(out)
+    let (mut rank, mut q) = numerical_rank(&t)?;
+    let mut power = t.clone();
+    let mut stable = false;
+    for _ in 1..MAX_INDEX {
+        power = &t * &power;
+        let (r, qq) = numerical_rank(&power)?;
+        if r == rank {
+            stable = true;
+            break;
+        }
+        rank = r;
+        q = qq;
+    }
+    if !stable {
+        return Err(SpectrumError::SingularPencil {
+            detail: format!(
+                "the rank of T^k still falls at k = {MAX_INDEX} (index above {MAX_INDEX})"
+            ),
+        });
+    }
+    let h = q.transpose() * &t * &q;
+    let theta = h
+        .eigenvalues()
+        .map_err(|_| SpectrumError::NoConvergence { n })?;
+    Ok(theta
+        .iter()
+        .map(|t| C64::new(shift, 0.0) + C64::new(1.0, 0.0) / C64::new(t.re, t.im))
+        .collect())
 }

@@ -7,7 +7,7 @@
 //! modes, and never enter resonance checks (Remark 1).
 //!
 //! Two paths, chosen automatically ([`DENSE_LIMIT`]) or by the scene:
-//! - [`dense`]: QZ of the whole pencil, all finite eigenvalues;
+//! - [`dense`]: shift-invert of the whole pencil and a dense eigensolver, all finite eigenvalues;
 //! - [`sparse`]: shift-invert Krylov-Schur on `(A - sigma B)^{-1} B` with a sparse
 //!   LU, only the requested modes nearest `sigma`, no dense `N x N` storage.
 //!
@@ -37,8 +37,8 @@ pub const DENSE_LIMIT: usize = 2000;
 /// Why a spectrum could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SpectrumError {
-    /// The dense QZ iteration did not converge.
-    #[error("dense QZ iteration did not converge for the {n}x{n} pencil (A, B)")]
+    /// The dense eigenvalue iteration did not converge.
+    #[error("dense eigenvalue iteration did not converge for the {n}x{n} pencil (A, B)")]
     NoConvergence {
         /// Pencil size.
         n: usize,
@@ -92,7 +92,7 @@ pub enum SpectrumError {
 /// Which solver produced a spectrum.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Method {
-    /// Dense QZ.
+    /// Dense eigensolver.
     Dense,
     /// Sparse shift-invert Krylov-Schur.
     Sparse,
@@ -146,7 +146,7 @@ pub fn compute(
         Method::Sparse
     });
     let mut eigenvalues = match method {
-        Method::Dense => dense::finite_eigenvalues(a, b)?,
+        Method::Dense => dense::finite_eigenvalues(a, b, opts.shift)?,
         Method::Sparse => sparse::eigenvalues_near_shift(a, b, opts.shift, opts.modes)?,
     };
     sort_spectrum(&mut eigenvalues);

@@ -1,0 +1,70 @@
+//! Spectrum benchmarks. Each benchmark first prints its error against the
+//! reference of the shared catalogue (`ssm_tests`), then times the computation:
+//! speed is never reported without the error it was bought with.
+//!
+//! Run with `cargo build --release --workspace && cargo bench -p ssm-benches`.
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use ssm_engine::scene::Normalization;
+use ssm_engine::spectrum::{self, Method, SpectrumOptions};
+use ssm_tests::{chain_eigenvalues, oscillator_published_eigenvalues, system, CHAIN_DEFAULTS};
+
+fn opts(method: Option<Method>, modes: usize) -> SpectrumOptions {
+    SpectrumOptions {
+        method,
+        modes,
+        shift: 0.0,
+        normalization: Normalization::Unit,
+    }
+}
+
+fn oscillator(c: &mut Criterion) {
+    let mut g = c.benchmark_group("spatial-oscillator");
+    for constraint in ["none", "cubic", "spherical"] {
+        let sys = system("spatial-oscillator", "", &format!("constraint = \"{constraint}\""));
+        let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+        let published = oscillator_published_eigenvalues(constraint);
+        let err = published
+            .iter()
+            .enumerate()
+            .map(|(j, p)| (sp.eigenvalues[2 * j] - p).norm() / p.norm())
+            .fold(0.0, f64::max);
+        println!("spatial-oscillator {constraint}: max relative deviation from the printed eqs. (26)-(27): {err:.2e} (printing precision ~2.5e-5)");
+        g.bench_function(BenchmarkId::new("spectrum+master", constraint), |b| {
+            b.iter(|| {
+                let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+                black_box(spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit).unwrap())
+            })
+        });
+    }
+    g.finish();
+}
+
+fn chain(c: &mut Criterion) {
+    let mut g = c.benchmark_group("oscillator-chain");
+    g.sample_size(10);
+    let (k, alpha, beta) = CHAIN_DEFAULTS;
+    for n in [100usize, 1_000, 10_000, 100_000] {
+        let sys = system("oscillator-chain", "chain", &format!("n = {n}"));
+        let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(Some(Method::Sparse), 4)).unwrap();
+        let exact = chain_eigenvalues(n, k, alpha, beta, 2);
+        let err = exact
+            .iter()
+            .enumerate()
+            .map(|(j, e)| (sp.eigenvalues[2 * j] - e).norm() / e.norm())
+            .fold(0.0, f64::max);
+        println!("oscillator-chain n = {n} (N = {}): 2 slowest pairs, max relative error vs closed form {err:.2e}", 2 * n);
+        g.bench_with_input(BenchmarkId::new("sparse 2 pairs + master", n), &n, |b, _| {
+            b.iter(|| {
+                let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(Some(Method::Sparse), 4)).unwrap();
+                black_box(spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit).unwrap())
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, oscillator, chain);
+criterion_main!(benches);

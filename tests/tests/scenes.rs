@@ -1,0 +1,214 @@
+//! Scenes end to end: the bundled zoo scenes through the real binary, and every
+//! kind of bad input with its error naming the place.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use ssm_engine::job::{self, JobError, Quiet};
+use ssm_engine::plugin::Registry;
+use ssm_engine::scene::{SceneError, SceneFile};
+use ssm_tests::{engine_binary, plugin_path, repo_root};
+
+fn registry() -> Registry {
+    Registry::discover(&[
+        plugin_path("spatial-oscillator"),
+        plugin_path("oscillator-chain"),
+    ])
+    .unwrap()
+}
+
+fn run_text(text: &str) -> Result<job::JobResult, JobError> {
+    let scene = SceneFile::parse(Path::new("test.toml"), text.to_owned())?;
+    job::run(&scene, &mut registry(), &Quiet)
+}
+
+fn scene_error(text: &str) -> (usize, String) {
+    match run_text(text) {
+        Err(JobError::Scene(SceneError::Parse { line, message, .. })) => (line, message),
+        Err(JobError::Scene(SceneError::Invalid {
+            line, key, message, ..
+        })) => (line, format!("{key}: {message}")),
+        Err(e) => panic!("expected a scene error, got: {e}"),
+        Ok(_) => panic!("expected a scene error, the scene ran"),
+    }
+}
+
+const GOOD: &str = "[model]\nplugin = \"spatial-oscillator\"\n[model.params]\nconstraint = \"cubic\"\n[ssm]\nmaster_pairs = [1]\norder = 13\n[outputs]\ncoordinates = [\"x1\"]\n";
+
+#[test]
+fn good_scene_runs() {
+    let r = run_text(GOOD).unwrap();
+    assert_eq!(r.spectrum.eigenvalues.len(), 4);
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+}
+
+#[test]
+fn unknown_key_names_key_and_line() {
+    let (line, msg) = scene_error(&GOOD.replace("order = 13", "ordre = 13"));
+    assert_eq!(line, 7);
+    assert!(msg.contains("ordre"), "{msg}");
+}
+
+#[test]
+fn wrong_type_names_line() {
+    let (line, msg) = scene_error(&GOOD.replace("order = 13", "order = \"thirteen\""));
+    assert_eq!(line, 7);
+    assert!(msg.contains("expected"), "{msg}");
+}
+
+#[test]
+fn missing_plugin_names_key_and_line() {
+    let (line, msg) = scene_error(&GOOD.replace("spatial-oscillator", "no-such-plugin"));
+    assert_eq!(line, 2);
+    assert!(
+        msg.contains("model.plugin") && msg.contains("no-such-plugin"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn unknown_output_lists_the_known_ones() {
+    let (line, msg) = scene_error(&GOOD.replace("[\"x1\"]", "[\"x1\", \"phi\"]"));
+    assert_eq!(line, 9);
+    assert!(msg.contains("'phi'") && msg.contains("x1_dot"), "{msg}");
+}
+
+#[test]
+fn master_pair_out_of_range_names_line() {
+    let (line, msg) = scene_error(&GOOD.replace("master_pairs = [1]", "master_pairs = [3]"));
+    assert_eq!(line, 6);
+    assert!(
+        msg.contains("master pair 3") && msg.contains("only 2"),
+        "{msg}"
+    );
+    let (line, _) = scene_error(&GOOD.replace("master_pairs = [1]", "master_pairs = [0]"));
+    assert_eq!(line, 6);
+}
+
+#[test]
+fn bad_model_parameter_names_its_line() {
+    let (line, msg) = scene_error(&GOOD.replace(
+        "constraint = \"cubic\"",
+        "constraint = \"cubic\"\nzeta = 0.1",
+    ));
+    assert_eq!(line, 5);
+    assert!(
+        msg.contains("model.params.zeta") && msg.contains("zeta1"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn missing_model_section_is_a_parse_error() {
+    let (_, msg) = scene_error("[ssm]\norder = 3\n");
+    assert!(msg.contains("model"), "{msg}");
+}
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ssm-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// The README's first command, on the three bundled oscillator scenes: the
+/// summary has the contract keys and the eigenvalues of eqs. (26)-(27).
+#[test]
+fn zoo_oscillator_scenes_write_the_summary() {
+    for (c, pairs) in [("none", 3), ("cubic", 2), ("spherical", 2)] {
+        let out = tmp_dir(&format!("zoo-{c}"));
+        let scene = repo_root().join(format!("zoo/spatial_oscillator_{c}.toml"));
+        let o = Command::new(engine_binary())
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out)
+            .env("CI", "1")
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        assert_eq!(s["model"]["plugin"], "spatial-oscillator");
+        assert_eq!(s["model"]["n_finite_modes"], 2 * pairs);
+        assert_eq!(s["master_pairs"], serde_json::json!([1]));
+        let sp = s["spectrum"].as_array().unwrap();
+        assert_eq!(sp.len(), 2 * pairs);
+        // eq. (26)/(27): lambda_1 = -0.02 + 1.9999i to the printed digits
+        assert!((sp[0]["re"].as_f64().unwrap() + 0.02).abs() < 5e-3);
+        assert!((sp[0]["im"].as_f64().unwrap() - 1.9999).abs() < 5e-5);
+        assert!(s["warnings"].as_array().unwrap().is_empty());
+        assert!(s["timing_s"]["spectrum"].as_f64().unwrap() >= 0.0);
+        assert!(s["timing_s"]["total"].as_f64().unwrap() >= 0.0);
+        let csv = std::fs::read_to_string(out.join("spectrum.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 1 + 2 * pairs);
+        // no temporary files left behind
+        assert!(std::fs::read_dir(&out).unwrap().all(|e| !e
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .ends_with(".tmp")));
+        let _ = std::fs::remove_dir_all(&out);
+    }
+}
+
+#[test]
+fn panicking_plugin_exits_nonzero_and_writes_nothing() {
+    let out = tmp_dir("panic");
+    let scene = tmp_dir("panic-scene.toml");
+    std::fs::write(
+        &scene,
+        "[model]\nplugin = \"panicking\"\nname = \"panics\"\n",
+    )
+    .unwrap();
+    let o = Command::new(engine_binary())
+        .arg("--plugin")
+        .arg(plugin_path("ssm-fixture-panicking"))
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("plugin 'panicking'") && err.contains("fixture panic"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a failed run must write no output");
+    let _ = std::fs::remove_file(&scene);
+}
+
+#[test]
+fn old_api_plugin_is_refused_by_the_binary() {
+    let o = Command::new(engine_binary())
+        .arg("--plugin")
+        .arg(plugin_path("ssm-fixture-old-api"))
+        .arg("plugins")
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("0.0.9") && err.contains(ssm_api::API_VERSION),
+        "{err}"
+    );
+}
+
+#[test]
+fn plugins_command_lists_models_and_parameters() {
+    let o = Command::new(engine_binary())
+        .arg("plugins")
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    for needle in [
+        "spatial-oscillator",
+        "oscillator-chain",
+        "constraint",
+        "\"none\"",
+        "zeta1",
+        "kappa",
+    ] {
+        assert!(out.contains(needle), "missing {needle} in:\n{out}");
+    }
+}

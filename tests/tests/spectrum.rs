@@ -1,0 +1,235 @@
+//! Spectrum of the pencil against published and closed-form references.
+
+use num_complex::Complex64 as C64;
+use ssm_engine::scene::Normalization;
+use ssm_engine::spectrum::{self, Method, SpectrumOptions};
+use ssm_engine::system::System;
+use ssm_tests::{chain_eigenvalues, oscillator_published_eigenvalues, system, CHAIN_DEFAULTS};
+
+fn opts(method: Option<Method>, modes: usize) -> SpectrumOptions {
+    SpectrumOptions {
+        method,
+        modes,
+        shift: 0.0,
+        normalization: Normalization::Unit,
+    }
+}
+
+/// True when `value` rounds to the printed decimal `printed` (half a unit in
+/// its last printed digit).
+fn agrees_to_printed(value: f64, printed: &str) -> bool {
+    let decimals = printed.split_once('.').map_or(0, |(_, d)| d.len()) as i32;
+    let p: f64 = printed.parse().unwrap();
+    (value - p).abs() <= 0.5 * 10f64.powi(-decimals) + 1e-15
+}
+
+/// Li, Jain & Haller (2023) eqs. (26)-(27), printed digits:
+/// -0.02 +- 1.9999i, -0.15 +- 2.9962i, (-0.25 +- 4.9937i unconstrained).
+#[test]
+fn oscillator_eigenvalues_match_eqs_26_27_to_printed_digits() {
+    let printed = [
+        ("-0.02", "1.9999"),
+        ("-0.15", "2.9962"),
+        ("-0.25", "4.9937"),
+    ];
+    for constraint in ["none", "cubic", "spherical"] {
+        let sys = system(
+            "spatial-oscillator",
+            "",
+            &format!("constraint = \"{constraint}\""),
+        );
+        let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+        let expected = oscillator_published_eigenvalues(constraint);
+        // exactly the finite pairs of the paper, nothing spurious: the 3 n_c = 3
+        // infinite constraint modes are excluded
+        assert_eq!(
+            sp.eigenvalues.len(),
+            2 * expected.len(),
+            "{constraint}: {:?}",
+            sp.eigenvalues
+        );
+        assert_eq!(sys.n_states(), if constraint == "none" { 6 } else { 7 });
+        for (j, _) in expected.iter().enumerate() {
+            let l = sp.eigenvalues[2 * j];
+            let (re, im) = printed[j];
+            assert!(
+                agrees_to_printed(l.re, re) && agrees_to_printed(l.im, im),
+                "{constraint}: pair {} = {l}, printed {re} + {im}i",
+                j + 1
+            );
+            assert_eq!(sp.eigenvalues[2 * j + 1], l.conj());
+        }
+    }
+}
+
+/// Master modes satisfy A v = lambda B v and u^* A = lambda u^* B, with the
+/// documented normalization and phase.
+#[test]
+fn master_modes_are_normalized_eigenvectors() {
+    for constraint in ["none", "cubic", "spherical"] {
+        let sys = system(
+            "spatial-oscillator",
+            "",
+            &format!("constraint = \"{constraint}\""),
+        );
+        let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+        for norm in [Normalization::Unit, Normalization::Mass] {
+            let modes = spectrum::master_modes(&sys, &sp, &[1, 2], norm).unwrap();
+            for m in &modes {
+                check_mode(&sys, m, norm);
+            }
+        }
+    }
+}
+
+fn check_mode(sys: &System, m: &spectrum::MasterMode, norm: Normalization) {
+    use ssm_engine::spectrum::modes::{spmv, spmv_t};
+    let (a, b) = (sys.a.as_ref(), sys.b.as_ref());
+    let av = spmv(a, &m.right);
+    let bv = spmv(b, &m.right);
+    let r: f64 = av
+        .iter()
+        .zip(&bv)
+        .map(|(x, y)| (x - m.lambda * y).norm_sqr())
+        .sum::<f64>()
+        .sqrt();
+    assert!(r < 1e-12, "right residual {r}");
+    // left: A^T u = conj(lambda) B^T u for u^* A = lambda u^* B (real A, B)
+    let atu = spmv_t(a, &m.left);
+    let btu = spmv_t(b, &m.left);
+    let r: f64 = atu
+        .iter()
+        .zip(&btu)
+        .map(|(x, y)| (x - m.lambda.conj() * y).norm_sqr())
+        .sum::<f64>()
+        .sqrt();
+    let un: f64 = m.left.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
+    assert!(r < 1e-11 * un.max(1.0), "left residual {r}");
+    let ubv: C64 = m.left.iter().zip(&bv).map(|(u, v)| u.conj() * v).sum();
+    assert!((ubv - 1.0).norm() < 1e-12, "u^* B v = {ubv}");
+    match norm {
+        Normalization::Unit => {
+            let n: f64 = m.right.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
+            assert!((n - 1.0).abs() < 1e-13);
+        }
+        Normalization::Mass => {
+            let mech = sys.mechanical.as_ref().unwrap();
+            let x = &m.right[..mech.n_dof];
+            let mx = spmv(mech.mass.as_ref(), x);
+            let q: C64 = x.iter().zip(&mx).map(|(a, b)| a.conj() * b).sum();
+            assert!((q - 1.0).norm() < 1e-12, "x^H M x = {q}");
+        }
+    }
+    let vmax = m.right.iter().map(|c| c.norm()).fold(0.0, f64::max);
+    let first = m
+        .right
+        .iter()
+        .find(|c| c.norm() >= vmax * (1.0 - 1e-8))
+        .unwrap();
+    assert!(
+        first.im.abs() < 1e-14 * vmax && first.re > 0.0,
+        "phase: {first}"
+    );
+}
+
+/// Sparse shift-invert path against the closed-form chain spectrum
+/// (`ssm_tests::chain_eigenvalues`), relative error 1e-9.
+#[test]
+fn sparse_path_matches_closed_form_chain_spectrum() {
+    let n = 1000;
+    let sys = system("oscillator-chain", "chain", &format!("n = {n}"));
+    let sp = spectrum::compute(
+        sys.a.as_ref(),
+        sys.b.as_ref(),
+        &opts(Some(Method::Sparse), 6),
+    )
+    .unwrap();
+    assert_eq!(sp.method, Method::Sparse);
+    assert!(!sp.complete);
+    let (k, alpha, beta) = CHAIN_DEFAULTS;
+    let exact = chain_eigenvalues(n, k, alpha, beta, 3);
+    for (j, e) in exact.iter().enumerate() {
+        let l = sp.eigenvalues[2 * j];
+        assert!(
+            (l - e).norm() < 1e-9 * e.norm(),
+            "pair {}: {l} vs {e}",
+            j + 1
+        );
+    }
+    let modes = spectrum::master_modes(&sys, &sp, &[1, 2], Normalization::Mass).unwrap();
+    for m in &modes {
+        check_mode(&sys, m, Normalization::Mass);
+    }
+}
+
+/// Dense and sparse paths agree on the slow modes, also for a constrained
+/// pencil with infinite eigenvalues (which the sparse path must never return).
+#[test]
+fn dense_and_sparse_paths_agree() {
+    for (plugin, model, params) in [
+        ("oscillator-chain", "chain", "n = 150"),
+        ("spatial-oscillator", "", "constraint = \"cubic\""),
+        ("spatial-oscillator", "", "constraint = \"spherical\""),
+    ] {
+        let sys = system(plugin, model, params);
+        let d = spectrum::compute(
+            sys.a.as_ref(),
+            sys.b.as_ref(),
+            &opts(Some(Method::Dense), 0),
+        )
+        .unwrap();
+        let s = spectrum::compute(
+            sys.a.as_ref(),
+            sys.b.as_ref(),
+            &opts(Some(Method::Sparse), 4),
+        )
+        .unwrap();
+        assert_eq!(
+            s.eigenvalues.len(),
+            4,
+            "{plugin} {params}: {:?}",
+            s.eigenvalues
+        );
+        for (x, y) in s.eigenvalues.iter().zip(&d.eigenvalues) {
+            assert!(
+                (x - y).norm() < 1e-10 * y.norm(),
+                "{plugin} {params}: {x} vs {y}"
+            );
+        }
+    }
+}
+
+/// A master pair beyond the available pairs is an error naming both numbers.
+#[test]
+fn master_pair_out_of_range_is_an_error() {
+    let sys = system("spatial-oscillator", "", "constraint = \"cubic\"");
+    let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+    let err = spectrum::master_modes(&sys, &sp, &[3], Normalization::Unit).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("master pair 3") && msg.contains("only 2"),
+        "{msg}"
+    );
+}
+
+/// Theorem 1, eq. (53): with omega2 = 3 omega1 and equal light damping,
+/// lambda_3 ~ 3 lambda_1 (|a + b| = 3 <= order) must be named, with the fix.
+#[test]
+fn internal_resonance_is_named_with_its_fix() {
+    let sys = system("spatial-oscillator", "", "omega2 = 6.0\nzeta2 = 0.01");
+    let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+    let rep = spectrum::check_resonances(&sp.eigenvalues, &[0], 5, 0.02, true);
+    let w = rep
+        .warnings
+        .iter()
+        .find(|w| w.contains("lambda_3 ~ 3 lambda_1"))
+        .unwrap_or_else(|| panic!("{:?}", rep.warnings));
+    assert!(w.contains("add pair 2 to the master pairs"), "{w}");
+    // the default oscillator has no such resonance up to order 13
+    let sys = system("spatial-oscillator", "", "");
+    let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+    let rep = spectrum::check_resonances(&sp.eigenvalues, &[0], 13, 0.02, true);
+    assert!(rep.warnings.is_empty(), "{:?}", rep.warnings);
+    // eq. (54): sigma(E) = Int(-0.25 / -0.02) = 12 for the unconstrained oscillator
+    assert_eq!(rep.quotients.relative, Some(12));
+}
