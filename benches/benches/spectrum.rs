@@ -23,7 +23,11 @@ fn opts(method: Option<Method>, modes: usize) -> SpectrumOptions {
 fn oscillator(c: &mut Criterion) {
     let mut g = c.benchmark_group("spatial-oscillator");
     for constraint in ["none", "cubic", "spherical"] {
-        let sys = system("spatial-oscillator", "", &format!("constraint = \"{constraint}\""));
+        let sys = system(
+            "spatial-oscillator",
+            "",
+            &format!("constraint = \"{constraint}\""),
+        );
         let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
         let published = oscillator_published_eigenvalues(constraint);
         let err = published
@@ -48,7 +52,12 @@ fn chain(c: &mut Criterion) {
     let (k, alpha, beta) = CHAIN_DEFAULTS;
     for n in [100usize, 1_000, 10_000, 100_000] {
         let sys = system("oscillator-chain", "chain", &format!("n = {n}"));
-        let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(Some(Method::Sparse), 4)).unwrap();
+        let sp = spectrum::compute(
+            sys.a.as_ref(),
+            sys.b.as_ref(),
+            &opts(Some(Method::Sparse), 4),
+        )
+        .unwrap();
         let exact = chain_eigenvalues(n, k, alpha, beta, 2);
         let err = exact
             .iter()
@@ -56,12 +65,21 @@ fn chain(c: &mut Criterion) {
             .map(|(j, e)| (sp.eigenvalues[2 * j] - e).norm() / e.norm())
             .fold(0.0, f64::max);
         println!("oscillator-chain n = {n} (N = {}): 2 slowest pairs, max relative error vs closed form {err:.2e}", 2 * n);
-        g.bench_with_input(BenchmarkId::new("sparse 2 pairs + master", n), &n, |b, _| {
-            b.iter(|| {
-                let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(Some(Method::Sparse), 4)).unwrap();
-                black_box(spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit).unwrap())
-            })
-        });
+        g.bench_with_input(
+            BenchmarkId::new("sparse 2 pairs + master", n),
+            &n,
+            |b, _| {
+                b.iter(|| {
+                    let sp = spectrum::compute(
+                        sys.a.as_ref(),
+                        sys.b.as_ref(),
+                        &opts(Some(Method::Sparse), 4),
+                    )
+                    .unwrap();
+                    black_box(spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit).unwrap())
+                })
+            },
+        );
     }
     g.finish();
 }

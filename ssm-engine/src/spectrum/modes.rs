@@ -197,7 +197,7 @@ fn refine(
             let x = &v[..mech.n_dof];
             let mx = spmv(mech.mass.as_ref(), x);
             let q = dot_h(x, &mx).re;
-            if !(q > 0.0) {
+            if q.is_nan() || q <= 0.0 {
                 return Err(fail(format!("x^H M x = {q:.3e} is not positive")));
             }
             q.sqrt()
