@@ -8,17 +8,10 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, Method, SpectrumOptions};
+use ssm_engine::spectrum::{self, Method};
 use ssm_tests::{chain_eigenvalues, oscillator_published_eigenvalues, system, CHAIN_DEFAULTS};
 
-fn opts(method: Option<Method>, modes: usize) -> SpectrumOptions {
-    SpectrumOptions {
-        method,
-        modes,
-        shift: 0.0,
-        normalization: Normalization::Unit,
-    }
-}
+use ssm_tests::spectrum_options as opts;
 
 fn oscillator(c: &mut Criterion) {
     let mut g = c.benchmark_group("spatial-oscillator");

@@ -9,6 +9,8 @@ use std::path::PathBuf;
 
 use num_complex::Complex64 as C64;
 use ssm_engine::plugin::Plugin;
+use ssm_engine::scene::Normalization;
+use ssm_engine::spectrum::{Method, SpectrumOptions};
 use ssm_engine::system::System;
 
 /// `target/<profile>` of the running test or bench executable.
@@ -90,3 +92,13 @@ pub fn chain_eigenvalues(n: usize, k: f64, alpha: f64, beta: f64, count: usize) 
 
 /// Default parameters of the `oscillator-chain` plugin `(k, alpha, beta)`.
 pub const CHAIN_DEFAULTS: (f64, f64, f64) = (1.0, 1e-5, 1e-3);
+
+/// Spectrum options with unit normalization and shift 0 (`method: None` = automatic).
+pub fn spectrum_options(method: Option<Method>, modes: usize) -> SpectrumOptions {
+    SpectrumOptions {
+        method,
+        modes,
+        shift: 0.0,
+        normalization: Normalization::Unit,
+    }
+}

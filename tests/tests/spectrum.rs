@@ -2,18 +2,11 @@
 
 use num_complex::Complex64 as C64;
 use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, Method, SpectrumOptions};
+use ssm_engine::spectrum::{self, Method};
 use ssm_engine::system::System;
 use ssm_tests::{chain_eigenvalues, oscillator_published_eigenvalues, system, CHAIN_DEFAULTS};
 
-fn opts(method: Option<Method>, modes: usize) -> SpectrumOptions {
-    SpectrumOptions {
-        method,
-        modes,
-        shift: 0.0,
-        normalization: Normalization::Unit,
-    }
-}
+use ssm_tests::spectrum_options as opts;
 
 /// True when `value` rounds to the printed decimal `printed` (half a unit in
 /// its last printed digit).
