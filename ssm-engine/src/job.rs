@@ -70,7 +70,13 @@ pub fn build_system(scene: &SceneFile, registry: &mut Registry) -> Result<System
         other => JobError::Plugin(other),
     })?;
     let name = m.name.as_ref().map_or("", |n| n.get_ref().as_str());
-    let params = toml::to_string(m.params.get_ref()).unwrap_or_default();
+    let params = toml::to_string(m.params.get_ref()).map_err(|e| {
+        scene.invalid(
+            m.params.span(),
+            "model.params",
+            format!("cannot pass the parameter table to the plugin: {e}"),
+        )
+    })?;
     let model = plugin.build_model(name, &params).map_err(|e| match e {
         PluginLoadError::Plugin { plugin, error }
             if error.kind == ssm_api::ErrorKind::InvalidParameter =>
