@@ -12,16 +12,12 @@ use ssm_engine::spectrum::{self, Method};
 use ssm_tests::{chain_eigenvalues, oscillator_published_eigenvalues, system, CHAIN_DEFAULTS};
 
 use ssm_tests::spectrum_options as opts;
+use ssm_tests::{oscillator_with_spectrum, OSCILLATOR_CONSTRAINTS};
 
 fn oscillator(c: &mut Criterion) {
     let mut g = c.benchmark_group("spatial-oscillator");
-    for constraint in ["none", "cubic", "spherical"] {
-        let sys = system(
-            "spatial-oscillator",
-            "",
-            &format!("constraint = \"{constraint}\""),
-        );
-        let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+    for constraint in OSCILLATOR_CONSTRAINTS {
+        let (sys, sp) = oscillator_with_spectrum(constraint);
         let published = oscillator_published_eigenvalues(constraint);
         let err = published
             .iter()

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use num_complex::Complex64 as C64;
 use ssm_engine::plugin::Plugin;
 use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{Method, SpectrumOptions};
+use ssm_engine::spectrum::{self, Method, Spectrum, SpectrumOptions};
 use ssm_engine::system::System;
 
 /// `target/<profile>` of the running test or bench executable.
@@ -101,4 +101,20 @@ pub fn spectrum_options(method: Option<Method>, modes: usize) -> SpectrumOptions
         shift: 0.0,
         normalization: Normalization::Unit,
     }
+}
+
+/// The three variants of the spatial oscillator (Li, Jain & Haller 2023, eqs. 23-25).
+pub const OSCILLATOR_CONSTRAINTS: [&str; 3] = ["none", "cubic", "spherical"];
+
+/// The spatial oscillator with `constraint` (paper defaults otherwise), loaded
+/// through its `.so`, and its automatically computed finite spectrum.
+pub fn oscillator_with_spectrum(constraint: &str) -> (System, Spectrum) {
+    let sys = system(
+        "spatial-oscillator",
+        "",
+        &format!("constraint = \"{constraint}\""),
+    );
+    let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &spectrum_options(None, 0))
+        .expect("oscillator spectrum");
+    (sys, sp)
 }

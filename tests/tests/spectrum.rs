@@ -7,6 +7,7 @@ use ssm_engine::system::System;
 use ssm_tests::{chain_eigenvalues, oscillator_published_eigenvalues, system, CHAIN_DEFAULTS};
 
 use ssm_tests::spectrum_options as opts;
+use ssm_tests::{oscillator_with_spectrum, OSCILLATOR_CONSTRAINTS};
 
 /// True when `value` rounds to the printed decimal `printed` (half a unit in
 /// its last printed digit).
@@ -25,13 +26,8 @@ fn oscillator_eigenvalues_match_eqs_26_27_to_printed_digits() {
         ("-0.15", "2.9962"),
         ("-0.25", "4.9937"),
     ];
-    for constraint in ["none", "cubic", "spherical"] {
-        let sys = system(
-            "spatial-oscillator",
-            "",
-            &format!("constraint = \"{constraint}\""),
-        );
-        let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+    for constraint in OSCILLATOR_CONSTRAINTS {
+        let (sys, sp) = oscillator_with_spectrum(constraint);
         let expected = oscillator_published_eigenvalues(constraint);
         // exactly the finite pairs of the paper, nothing spurious: the 3 n_c = 3
         // infinite constraint modes are excluded
@@ -59,13 +55,8 @@ fn oscillator_eigenvalues_match_eqs_26_27_to_printed_digits() {
 /// documented normalization and phase.
 #[test]
 fn master_modes_are_normalized_eigenvectors() {
-    for constraint in ["none", "cubic", "spherical"] {
-        let sys = system(
-            "spatial-oscillator",
-            "",
-            &format!("constraint = \"{constraint}\""),
-        );
-        let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(None, 0)).unwrap();
+    for constraint in OSCILLATOR_CONSTRAINTS {
+        let (sys, sp) = oscillator_with_spectrum(constraint);
         for norm in [Normalization::Unit, Normalization::Mass] {
             let modes = spectrum::master_modes(&sys, &sp, &[1, 2], norm).unwrap();
             for m in &modes {
