@@ -10,14 +10,19 @@
 //! - [`system`]: the engine-side first-order system built from a plugin's model;
 //! - [`spectrum`]: finite spectrum of the (possibly singular) pencil `(A, B)`,
 //!   master modes, normalization, spectral quotients and non-resonance checks;
+//! - [`poly`]: multi-indices, truncated series, order-by-order composition `F(W(p))`;
+//! - [`ssm`]: autonomous SSMs of flows and maps (parametrization method),
+//!   polar form, backbones, invariance error, reduced-model transients;
 //! - [`report`]: `summary.json` and CSV tables, written atomically;
 //! - [`job`]: running a scene end to end.
 
 pub mod job;
 pub mod plugin;
+pub mod poly;
 pub mod report;
 pub mod scene;
 pub mod spectrum;
+pub mod ssm;
 pub mod system;
 
 pub use num_complex::Complex64 as C64;

@@ -11,13 +11,23 @@
 //! [ssm]
 //! master_pairs = [1]              # 1-based mode pairs, slowest first
 //! order = 13                      # expansion order (non-resonance checks go up to it)
-//! normalization = "unit"          # or "mass"
+//! normalization = "unit"          # or "mass", or { scale = 0.8306 }
 //! resonance_tol = 0.02            # relative distance counted as a (near) resonance
 //! [spectrum]
 //! method = "auto"                 # "dense" | "sparse" | "auto" (dense up to 2000 states)
 //! modes = 12                      # finite modes computed on the sparse path
 //! [outputs]
 //! coordinates = ["x1"]            # named outputs of the model
+//! [outputs.invariance_error]      # eq. (41)
+//! radii = [0.01, 0.1]
+//! orders = [3, 5, 7]
+//! [outputs.backbone]              # one master pair
+//! rho_max = 0.35
+//! orders = [3, 7, 13]
+//! [outputs.transient]             # p' = R(p) from (rho0, theta0), lifted by W
+//! rho0 = [0.35]
+//! theta0 = [0.5]
+//! t_end = 100.0
 //! ```
 
 use std::ops::Range;
@@ -93,14 +103,64 @@ pub struct ModelSection {
 }
 
 /// How master eigenvectors are scaled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
+///
+/// In the scene: `normalization = "unit"`, `"mass"`, or `{ scale = s }`
+/// (unit 2-norm times `s > 0`, e.g. to reproduce published coefficients that
+/// were computed with another eigenvector scaling).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Normalization {
     /// Unit 2-norm of the whole state vector.
     #[default]
     Unit,
     /// Displacement part mass-normalized, `x^H M x = 1` (needs a mechanical model).
     Mass,
+    /// Unit 2-norm times the given positive factor.
+    Scale(f64),
+}
+
+impl<'de> Deserialize<'de> for Normalization {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Normalization;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(r#""unit", "mass" or { scale = <positive number> }"#)
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Normalization, E> {
+                match v {
+                    "unit" => Ok(Normalization::Unit),
+                    "mass" => Ok(Normalization::Mass),
+                    other => Err(E::custom(format!(
+                        r#"unknown normalization "{other}"; expected "unit", "mass" or {{ scale = <positive number> }}"#
+                    ))),
+                }
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<Normalization, A::Error> {
+                let mut scale = None;
+                while let Some(key) = map.next_key::<String>()? {
+                    if key != "scale" {
+                        return Err(serde::de::Error::custom(format!(
+                            "unknown key `{key}` in normalization; the only key is `scale`"
+                        )));
+                    }
+                    scale = Some(map.next_value::<f64>()?);
+                }
+                match scale {
+                    Some(s) if s.is_finite() && s > 0.0 => Ok(Normalization::Scale(s)),
+                    Some(s) => Err(serde::de::Error::custom(format!(
+                        "normalization scale must be a positive number, found {s}"
+                    ))),
+                    None => Err(serde::de::Error::custom(
+                        "normalization table needs `scale = <positive number>`",
+                    )),
+                }
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
 }
 
 /// `[ssm]`.
@@ -179,14 +239,94 @@ pub struct OutputsSection {
     /// Named outputs of the model to report.
     #[serde(default = "empty_list")]
     pub coordinates: Spanned<Vec<String>>,
+    /// `[outputs.invariance_error]`: eq. (41) at given radii and orders.
+    #[serde(default)]
+    pub invariance_error: Option<InvarianceErrorSection>,
+    /// `[outputs.backbone]`: backbone curves (one master pair).
+    #[serde(default)]
+    pub backbone: Option<BackboneSection>,
+    /// `[outputs.transient]`: reduced-model trajectory lifted to the outputs.
+    #[serde(default)]
+    pub transient: Option<TransientSection>,
 }
 
 impl Default for OutputsSection {
     fn default() -> Self {
         Self {
             coordinates: empty_list(),
+            invariance_error: None,
+            backbone: None,
+            transient: None,
         }
     }
+}
+
+/// `[outputs.invariance_error]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InvarianceErrorSection {
+    /// Radii `varrho` of the sampling spheres.
+    pub radii: Spanned<Vec<f64>>,
+    /// Expansion orders to evaluate (each at most `[ssm] order`).
+    pub orders: Spanned<Vec<usize>>,
+    /// Amplitude angles per pair after the first (eq. 40).
+    #[serde(default = "default_n_alpha")]
+    pub n_alpha: Spanned<usize>,
+    /// Phases per pair (eq. 40).
+    #[serde(default = "default_n_theta")]
+    pub n_theta: Spanned<usize>,
+}
+
+/// `[outputs.backbone]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BackboneSection {
+    /// Largest polar amplitude `rho`.
+    pub rho_max: Spanned<f64>,
+    /// Number of amplitudes in `[0, rho_max]`.
+    #[serde(default = "default_points")]
+    pub points: Spanned<usize>,
+    /// Expansion orders, one curve each (default: `[ssm] order`).
+    #[serde(default)]
+    pub orders: Option<Spanned<Vec<usize>>>,
+}
+
+/// `[outputs.transient]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransientSection {
+    /// Initial polar amplitude of each master pair.
+    pub rho0: Spanned<Vec<f64>>,
+    /// Initial phase of each master pair (default 0).
+    #[serde(default)]
+    pub theta0: Option<Spanned<Vec<f64>>>,
+    /// Final time.
+    pub t_end: Spanned<f64>,
+    /// Number of output samples.
+    #[serde(default = "default_samples")]
+    pub samples: Spanned<usize>,
+    /// Expansion order of the reduced model (default: `[ssm] order`).
+    #[serde(default)]
+    pub order: Option<Spanned<usize>>,
+    /// Relative tolerance of the integrator.
+    #[serde(default = "default_rtol")]
+    pub rtol: Spanned<f64>,
+}
+
+fn default_n_alpha() -> Spanned<usize> {
+    Spanned::new(0..0, 10)
+}
+fn default_n_theta() -> Spanned<usize> {
+    Spanned::new(0..0, 30)
+}
+fn default_points() -> Spanned<usize> {
+    Spanned::new(0..0, 101)
+}
+fn default_samples() -> Spanned<usize> {
+    Spanned::new(0..0, 1001)
+}
+fn default_rtol() -> Spanned<f64> {
+    Spanned::new(0..0, 1e-9)
 }
 
 fn empty_list() -> Spanned<Vec<String>> {
@@ -282,9 +422,117 @@ impl SceneFile {
                 format!("must lie in (0, 1), found {tol}"),
             ));
         }
+        self.check_outputs()?;
         if let Some(m) = &self.scene.spectrum.modes {
             if *m.get_ref() == 0 {
                 return Err(self.invalid(m.span(), "spectrum.modes", "must be at least 1".into()));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl SceneFile {
+    fn check_orders(&self, orders: &Spanned<Vec<usize>>, key: &str) -> Result<(), SceneError> {
+        let max = *self.scene.ssm.order.get_ref();
+        if orders.get_ref().is_empty() {
+            return Err(self.invalid(orders.span(), key, "at least one order is needed".into()));
+        }
+        if let Some(&bad) = orders.get_ref().iter().find(|&&o| o < 1 || o > max) {
+            return Err(self.invalid(
+                orders.span(),
+                key,
+                format!("order {bad} is outside 1..={max} ([ssm] order)"),
+            ));
+        }
+        Ok(())
+    }
+
+    fn check_positive(&self, v: &Spanned<f64>, key: &str) -> Result<(), SceneError> {
+        let x = *v.get_ref();
+        if !(x.is_finite() && x > 0.0) {
+            return Err(self.invalid(
+                v.span(),
+                key,
+                format!("must be a positive number, found {x}"),
+            ));
+        }
+        Ok(())
+    }
+
+    fn check_at_least(&self, v: &Spanned<usize>, min: usize, key: &str) -> Result<(), SceneError> {
+        if *v.get_ref() < min {
+            return Err(self.invalid(v.span(), key, format!("must be at least {min}")));
+        }
+        Ok(())
+    }
+
+    fn check_outputs(&self) -> Result<(), SceneError> {
+        let out = &self.scene.outputs;
+        let pairs = self.scene.ssm.master_pairs.get_ref().len();
+        if let Some(ie) = &out.invariance_error {
+            self.check_orders(&ie.orders, "outputs.invariance_error.orders")?;
+            if ie.radii.get_ref().is_empty()
+                || ie
+                    .radii
+                    .get_ref()
+                    .iter()
+                    .any(|r| !(r.is_finite() && *r > 0.0))
+            {
+                return Err(self.invalid(
+                    ie.radii.span(),
+                    "outputs.invariance_error.radii",
+                    "give one or more positive radii".into(),
+                ));
+            }
+            self.check_at_least(&ie.n_alpha, 2, "outputs.invariance_error.n_alpha")?;
+            self.check_at_least(&ie.n_theta, 1, "outputs.invariance_error.n_theta")?;
+        }
+        if let Some(bb) = &out.backbone {
+            if pairs != 1 {
+                return Err(self.invalid(
+                    self.scene.ssm.master_pairs.span(),
+                    "outputs.backbone",
+                    format!("backbone curves need exactly one master pair, found {pairs}"),
+                ));
+            }
+            self.check_positive(&bb.rho_max, "outputs.backbone.rho_max")?;
+            self.check_at_least(&bb.points, 2, "outputs.backbone.points")?;
+            if let Some(o) = &bb.orders {
+                self.check_orders(o, "outputs.backbone.orders")?;
+            }
+        }
+        if let Some(tr) = &out.transient {
+            if tr.rho0.get_ref().len() != pairs
+                || tr
+                    .rho0
+                    .get_ref()
+                    .iter()
+                    .any(|r| !(r.is_finite() && *r >= 0.0))
+            {
+                return Err(self.invalid(
+                    tr.rho0.span(),
+                    "outputs.transient.rho0",
+                    format!("give {pairs} non-negative amplitude(s), one per master pair"),
+                ));
+            }
+            if let Some(th) = &tr.theta0 {
+                if th.get_ref().len() != pairs || th.get_ref().iter().any(|t| !t.is_finite()) {
+                    return Err(self.invalid(
+                        th.span(),
+                        "outputs.transient.theta0",
+                        format!("give {pairs} finite phase(s), one per master pair"),
+                    ));
+                }
+            }
+            self.check_positive(&tr.t_end, "outputs.transient.t_end")?;
+            self.check_at_least(&tr.samples, 2, "outputs.transient.samples")?;
+            self.check_positive(&tr.rtol, "outputs.transient.rtol")?;
+            if let Some(o) = &tr.order {
+                self.check_orders(
+                    &Spanned::new(o.span(), vec![*o.get_ref()]),
+                    "outputs.transient.order",
+                )?;
             }
         }
         Ok(())

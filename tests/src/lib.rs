@@ -11,6 +11,7 @@ use num_complex::Complex64 as C64;
 use ssm_engine::plugin::Plugin;
 use ssm_engine::scene::Normalization;
 use ssm_engine::spectrum::{self, Method, Spectrum, SpectrumOptions};
+use ssm_engine::ssm::{self as ssm_mod, SsmExpansion, SsmOptions};
 use ssm_engine::system::System;
 
 /// `target/<profile>` of the running test or bench executable.
@@ -117,4 +118,131 @@ pub fn oscillator_with_spectrum(constraint: &str) -> (System, Spectrum) {
     let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &spectrum_options(None, 0))
         .expect("oscillator spectrum");
     (sys, sp)
+}
+
+/// Autonomous SSM of `pairs` to `order` (resonance tolerance 0.02), with the
+/// master modes scaled by `normalization`.
+pub fn ssm_of(
+    sys: &System,
+    sp: &Spectrum,
+    pairs: &[usize],
+    order: usize,
+    normalization: Normalization,
+) -> SsmExpansion {
+    let masters = spectrum::master_modes(sys, sp, pairs, normalization).expect("master modes");
+    let others = ssm_mod::non_master(&sp.eigenvalues, &masters);
+    ssm_mod::compute(
+        sys,
+        &masters,
+        &others,
+        &SsmOptions {
+            order,
+            resonance_tol: 0.02,
+        },
+    )
+    .expect("SSM computation")
+}
+
+/// Printed polar reduced dynamics of the spatial oscillator's slowest SSM at
+/// O(13), Li, Jain & Haller (2023), eqs. (28) (unconstrained), (29) (cubic)
+/// and (30) (spherical): `([a1, a3, ..., a13], [b0, b2, ..., b12])` with
+/// `rho' = sum a_{2j+1} rho^{2j+1}`, `theta' = sum b_{2j} rho^{2j}`, as printed
+/// (4 significant digits).
+pub fn oscillator_published_polar(constraint: &str) -> ([&'static str; 7], [&'static str; 7]) {
+    match constraint {
+        "none" => (
+            [
+                "-0.02", "-0.2387", "1.08", "-4.408", "27.75", "-71.08", "50.58",
+            ],
+            [
+                "2.0", "-1.206", "-0.3417", "-4.035", "-23.49", "121.5", "-1370",
+            ],
+        ),
+        "cubic" => (
+            [
+                "-0.02", "-0.02188", "0.02972", "-1.029", "5.913", "-27.97", "214.2",
+            ],
+            [
+                "2.0", "0.8168", "-8.958", "3.485", "-66.98", "-7.963", "-882.8",
+            ],
+        ),
+        "spherical" => (
+            [
+                "-0.02", "-0.05085", "0.2779", "-1.945", "5.725", "26.99", "1068.0",
+            ],
+            [
+                "2.0", "4.421", "-3.666", "-88.02", "1341.0", "-12060.0", "55620.0",
+            ],
+        ),
+        other => panic!("no published polar form for constraint {other}"),
+    }
+}
+
+/// A real 4-dimensional polynomial map `z_{k+1} = A z_k + F(z_k)` with two
+/// rotation-contraction blocks, `mu_1 = 0.95 e^{0.3 i}` (slow) and
+/// `mu_2 = 0.7 e^{1.1 i}`, and quadratic and cubic couplings (sampling period
+/// 0.1). Used against Theorem 6.3 of Szalai, Ehrhardt & Haller (2017).
+pub fn cubic_map() -> System {
+    use ssm_api::reexports::abi_stable::std_types::{ROption, RString, RVec};
+    use ssm_api::{
+        Model, MotionKind, Output, PolyVector, SparseMatrix, StateInfo, StateKind, TimeKind, Weight,
+    };
+    let mut a = SparseMatrix::zeros(4, 4);
+    for (blk, (r, th)) in [(0.95f64, 0.3f64), (0.7, 1.1)].into_iter().enumerate() {
+        let (c, s) = (r * th.cos(), r * th.sin());
+        let o = 2 * blk;
+        a.push(o, o, c);
+        a.push(o, o + 1, -s);
+        a.push(o + 1, o, s);
+        a.push(o + 1, o + 1, c);
+    }
+    let mut f = PolyVector::zeros(4, 4);
+    f.push(0, 0.3, &[(0, 2)]);
+    f.push(0, 0.2, &[(0, 1), (2, 1)]);
+    f.push(0, -0.5, &[(0, 3)]);
+    f.push(0, 0.1, &[(1, 1), (3, 2)]);
+    f.push(1, -0.4, &[(0, 1), (1, 1)]);
+    f.push(1, 0.7, &[(1, 3)]);
+    f.push(1, 0.15, &[(0, 2), (1, 1)]);
+    f.push(2, 0.25, &[(0, 2)]);
+    f.push(2, -0.3, &[(1, 2), (2, 1)]);
+    f.push(3, 0.35, &[(0, 1), (1, 1)]);
+    f.push(3, 0.2, &[(3, 3)]);
+    let states: RVec<StateInfo> = (1..=4)
+        .map(|i| StateInfo {
+            name: RString::from(format!("z{i}")),
+            kind: StateKind::Other,
+            motion: MotionKind::Unspecified,
+        })
+        .collect();
+    let outputs: RVec<Output> = (0..4)
+        .map(|i| Output {
+            name: RString::from(format!("z{}", i + 1)),
+            weights: vec![Weight {
+                state: i,
+                value: 1.0,
+            }]
+            .into(),
+        })
+        .collect();
+    let model = Model {
+        name: "cubic-map".into(),
+        a,
+        b: SparseMatrix::diagonal(&[1.0; 4]),
+        nonlinearity: f,
+        forcing: RVec::new(),
+        states,
+        outputs,
+        time: TimeKind::Map { period: 0.1 },
+        mechanical: ROption::RNone,
+    };
+    System::from_model("catalogue", model).expect("valid map model")
+}
+
+/// The spectrum of a map, sorted by `ln |mu|` (slowest first).
+pub fn map_spectrum(sys: &System) -> Spectrum {
+    let mut sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &spectrum_options(None, 0))
+        .expect("map spectrum");
+    spectrum::sort_multipliers(&mut sp.eigenvalues);
+    sp
 }

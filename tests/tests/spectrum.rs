@@ -57,7 +57,11 @@ fn oscillator_eigenvalues_match_eqs_26_27_to_printed_digits() {
 fn master_modes_are_normalized_eigenvectors() {
     for constraint in OSCILLATOR_CONSTRAINTS {
         let (sys, sp) = oscillator_with_spectrum(constraint);
-        for norm in [Normalization::Unit, Normalization::Mass] {
+        for norm in [
+            Normalization::Unit,
+            Normalization::Mass,
+            Normalization::Scale(0.8306),
+        ] {
             let modes = spectrum::master_modes(&sys, &sp, &[1, 2], norm).unwrap();
             for m in &modes {
                 check_mode(&sys, m, norm);
@@ -92,9 +96,13 @@ fn check_mode(sys: &System, m: &spectrum::MasterMode, norm: Normalization) {
     let ubv: C64 = m.left.iter().zip(&bv).map(|(u, v)| u.conj() * v).sum();
     assert!((ubv - 1.0).norm() < 1e-12, "u^* B v = {ubv}");
     match norm {
-        Normalization::Unit => {
+        Normalization::Unit | Normalization::Scale(_) => {
+            let target = match norm {
+                Normalization::Scale(s) => s,
+                _ => 1.0,
+            };
             let n: f64 = m.right.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
-            assert!((n - 1.0).abs() < 1e-13);
+            assert!((n - target).abs() < 1e-13 * target);
         }
         Normalization::Mass => {
             let mech = sys.mechanical.as_ref().unwrap();

@@ -203,6 +203,25 @@ pub fn sort_spectrum(ev: &mut Vec<C64>) {
     }
 }
 
+/// Sorts the multipliers of a map like [`sort_spectrum`] sorts eigenvalues
+/// of a flow: by `ln |mu|` descending (slowest decay first), pairs adjacent.
+pub fn sort_multipliers(ev: &mut Vec<C64>) {
+    let mut logs: Vec<C64> = ev.iter().map(|m| m.ln()).collect();
+    sort_spectrum(&mut logs);
+    *ev = logs.iter().map(|l| l.exp()).collect();
+    // exact conjugate partners after the round trip
+    for i in 1..ev.len() {
+        if ev[i - 1].im > 0.0 && logs[i] == logs[i - 1].conj() {
+            ev[i] = ev[i - 1].conj();
+        }
+    }
+}
+
+/// Flow eigenvalues `ln(mu) / T` of map multipliers.
+pub fn multipliers_to_rates(mu: &[C64], period: f64) -> Vec<C64> {
+    mu.iter().map(|m| m.ln() / period).collect()
+}
+
 /// Indices (into a sorted spectrum) of the first eigenvalue of each complex
 /// conjugate pair, in order: pair `p` (1-based) is `pairs[p - 1]`.
 pub fn pair_starts(ev: &[C64]) -> Vec<usize> {

@@ -10,6 +10,7 @@
 //! Normalization (scene `[ssm] normalization`):
 //! - `unit`: `||v||_2 = 1`;
 //! - `mass`: `x^H M x = 1` for the displacement part `x` of `v`;
+//! - `{ scale = s }`: `||v||_2 = s`;
 //!
 //! then the phase is fixed so that the largest-modulus component of `v` is real
 //! and positive (first such component on ties), and `u` is scaled so that
@@ -192,6 +193,7 @@ fn refine(
     // normalization of v
     let scale = match normalization {
         Normalization::Unit => norm2(&v),
+        Normalization::Scale(s) => norm2(&v) / s,
         Normalization::Mass => {
             let mech = sys.mechanical.as_ref().ok_or(SpectrumError::NoMassMatrix)?;
             let x = &v[..mech.n_dof];
