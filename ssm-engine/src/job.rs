@@ -1,5 +1,6 @@
 //! Running a scene: load the plugin, build and validate the model, compute the
-//! spectrum and master modes, check resonances, assemble the outputs.
+//! spectrum and master modes, check resonances, compute the SSM and what is
+//! read off it, assemble the outputs.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -8,9 +9,11 @@ use serde_json::json;
 
 use crate::plugin::{PluginLoadError, Registry};
 use crate::report::{spectrum_csv, OutputError, OutputSet};
+use crate::results::{self, ResultError};
 use crate::scene::{SceneError, SceneFile, SpectrumMethod};
 use crate::spectrum::{self, MasterMode, Method, Spectrum, SpectrumError, SpectrumOptions};
-use crate::system::{ModelError, System};
+use crate::ssm::{self, Dynamics, SsmError, SsmExpansion, SsmOptions};
+use crate::system::{ModelError, OutputMap, System};
 
 /// Anything that stops a run; each variant says where.
 #[derive(Debug, thiserror::Error)]
@@ -30,6 +33,12 @@ pub enum JobError {
     /// Outputs could not be written.
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// The SSM could not be computed.
+    #[error("SSM: {0}")]
+    Ssm(#[from] SsmError),
+    /// A result (backbone, transient, plot) could not be produced.
+    #[error(transparent)]
+    Result(#[from] ResultError),
 }
 
 /// Stages reported to a progress display.
@@ -54,6 +63,8 @@ pub struct JobResult {
     pub spectrum: Spectrum,
     /// Master modes.
     pub masters: Vec<MasterMode>,
+    /// The SSM.
+    pub ssm: SsmExpansion,
     /// Warnings (resonances, ...).
     pub warnings: Vec<String>,
     /// Files to write.
@@ -170,7 +181,11 @@ pub fn run(
         shift: sc.spectrum.shift.unwrap_or(0.0),
         normalization: sc.ssm.normalization,
     };
-    let spectrum = spectrum::compute(system.a.as_ref(), system.b.as_ref(), &opts)?;
+    let dynamics = Dynamics::from(system.time);
+    let mut spectrum = spectrum::compute(system.a.as_ref(), system.b.as_ref(), &opts)?;
+    if let Dynamics::Map { .. } = dynamics {
+        spectrum::sort_multipliers(&mut spectrum.eigenvalues);
+    }
     if let (true, Some(mech)) = (spectrum.complete, &system.mechanical) {
         let expected = 2 * (mech.n_dof - mech.n_constraints.min(mech.n_dof));
         let aux = system.n_states() - 2 * mech.n_dof - mech.n_constraints;
@@ -195,8 +210,12 @@ pub fn run(
     )?;
     let spectrum_s = t_spec.elapsed().as_secs_f64();
     let master_indices: Vec<usize> = masters.iter().map(|m| m.index).collect();
+    let rates = match dynamics {
+        Dynamics::Flow => spectrum.eigenvalues.clone(),
+        Dynamics::Map { period } => spectrum::multipliers_to_rates(&spectrum.eigenvalues, period),
+    };
     let res = spectrum::check_resonances(
-        &spectrum.eigenvalues,
+        &rates,
         &master_indices,
         *sc.ssm.order.get_ref(),
         *sc.ssm.resonance_tol.get_ref(),
@@ -211,6 +230,48 @@ pub fn run(
         ));
     }
 
+    progress.stage("SSM");
+    let t_ssm = Instant::now();
+    let others = ssm::non_master(&spectrum.eigenvalues, &masters);
+    let expansion = ssm::compute(
+        &system,
+        &masters,
+        &others,
+        &SsmOptions {
+            order: *sc.ssm.order.get_ref(),
+            resonance_tol: *sc.ssm.resonance_tol.get_ref(),
+        },
+    )?;
+    let ssm_s = t_ssm.elapsed().as_secs_f64();
+
+    progress.stage("backbone, invariance error, transients");
+    let t_out = Instant::now();
+    let out_maps: Vec<&OutputMap> = sc
+        .outputs
+        .coordinates
+        .get_ref()
+        .iter()
+        .filter_map(|n| system.output(n))
+        .collect();
+    let mut outputs = OutputSet::default();
+    let invariance = sc
+        .outputs
+        .invariance_error
+        .as_ref()
+        .map(|sec| results::invariance_json(&expansion, &system, sec));
+    if let Some(sec) = &sc.outputs.backbone {
+        let (csv, svg) = results::backbone(&expansion, sec, &out_maps)?;
+        outputs.add("backbone.csv", csv);
+        outputs.add("backbone.svg", svg);
+    }
+    let mut rom_steps = None;
+    if let Some(sec) = &sc.outputs.transient {
+        let (csv, steps) = results::transient(&expansion, sec, &out_maps)?;
+        outputs.add("rom_trajectory.csv", csv);
+        rom_steps = Some(steps);
+    }
+    let results_s = t_out.elapsed().as_secs_f64();
+
     progress.stage("writing outputs");
     let n_finite = match (&system.mechanical, spectrum.complete) {
         (_, true) => spectrum.eigenvalues.len(),
@@ -219,7 +280,6 @@ pub fn run(
         }
         _ => spectrum.eigenvalues.len(),
     };
-    let mut outputs = OutputSet::default();
     let pair_index: Vec<(usize, usize)> = masters.iter().map(|m| (m.pair, m.index)).collect();
     outputs.add("spectrum.csv", spectrum_csv(&spectrum, &pair_index));
     let summary = json!({
@@ -243,8 +303,25 @@ pub fn run(
             "absolute": res.quotients.absolute,
             "complete": res.quotients.complete,
         },
+        "ssm": results::ssm_json(&expansion),
+        "polar": results::polar_json(&expansion),
+        "invariance_error": invariance,
+        "rom_steps": rom_steps,
         "warnings": warnings,
-        "timing_s": {"spectrum": spectrum_s, "total": t0.elapsed().as_secs_f64()},
+        "timing_s": {
+            "spectrum": spectrum_s,
+            "ssm": ssm_s,
+            "ssm_composition": expansion.timing.compose_s,
+            "ssm_factorization": expansion.timing.linear.factor_s,
+            "ssm_solves": expansion.timing.linear.solve_s,
+            "results": results_s,
+            "total": t0.elapsed().as_secs_f64(),
+        },
+        "linear_algebra": {
+            "symbolic_factorizations": expansion.timing.linear.symbolic,
+            "numeric_factorizations": expansion.timing.linear.factorizations,
+            "solves": expansion.timing.linear.solves,
+        },
     });
     outputs.add(
         "summary.json",
@@ -254,6 +331,7 @@ pub fn run(
         system,
         spectrum,
         masters,
+        ssm: expansion,
         warnings,
         outputs,
     })

@@ -13,13 +13,17 @@
 //! - [`poly`]: multi-indices, truncated series, order-by-order composition `F(W(p))`;
 //! - [`ssm`]: autonomous SSMs of flows and maps (parametrization method),
 //!   polar form, backbones, invariance error, reduced-model transients;
+//! - [`results`]: SSM entries of the summary, backbone and transient files;
+//! - [`plot`]: SVG plots;
 //! - [`report`]: `summary.json` and CSV tables, written atomically;
 //! - [`job`]: running a scene end to end.
 
 pub mod job;
+pub mod plot;
 pub mod plugin;
 pub mod poly;
 pub mod report;
+pub mod results;
 pub mod scene;
 pub mod spectrum;
 pub mod ssm;

@@ -140,6 +140,7 @@ fn zoo_oscillator_scenes_write_the_summary() {
         assert!(s["timing_s"]["total"].as_f64().unwrap() >= 0.0);
         let csv = std::fs::read_to_string(out.join("spectrum.csv")).unwrap();
         assert_eq!(csv.lines().count(), 1 + 2 * pairs);
+        check_ssm_outputs(c, &s, &out);
         // no temporary files left behind
         assert!(std::fs::read_dir(&out).unwrap().all(|e| !e
             .unwrap()
@@ -148,6 +149,61 @@ fn zoo_oscillator_scenes_write_the_summary() {
             .ends_with(".tmp")));
         let _ = std::fs::remove_dir_all(&out);
     }
+}
+
+/// The SSM part of the output contract of the zoo oscillator scenes (O(13),
+/// eigenvector scaled to 0.8306 as in the published computation).
+fn check_ssm_outputs(c: &str, s: &serde_json::Value, out: &std::path::Path) {
+    let ssm = &s["ssm"];
+    assert_eq!(ssm["order"], 13);
+    assert_eq!(ssm["dim"], 2);
+    let resonant = ssm["resonant_terms"].as_array().unwrap();
+    // backbone terms p^(j+1) conj(p)^j, j = 1..6, in both equations
+    assert_eq!(resonant.len(), 12);
+    assert!(resonant.contains(&serde_json::json!({"eq": 1, "exponents": [2, 1]})));
+    assert!(resonant.contains(&serde_json::json!({"eq": 2, "exponents": [1, 2]})));
+    assert_eq!(ssm["reduced_dynamics"].as_array().unwrap().len(), 14);
+    // eqs. (28)-(30): cubic coefficients to the printed digits (the scene's
+    // scaling 0.8306 is the published one rounded to 4 digits)
+    let (a, b) = ssm_tests::oscillator_published_polar(c);
+    let polar = &s["polar"][0];
+    let a3 = polar["rho_dot"][1].as_f64().unwrap();
+    let b2 = polar["omega"][1].as_f64().unwrap();
+    let (pa3, pb2): (f64, f64) = (a[1].parse().unwrap(), b[1].parse().unwrap());
+    assert!((a3 - pa3).abs() < 1e-3 * pa3.abs(), "{c}: a3 {a3} vs {pa3}");
+    assert!((b2 - pb2).abs() < 1e-3 * pb2.abs(), "{c}: b2 {b2} vs {pb2}");
+    // invariance error: 6 orders x 6 radii, falling with order at small radius
+    let ie = s["invariance_error"].as_array().unwrap();
+    assert_eq!(ie.len(), 36);
+    let at = |order: u64, radius: f64| {
+        ie.iter()
+            .find(|e| e["order"] == order && (e["radius"].as_f64().unwrap() - radius).abs() < 1e-12)
+            .unwrap()["error"]
+            .as_f64()
+            .unwrap()
+    };
+    for w in [3u64, 5, 7, 9, 11, 13].windows(2) {
+        assert!(
+            at(w[1], 0.05) < at(w[0], 0.05),
+            "{c}: O({}) vs O({})",
+            w[1],
+            w[0]
+        );
+    }
+    let bb = std::fs::read_to_string(out.join("backbone.csv")).unwrap();
+    assert_eq!(bb.lines().next().unwrap(), "order,rho,omega,x1,x2,x3");
+    assert_eq!(bb.lines().count(), 1 + 6 * 71);
+    let svg = std::fs::read_to_string(out.join("backbone.svg")).unwrap();
+    assert!(svg.contains("O(13)") && svg.contains("amplitude of x1"));
+    let tr = std::fs::read_to_string(out.join("rom_trajectory.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = tr
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 2001);
+    // the reduced amplitude decays (rho' < 0 on the damped backbone)
+    assert!(rows[2000][4] < 0.5 * rows[0][4]);
 }
 
 #[test]

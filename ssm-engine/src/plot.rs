@@ -1,0 +1,169 @@
+//! SVG line plots of backbones, trajectories and error curves (plotters, SVG
+//! backend; text is emitted as SVG text, no font files are needed).
+
+use plotters::prelude::*;
+
+/// A plot that could not be drawn.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("plot '{title}': {message}")]
+pub struct PlotError {
+    /// Plot title.
+    pub title: String,
+    /// What failed.
+    pub message: String,
+}
+
+/// One labelled curve.
+#[derive(Debug, Clone)]
+pub struct Curve {
+    /// Legend label.
+    pub label: String,
+    /// Points `(x, y)`; non-finite points are skipped.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Axis scaling.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scale {
+    /// Linear axes.
+    Linear,
+    /// Logarithmic x and y axes (non-positive values are skipped).
+    LogLog,
+}
+
+fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in vals.filter(|v| v.is_finite() && (!log || *v > 0.0)) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return if log { (0.1, 1.0) } else { (0.0, 1.0) };
+    }
+    if log {
+        if hi <= lo {
+            return (lo / 2.0, hi * 2.0);
+        }
+        return (lo / 1.2, hi * 1.2);
+    }
+    let pad = if hi > lo {
+        0.04 * (hi - lo)
+    } else {
+        0.5 * lo.abs().max(1.0)
+    };
+    (lo - pad, hi + pad)
+}
+
+/// Draws `curves` into an SVG document (800 x 560) with axis names and a legend.
+pub fn line_plot(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    curves: &[Curve],
+    scale: Scale,
+) -> Result<String, PlotError> {
+    let fail = |e: &dyn std::fmt::Display| PlotError {
+        title: title.to_owned(),
+        message: e.to_string(),
+    };
+    let log = scale == Scale::LogLog;
+    let keep =
+        |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite() && (!log || (p.0 > 0.0 && p.1 > 0.0));
+    let xs = range(
+        curves
+            .iter()
+            .flat_map(|c| c.points.iter().filter(keep).map(|p| p.0)),
+        log,
+    );
+    let ys = range(
+        curves
+            .iter()
+            .flat_map(|c| c.points.iter().filter(keep).map(|p| p.1)),
+        log,
+    );
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (800, 560)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(72);
+        macro_rules! draw {
+            ($chart:expr) => {{
+                let mut chart = $chart;
+                chart
+                    .configure_mesh()
+                    .x_desc(x_label)
+                    .y_desc(y_label)
+                    .draw()
+                    .map_err(|e| fail(&e))?;
+                for (i, c) in curves.iter().enumerate() {
+                    let color = Palette99::pick(i).to_rgba();
+                    chart
+                        .draw_series(LineSeries::new(
+                            c.points.iter().filter(keep).copied(),
+                            color.stroke_width(2),
+                        ))
+                        .map_err(|e| fail(&e))?
+                        .label(c.label.clone())
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                        });
+                }
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .draw()
+                    .map_err(|e| fail(&e))?;
+            }};
+        }
+        if log {
+            draw!(builder
+                .build_cartesian_2d((xs.0..xs.1).log_scale(), (ys.0..ys.1).log_scale())
+                .map_err(|e| fail(&e))?);
+        } else {
+            draw!(builder
+                .build_cartesian_2d(xs.0..xs.1, ys.0..ys.1)
+                .map_err(|e| fail(&e))?);
+        }
+        root.present().map_err(|e| fail(&e))?;
+    }
+    Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn svg_has_axes_legend_and_curves() {
+        let curves = vec![
+            Curve {
+                label: "O(3)".into(),
+                points: (0..10).map(|i| (i as f64, (i * i) as f64)).collect(),
+            },
+            Curve {
+                label: "O(5)".into(),
+                points: vec![(1.0, 2.0), (f64::NAN, 1.0), (3.0, 4.0)],
+            },
+        ];
+        let svg = line_plot("backbone", "amplitude x1", "omega", &curves, Scale::Linear).unwrap();
+        assert!(svg.starts_with("<svg"));
+        for text in [
+            "backbone",
+            "amplitude x1",
+            "omega",
+            "O(3)",
+            "O(5)",
+            "polyline",
+        ] {
+            assert!(svg.contains(text), "missing {text}");
+        }
+        let log = line_plot("error", "radius", "error", &curves, Scale::LogLog).unwrap();
+        assert!(log.contains("polyline"));
+    }
+}
