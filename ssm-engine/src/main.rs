@@ -26,7 +26,7 @@ SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
   resonance_tol = 0.02            # relative distance counted as a near resonance
 
   [spectrum]
-  method = \"auto\"                 # \"dense\", \"sparse\", or \"auto\" (dense up to 2000 states)
+  method = \"auto\"                 # \"dense\", \"sparse\", or \"auto\" (dense up to 1000 states)
   modes = 12                      # finite modes computed on the sparse path
   shift = 0.0                     # sparse path: modes nearest this real shift
 

@@ -14,7 +14,7 @@
 //! normalization = "unit"          # or "mass", or { scale = 0.8306 }
 //! resonance_tol = 0.02            # relative distance counted as a (near) resonance
 //! [spectrum]
-//! method = "auto"                 # "dense" | "sparse" | "auto" (dense up to 2000 states)
+//! method = "auto"                 # "dense" | "sparse" | "auto" (dense up to 1000 states)
 //! modes = 12                      # finite modes computed on the sparse path
 //! [outputs]
 //! coordinates = ["x1"]            # named outputs of the model

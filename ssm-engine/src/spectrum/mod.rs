@@ -32,7 +32,7 @@ pub use modes::{master_modes, MasterMode};
 pub use resonance::{check_resonances, ResonanceReport, SpectralQuotients};
 
 /// Largest number of states for which `auto` uses the dense path.
-pub const DENSE_LIMIT: usize = 2000;
+pub const DENSE_LIMIT: usize = 1000;
 
 /// Why a spectrum could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

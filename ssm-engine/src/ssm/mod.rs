@@ -244,7 +244,7 @@ pub fn compute(
             coeff: lambda[i],
         });
     }
-    let mut solver = Homological::new(sys.a.as_ref(), sys.b.as_ref(), &right, &left);
+    let mut solver = Homological::new(sys.a.as_ref(), sys.b.as_ref(), &lambda, &right, &left);
     let mut comp = Composition::new(&sys.nonlinearity, set.len());
     // maps: the monomials R(p)^j, 2 <= |j| < order, composed like F(W)
     let mut rpow = match dynamics {
