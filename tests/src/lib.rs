@@ -246,3 +246,24 @@ pub fn map_spectrum(sys: &System) -> Spectrum {
     spectrum::sort_multipliers(&mut sp.eigenvalues);
     sp
 }
+
+/// Two oscillators with an exact 1:2 resonance, `lambda_2 = 2 lambda_1`
+/// (`omega_2 = 2 omega_1`, equal damping ratios `zeta`), coupled by the
+/// quadratic terms `x1^2` (in the second equation) and `x1 x2` (in the first)
+/// and with cubic self-stiffening.
+pub fn one_to_two_resonant(zeta: f64) -> System {
+    use ssm_api::{MechanicalSystem, PolyVector, SparseMatrix};
+    let mut m = MechanicalSystem::new("one-to-two", &["x1", "x2"]);
+    let (w1, w2) = (1.0f64, 2.0f64);
+    m.mass = SparseMatrix::diagonal(&[1.0, 1.0]);
+    m.damping = SparseMatrix::diagonal(&[2.0 * zeta * w1, 2.0 * zeta * w2]);
+    m.stiffness = SparseMatrix::diagonal(&[w1 * w1, w2 * w2]);
+    let mut f = PolyVector::zeros(2, 4);
+    f.push(0, 0.5, &[(0, 1), (1, 1)]);
+    f.push(1, 0.25, &[(0, 2)]);
+    f.push(0, 0.3, &[(0, 3)]);
+    f.push(1, 0.2, &[(1, 3)]);
+    m.internal_force = f;
+    let model = m.into_model().expect("valid mechanical model");
+    System::from_model("catalogue", model).expect("valid model")
+}

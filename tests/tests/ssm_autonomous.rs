@@ -325,3 +325,82 @@ fn map_cubic_coefficient_matches_theorem_6_3() {
         );
     }
 }
+
+/// Hard case: with `lambda_2 = 2 lambda_1` exactly, the 2-D SSM of pair 1
+/// does not exist (outer resonance at `p1^2`): the resonance check warns and
+/// names pair 2, and the computation stops with an error naming the
+/// multi-index and the eigenvalue, never NaN. Taking both pairs as a 4-D SSM
+/// turns it into an inner resonance: the 1:2 terms go into `R`, and the
+/// invariance error of orders 3 and 5 falls like `r^{k+1}` (m = 2 computed
+/// to O(13)).
+#[test]
+fn exact_one_to_two_resonance_warns_errors_or_goes_into_r() {
+    use ssm_engine::spectrum::check_resonances;
+    use ssm_engine::ssm::{self, SsmError, SsmOptions};
+    let sys = ssm_tests::one_to_two_resonant(0.01);
+    let sp = ssm_engine::spectrum::compute(
+        sys.a.as_ref(),
+        sys.b.as_ref(),
+        &ssm_tests::spectrum_options(None, 0),
+    )
+    .unwrap();
+    assert!((sp.eigenvalues[2] - 2.0 * sp.eigenvalues[0]).norm() < 1e-12);
+    let masters = ssm_engine::spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit).unwrap();
+    let report = check_resonances(&sp.eigenvalues, &[masters[0].index], 5, 0.02, true);
+    assert!(
+        report
+            .warnings
+            .iter()
+            .any(|w| w.contains("2 lambda_1") && w.contains("add pair 2")),
+        "{:?}",
+        report.warnings
+    );
+    let others = ssm::non_master(&sp.eigenvalues, &masters);
+    let err = ssm::compute(
+        &sys,
+        &masters,
+        &others,
+        &SsmOptions {
+            order: 5,
+            resonance_tol: 0.02,
+        },
+    )
+    .unwrap_err();
+    match &err {
+        SsmError::OuterResonance {
+            order, exponents, ..
+        } => {
+            assert_eq!(*order, 2);
+            assert_eq!(exponents, &vec![2, 0]);
+        }
+        other => panic!("expected an outer-resonance error, got {other}"),
+    }
+    assert!(err.to_string().contains("master_pairs"));
+
+    let s = ssm_of(&sys, &sp, &[1, 2], 13, Normalization::Unit);
+    assert!(s
+        .w
+        .iter()
+        .all(|w| w.iter().all(|x| x.re.is_finite() && x.im.is_finite())));
+    let has = |eq: usize, e: [u16; 4]| {
+        s.nonlinear_terms()
+            .any(|t| t.coord == eq && s.set.exponents(t.index) == e)
+    };
+    assert!(has(2, [2, 0, 0, 0]), "p1^2 in the equation of p2");
+    assert!(has(0, [0, 1, 1, 0]), "conj(p1) p2 in the equation of p1");
+    let radii = [0.02, 0.03, 0.045, 0.0675];
+    for k in [3, 5] {
+        let e: Vec<f64> = radii
+            .iter()
+            .map(|&r| invariance_error(&s, &sys, k, r, 6, 12))
+            .collect();
+        let slope = loglog_slope(&radii, &e);
+        assert!(
+            (slope - (k + 1) as f64).abs() < 0.5,
+            "4-D O({k}): slope {slope}, {e:?}"
+        );
+    }
+    let e13 = invariance_error(&s, &sys, 13, 0.05, 6, 12);
+    let e5 = invariance_error(&s, &sys, 5, 0.05, 6, 12);
+    assert!(e13 < e5, "O(13) {e13} vs O(5) {e5}");
+}
