@@ -268,3 +268,33 @@ fn plugins_command_lists_models_and_parameters() {
         assert!(out.contains(needle), "missing {needle} in:\n{out}");
     }
 }
+
+#[test]
+fn output_orders_above_the_ssm_order_name_key_and_line() {
+    let text = format!("{GOOD}[outputs.backbone]\nrho_max = 0.3\norders = [3, 15]\n");
+    let (line, msg) = scene_error(&text);
+    assert_eq!(line, 12);
+    assert!(
+        msg.contains("outputs.backbone.orders") && msg.contains("15"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn bad_normalization_is_explained() {
+    let (line, msg) =
+        scene_error(&GOOD.replace("order = 13", "order = 13\nnormalization = { scale = -1.0 }"));
+    assert_eq!(line, 8);
+    assert!(msg.contains("positive"), "{msg}");
+    let (_, msg) =
+        scene_error(&GOOD.replace("order = 13", "order = 13\nnormalization = \"modal\""));
+    assert!(msg.contains("unit") && msg.contains("scale"), "{msg}");
+}
+
+#[test]
+fn transient_needs_one_amplitude_per_pair() {
+    let text = format!("{GOOD}[outputs.transient]\nrho0 = [0.1, 0.2]\nt_end = 10.0\n");
+    let (line, msg) = scene_error(&text);
+    assert_eq!(line, 11);
+    assert!(msg.contains("outputs.transient.rho0"), "{msg}");
+}
