@@ -9,7 +9,9 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use ssm_engine::scene::Normalization;
 use ssm_engine::spectrum::{self, Method};
-use ssm_tests::{chain_eigenvalues, oscillator_published_eigenvalues, system, CHAIN_DEFAULTS};
+use ssm_tests::{
+    chain_eigenvalues, chain_with_sparse_spectrum, oscillator_published_eigenvalues, CHAIN_DEFAULTS,
+};
 
 use ssm_tests::spectrum_options as opts;
 use ssm_tests::{oscillator_with_spectrum, OSCILLATOR_CONSTRAINTS};
@@ -40,13 +42,7 @@ fn chain(c: &mut Criterion) {
     g.sample_size(10);
     let (k, alpha, beta) = CHAIN_DEFAULTS;
     for n in [100usize, 1_000, 10_000, 100_000] {
-        let sys = system("oscillator-chain", "chain", &format!("n = {n}"));
-        let sp = spectrum::compute(
-            sys.a.as_ref(),
-            sys.b.as_ref(),
-            &opts(Some(Method::Sparse), 4),
-        )
-        .unwrap();
+        let (sys, sp) = chain_with_sparse_spectrum(n, 4);
         let exact = chain_eigenvalues(n, k, alpha, beta, 2);
         let err = exact
             .iter()

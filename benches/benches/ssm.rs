@@ -9,12 +9,12 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, Method};
+use ssm_engine::spectrum;
 use ssm_engine::ssm::analysis::{invariance_error, polar};
 use ssm_engine::ssm::{self, SsmOptions};
-use ssm_tests::spectrum_options as opts;
 use ssm_tests::{
-    oscillator_published_polar, oscillator_with_spectrum, ssm_of, system, OSCILLATOR_CONSTRAINTS,
+    chain_with_sparse_spectrum, oscillator_published_polar, oscillator_with_spectrum, ssm_of,
+    OSCILLATOR_CONSTRAINTS,
 };
 
 fn oscillator(c: &mut Criterion) {
@@ -61,13 +61,7 @@ fn chain(c: &mut Criterion) {
     let mut g = c.benchmark_group("ssm oscillator-chain");
     g.sample_size(10);
     for n in [1_000usize, 10_000, 100_000] {
-        let sys = system("oscillator-chain", "chain", &format!("n = {n}"));
-        let sp = spectrum::compute(
-            sys.a.as_ref(),
-            sys.b.as_ref(),
-            &opts(Some(Method::Sparse), 4),
-        )
-        .unwrap();
+        let (sys, sp) = chain_with_sparse_spectrum(n, 4);
         let masters = spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit).unwrap();
         let others = ssm::non_master(&sp.eigenvalues, &masters);
         let o = SsmOptions {

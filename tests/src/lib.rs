@@ -91,6 +91,19 @@ pub fn chain_eigenvalues(n: usize, k: f64, alpha: f64, beta: f64, count: usize) 
         .collect()
 }
 
+/// The `oscillator-chain` plugin with `n` masses (other parameters default)
+/// and its `modes` finite eigenvalues nearest 0 from the sparse path.
+pub fn chain_with_sparse_spectrum(n: usize, modes: usize) -> (System, Spectrum) {
+    let sys = system("oscillator-chain", "chain", &format!("n = {n}"));
+    let sp = spectrum::compute(
+        sys.a.as_ref(),
+        sys.b.as_ref(),
+        &spectrum_options(Some(Method::Sparse), modes),
+    )
+    .expect("chain spectrum");
+    (sys, sp)
+}
+
 /// Default parameters of the `oscillator-chain` plugin `(k, alpha, beta)`.
 pub const CHAIN_DEFAULTS: (f64, f64, f64) = (1.0, 1e-5, 1e-3);
 
