@@ -258,7 +258,8 @@ pub fn run(
         .outputs
         .invariance_error
         .as_ref()
-        .map(|sec| results::invariance_json(&expansion, &system, sec));
+        .map(|sec| results::invariance_json(&expansion, &system, sec))
+        .transpose()?;
     if let Some(sec) = &sc.outputs.backbone {
         let (csv, svg) = results::backbone(&expansion, sec, &out_maps)?;
         outputs.add("backbone.csv", csv);

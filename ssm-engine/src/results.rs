@@ -48,7 +48,11 @@ pub fn polar_json(ssm: &SsmExpansion) -> Option<Value> {
 }
 
 /// `"invariance_error"`: eq. (41) for every requested order and radius.
-pub fn invariance_json(ssm: &SsmExpansion, sys: &System, sec: &InvarianceErrorSection) -> Value {
+pub fn invariance_json(
+    ssm: &SsmExpansion,
+    sys: &System,
+    sec: &InvarianceErrorSection,
+) -> Result<Value, ResultError> {
     let mut rows = Vec::new();
     for &order in sec.orders.get_ref() {
         for &radius in sec.radii.get_ref() {
@@ -60,10 +64,16 @@ pub fn invariance_json(ssm: &SsmExpansion, sys: &System, sec: &InvarianceErrorSe
                 *sec.n_alpha.get_ref(),
                 *sec.n_theta.get_ref(),
             );
+            if !e.is_finite() {
+                return Err(ResultError::NonFinite {
+                    what: "invariance error".into(),
+                    place: format!("order {order}, radius {radius}"),
+                });
+            }
             rows.push(json!({"order": order, "radius": radius, "error": e}));
         }
     }
-    Value::Array(rows)
+    Ok(Value::Array(rows))
 }
 
 /// Why a backbone or transient could not be produced.
