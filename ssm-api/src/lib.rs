@@ -18,11 +18,16 @@
 //!   first-order DAE of eqs. (4)-(5) of Li, Jain & Haller (2023), so plugins never
 //!   assemble block matrices by hand; the resulting [`Model`] keeps the constraint
 //!   structure in [`MechanicalInfo`].
-//! - **Recast** and **Reducer**: further constructors of the root module. The
-//!   root module is a prefix type whose fields are only ever appended, so these
-//!   entry points are added as new trailing fields in later API versions without
-//!   breaking plugins built against this one; an engine that finds a plugin
-//!   without them treats the capability as absent.
+//! - **Recast** ([`Expr`], [`ExprVector`]): non-polynomial terms (`sin`, `cos`,
+//!   `exp`, `ln`, `sqrt`, `1/x`, integer powers) written as expressions over the
+//!   states, with an optional equilibrium to expand about. The engine turns them
+//!   into a polynomial DAE with auxiliary states (`u1 = sin phi`,
+//!   `u2 = 1 - cos phi`) and knows which states are auxiliary.
+//! - **Reducer**: a further constructor of the root module. The root module is a
+//!   prefix type whose fields are only ever appended, so such entry points are
+//!   added as new trailing fields in later API versions without breaking plugins
+//!   built against this one; an engine that finds a plugin without them treats
+//!   the capability as absent.
 //!
 //! ## Versioning
 //! The API version is this crate's package version ([`API_VERSION`]). The engine
@@ -30,12 +35,14 @@
 //! 0.x a different minor) and names both versions; abi_stable additionally checks
 //! the full type layout of the root module at load time.
 
+mod expr;
 mod mechanical;
 mod model;
 mod params;
 mod plugin;
 
-pub use mechanical::{BuildError, Constraints, MechanicalSystem};
+pub use expr::{Expr, ExprNode, ExprOp, ExprTerm, ExprVector};
+pub use mechanical::{BuildError, Constraints, Equilibrium, MechanicalSystem};
 pub use model::{
     Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyTerm, PolyVector, SparseMatrix,
     StateInfo, StateKind, TimeKind, Triplet, VarPower, Weight,

@@ -7,17 +7,62 @@
 
 use abi_stable::std_types::{RString, RVec};
 
+use crate::expr::{Expr, ExprVector};
 use crate::model::{
     Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyVector, SparseMatrix, StateInfo,
     StateKind, TimeKind, Weight,
 };
 
-/// Polynomial configuration constraints `g(x) = G0 x + g_nl(x) = 0` (eq. 2):
-/// `n_c` components in the `n` displacements, no constant term.
+/// Configuration constraints `g(x) = 0` (eq. 2) in the `n` displacements: the
+/// polynomial ones `G0 x + g_nl(x)` first, then those written as expressions
+/// (e.g. `x2 - x1 - 0.5 l sin(phi2)`, eq. 33), which the engine recasts.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Constraints {
-    /// `g`, linear and nonlinear terms together (`n_c` equations, `n` variables).
+    /// Polynomial constraints, linear and nonlinear terms together (`n_p`
+    /// equations in `n` variables, no constant term).
     pub g: PolyVector,
+    /// Constraints `n_p + 1, ...` as expressions in the `n` displacements; they
+    /// may have a constant part when the model gives an [`Equilibrium`] at which
+    /// they vanish.
+    pub expressions: Vec<Expr>,
+}
+
+impl Constraints {
+    /// Polynomial constraints only.
+    pub fn polynomial(g: PolyVector) -> Self {
+        Self {
+            g,
+            expressions: Vec::new(),
+        }
+    }
+
+    /// Constraints written as expressions in the `n` displacements.
+    pub fn expressions(n_dof: usize, expressions: Vec<Expr>) -> Self {
+        Self {
+            g: PolyVector::zeros(0, n_dof),
+            expressions,
+        }
+    }
+
+    /// Number of constraints `n_c`.
+    pub fn len(&self) -> usize {
+        self.g.n_eq as usize + self.expressions.len()
+    }
+
+    /// True when there is no constraint.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A static equilibrium `(x_eq, mu_eq)` (velocities zero) that the engine shifts
+/// to the origin (eqs. 34 and 107).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Equilibrium {
+    /// Displacements at the equilibrium (`n` values).
+    pub x: Vec<f64>,
+    /// Lagrange multipliers at the equilibrium (`n_c` values).
+    pub mu: Vec<f64>,
 }
 
 /// What is wrong with a [`MechanicalSystem`].
@@ -83,6 +128,17 @@ pub enum BuildError {
     /// Names do not match the number of degrees of freedom, or repeat.
     #[error("names: {0}")]
     Names(String),
+    /// An expression uses a variable outside its range or enters a missing equation.
+    #[error("{what}: {detail}")]
+    ExprShape {
+        /// Which expression.
+        what: String,
+        /// What is wrong.
+        detail: String,
+    },
+    /// The equilibrium has the wrong length or a non-finite value.
+    #[error("equilibrium: {0}")]
+    Equilibrium(String),
 }
 
 /// A mechanical system `M x'' + C x' + K x + f(x, x') + G(x)^T mu = eps fext, g(x) = 0`
@@ -106,10 +162,16 @@ pub struct MechanicalSystem {
     pub internal_force: PolyVector,
     /// Configuration constraints, if any.
     pub constraints: Option<Constraints>,
+    /// Non-polynomial (or constant, or linear) parts of `f(x, x')` as
+    /// `(dof, expression in the 2n variables (x, x'))`, e.g. `(0, sin(phi))` for
+    /// the pendulum (eq. 21) or `(1, -m1 g)` for gravity; recast by the engine.
+    pub force_expressions: Vec<(usize, Expr)>,
     /// External forcing `fext(x, x', Omega t)` as harmonics, each `n` equations in `2n` variables.
     pub forcing: Vec<Harmonic>,
     /// Extra named outputs as `(name, [(displacement index, weight)])`.
     pub extra_outputs: Vec<(String, Vec<(usize, f64)>)>,
+    /// Equilibrium to expand about, when it is not the origin.
+    pub equilibrium: Option<Equilibrium>,
 }
 
 impl MechanicalSystem {
@@ -126,8 +188,10 @@ impl MechanicalSystem {
             stiffness: SparseMatrix::zeros(n, n),
             internal_force: PolyVector::zeros(n, 2 * n),
             constraints: None,
+            force_expressions: Vec::new(),
             forcing: Vec::new(),
             extra_outputs: Vec::new(),
+            equilibrium: None,
         }
     }
 
@@ -165,6 +229,34 @@ impl MechanicalSystem {
             check_poly("fext (cos part)", &h.cos, n, 2 * n)?;
             check_poly("fext (sin part)", &h.sin, n, 2 * n)?;
         }
+        for (k, (i, e)) in self.force_expressions.iter().enumerate() {
+            let what = format!("force expression {}", k + 1);
+            if *i >= n {
+                return Err(BuildError::ExprShape {
+                    what,
+                    detail: format!("enters dof {i} of {n}"),
+                });
+            }
+            check_expr(what, e, 2 * n)?;
+        }
+        if let Some(c) = &self.constraints {
+            for (k, e) in c.expressions.iter().enumerate() {
+                check_expr(format!("constraint {}", c.g.n_eq as usize + k + 1), e, n)?;
+            }
+        }
+        if let Some(eq) = &self.equilibrium {
+            let nc = self.constraints.as_ref().map_or(0, Constraints::len);
+            if eq.x.len() != n || eq.mu.len() != nc {
+                return Err(BuildError::Equilibrium(format!(
+                    "{} displacements and {} multipliers given, expected {n} and {nc}",
+                    eq.x.len(),
+                    eq.mu.len()
+                )));
+            }
+            if let Some(v) = eq.x.iter().chain(&eq.mu).find(|v| !v.is_finite()) {
+                return Err(BuildError::Equilibrium(format!("non-finite value {v}")));
+            }
+        }
         if let Some(c) = &self.constraints {
             check_poly("g(x)", &c.g, c.g.n_eq as usize, n)?;
             let nc = c.g.n_eq as usize;
@@ -200,9 +292,13 @@ impl MechanicalSystem {
     /// `A = [[-K, 0, -G0^T], [0, M, 0], [G0, 0, 0]]`,
     /// `B = [[C, M, 0], [M, 0, 0], [0, 0, 0]]`,
     /// `F = (-f(x, x') - G_nl(x)^T mu, 0, g_nl(x))`, `Fext = (fext, 0, 0)`.
+    ///
+    /// Force expressions enter `E(z)` as `-f_i`; each expression constraint
+    /// `g_j` enters as `E_{2n+j} = g_j(x)` and `E_i = -(d g_j / d x_i) mu_j`,
+    /// differentiated symbolically ([`Expr::diff`]).
     pub fn into_model(self) -> Result<Model, BuildError> {
         let n = self.check()?;
-        let nc = self.constraints.as_ref().map_or(0, |c| c.g.n_eq as usize);
+        let nc = self.constraints.as_ref().map_or(0, Constraints::len);
         let big_n = 2 * n + nc;
         let mut a = SparseMatrix::zeros(big_n, big_n);
         let mut b = SparseMatrix::zeros(big_n, big_n);
@@ -251,6 +347,32 @@ impl MechanicalSystem {
                 }
             }
         }
+        let mut expr_terms: Vec<(usize, Expr)> = self
+            .force_expressions
+            .iter()
+            .map(|(i, e)| (*i, -e.clone()))
+            .collect();
+        if let Some(c) = &self.constraints {
+            let np = c.g.n_eq as usize;
+            for (k, g) in c.expressions.iter().enumerate() {
+                let mu = Expr::var(2 * n + np + k);
+                expr_terms.push((2 * n + np + k, g.clone()));
+                for i in g.vars() {
+                    expr_terms.push((i, -(g.diff(i) * mu.clone())));
+                }
+            }
+        }
+        let expressions = ExprVector::from_terms(big_n, big_n, &expr_terms);
+        let equilibrium: RVec<f64> = match &self.equilibrium {
+            Some(eq) => {
+                eq.x.iter()
+                    .copied()
+                    .chain(std::iter::repeat_n(0.0, n))
+                    .chain(eq.mu.iter().copied())
+                    .collect()
+            }
+            None => RVec::new(),
+        };
         let forcing = self
             .forcing
             .iter()
@@ -315,6 +437,8 @@ impl MechanicalSystem {
                 n_constraints: nc as u32,
                 mass: self.mass,
             }),
+            expressions,
+            equilibrium,
         })
     }
 }
@@ -335,6 +459,16 @@ fn embed(p: &PolyVector, big_n: usize) -> PolyVector {
         n_vars: big_n as u32,
         terms: p.terms.clone(),
     }
+}
+
+fn check_expr(what: String, e: &Expr, n_vars: usize) -> Result<(), BuildError> {
+    if let Some(&v) = e.vars().iter().find(|&&v| v >= n_vars) {
+        return Err(BuildError::ExprShape {
+            what,
+            detail: format!("uses variable {v} of {n_vars}"),
+        });
+    }
+    Ok(())
 }
 
 fn check_matrix(what: &'static str, m: &SparseMatrix, n: usize) -> Result<(), BuildError> {
@@ -424,7 +558,7 @@ mod tests {
         let mut g = PolyVector::zeros(1, 2);
         g.push(0, 1.0, &[(1, 1)]); // x2
         g.push(0, -1.0, &[(0, 3)]); // -x1^3
-        s.constraints = Some(Constraints { g });
+        s.constraints = Some(Constraints::polynomial(g));
         let m = s.into_model().unwrap();
         assert_eq!(m.n_states(), 5);
         let dense = |sm: &SparseMatrix| {
@@ -468,7 +602,7 @@ mod tests {
         s.mass = SparseMatrix::diagonal(&[1.0]);
         let mut g = PolyVector::zeros(1, 1);
         g.push(0, 1.0, &[(0, 2)]);
-        s.constraints = Some(Constraints { g });
+        s.constraints = Some(Constraints::polynomial(g));
         assert_eq!(
             s.into_model(),
             Err(BuildError::ConstraintNoLinearPart { index: 1 })

@@ -4,6 +4,8 @@
 use abi_stable::std_types::{ROption, RString, RVec};
 use abi_stable::StableAbi;
 
+use crate::expr::ExprVector;
+
 /// One stored entry `(row, col, value)` of a [`SparseMatrix`].
 #[repr(C)]
 #[derive(StableAbi, Clone, Copy, Debug, PartialEq)]
@@ -274,6 +276,15 @@ pub struct Model {
     pub time: TimeKind,
     /// Mechanical structure, when the model came from [`crate::MechanicalSystem`].
     pub mechanical: ROption<MechanicalInfo>,
+    /// Non-polynomial right-hand-side terms `E(z)` (`N` components in the `N`
+    /// states), added to `A z + F(z)`; they may have constant and linear parts.
+    /// The engine recasts them into polynomials with auxiliary states (Sect. 4.2
+    /// of Li, Jain & Haller 2023). Empty for purely polynomial models.
+    pub expressions: ExprVector,
+    /// Equilibrium `z_eq` to expand about (eqs. 34, 107): the engine substitutes
+    /// `z = z_eq + z_hat`, so `A z_eq + F(z_eq) + E(z_eq)` must vanish. Empty:
+    /// the origin.
+    pub equilibrium: RVec<f64>,
 }
 
 impl Model {

@@ -182,14 +182,36 @@ pub fn run(
         normalization: sc.ssm.normalization,
     };
     let dynamics = Dynamics::from(system.time);
-    let mut spectrum = spectrum::compute(system.a.as_ref(), system.b.as_ref(), &opts)?;
+    let (pencil_a, pencil_b) = system.spectral_pencil();
+    let mut spectrum = match spectrum::compute(pencil_a, pencil_b, &opts) {
+        // a stiff pencil (e.g. light pendulums on a heavy slider) can defeat the
+        // dense path's rank decisions; the sparse path needs only the slow modes
+        Err(e @ (SpectrumError::SingularPencil { .. } | SpectrumError::NoConvergence { .. }))
+            if opts.method.is_none() =>
+        {
+            let sparse = SpectrumOptions {
+                method: Some(Method::Sparse),
+                ..opts.clone()
+            };
+            let sp = spectrum::compute(pencil_a, pencil_b, &sparse).map_err(|_| e.clone())?;
+            warnings.push(format!(
+                "dense spectrum failed ({e}); the sparse path was used instead (set [spectrum] method = \"sparse\" to skip the attempt)"
+            ));
+            sp
+        }
+        r => r?,
+    };
     if let Dynamics::Map { .. } = dynamics {
         spectrum::sort_multipliers(&mut spectrum.eigenvalues);
     }
-    if let (true, Some(mech)) = (spectrum.complete, &system.mechanical) {
+    let n_original = system.n_states() - system.n_auxiliary();
+    let mechanical_layout = system
+        .mechanical
+        .as_ref()
+        .filter(|m| n_original == 2 * m.n_dof + m.n_constraints);
+    if let (true, Some(mech)) = (spectrum.complete, mechanical_layout) {
         let expected = 2 * (mech.n_dof - mech.n_constraints.min(mech.n_dof));
-        let aux = system.n_states() - 2 * mech.n_dof - mech.n_constraints;
-        if aux == 0 && spectrum.eigenvalues.len() != expected {
+        if spectrum.eigenvalues.len() != expected {
             warnings.push(format!(
                 "found {} finite eigenvalues where a mechanical system with {} dofs and {} constraints has {expected}: check that M is non-singular and G0 has full rank",
                 spectrum.eigenvalues.len(),
@@ -274,11 +296,9 @@ pub fn run(
     let results_s = t_out.elapsed().as_secs_f64();
 
     progress.stage("writing outputs");
-    let n_finite = match (&system.mechanical, spectrum.complete) {
+    let n_finite = match (mechanical_layout, spectrum.complete) {
         (_, true) => spectrum.eigenvalues.len(),
-        (Some(m), false) if system.n_states() == 2 * m.n_dof + m.n_constraints => {
-            2 * (m.n_dof - m.n_constraints.min(m.n_dof))
-        }
+        (Some(m), false) => 2 * (m.n_dof - m.n_constraints.min(m.n_dof)),
         _ => spectrum.eigenvalues.len(),
     };
     let pair_index: Vec<(usize, usize)> = masters.iter().map(|m| (m.pair, m.index)).collect();
@@ -290,6 +310,15 @@ pub fn run(
             "n_states": system.n_states(),
             "n_finite_modes": n_finite,
         },
+        "recast": system.recast.as_ref().map(|r| json!({
+            "n_original_states": r.n_original,
+            "equilibrium_shifted": r.equilibrium.iter().any(|&v| v != 0.0),
+            "auxiliaries": r.auxiliaries.iter().map(|a| json!({
+                "name": a.name,
+                "definition": a.definition,
+                "equation": if a.kind.is_differential() { "differential" } else { "algebraic" },
+            })).collect::<Vec<_>>(),
+        })),
         "spectrum": spectrum.eigenvalues.iter().map(|l| json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
         "spectrum_method": spectrum.method.as_str(),
         "spectrum_complete": spectrum.complete,

@@ -8,6 +8,8 @@
 //! - [`plugin`]: finding and loading plugins, ABI/version checks;
 //! - [`scene`]: the TOML scene format, validated with line numbers;
 //! - [`system`]: the engine-side first-order system built from a plugin's model;
+//! - [`recast`]: non-polynomial terms turned into a polynomial DAE with
+//!   auxiliary states, equilibrium shift, and the physical pencil;
 //! - [`spectrum`]: finite spectrum of the (possibly singular) pencil `(A, B)`,
 //!   master modes, normalization, spectral quotients and non-resonance checks;
 //! - [`poly`]: multi-indices, truncated series, order-by-order composition `F(W(p))`;
@@ -22,6 +24,7 @@ pub mod job;
 pub mod plot;
 pub mod plugin;
 pub mod poly;
+pub mod recast;
 pub mod report;
 pub mod results;
 pub mod scene;

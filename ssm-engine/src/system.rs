@@ -2,7 +2,9 @@
 //! validated and converted from a plugin's [`ssm_api::Model`].
 
 use faer::sparse::{SparseColMat, Triplet};
-use ssm_api::{Harmonic, PolyVector, StateInfo, TimeKind};
+use ssm_api::{Harmonic, MotionKind, PolyVector, StateInfo, StateKind, TimeKind};
+
+use crate::recast::{self, RecastError, RecastInfo};
 
 /// A plugin's model that the engine cannot use.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -48,6 +50,14 @@ pub enum ModelError {
         model: String,
         /// The repeated name.
         name: String,
+    },
+    /// The non-polynomial part could not be recast.
+    #[error("model '{model}': recast: {source}")]
+    Recast {
+        /// Model name.
+        model: String,
+        /// What went wrong.
+        source: RecastError,
     },
     /// The nonlinearity has a constant or linear term.
     #[error("model '{model}': F, equation {eq}, has a term of degree {degree}; F must start at degree 2 (linear terms belong in A)")]
@@ -104,6 +114,9 @@ pub struct System {
     pub time: TimeKind,
     /// Mechanical structure, if any.
     pub mechanical: Option<Mechanical>,
+    /// The recast of a non-polynomial model (auxiliary states appended after
+    /// the model's own), if it needed one.
+    pub recast: Option<RecastInfo>,
 }
 
 impl System {
@@ -205,6 +218,15 @@ impl System {
             }
             None => None,
         };
+        let needs_recast = !m.expressions.is_empty() || !m.equilibrium.is_empty();
+        if needs_recast && m.time != TimeKind::Flow {
+            return Err(ModelError::Shape {
+                model,
+                what: "expressions or equilibrium".into(),
+                found: "a map".into(),
+                expected: "a flow (the recast of maps is not supported)".into(),
+            });
+        }
         if let TimeKind::Map { period } = m.time {
             if !(period.is_finite() && period > 0.0) {
                 return Err(ModelError::NonFinite {
@@ -214,18 +236,83 @@ impl System {
                 });
             }
         }
+        let forcing: Vec<Harmonic> = m.forcing.into_iter().collect();
+        let mut states: Vec<StateInfo> = m.states.into_iter().collect();
+        if !needs_recast {
+            return Ok(Self {
+                plugin: plugin.to_owned(),
+                name: model,
+                a,
+                b,
+                nonlinearity: m.nonlinearity,
+                forcing,
+                states,
+                outputs,
+                time: m.time,
+                mechanical,
+                recast: None,
+            });
+        }
+        let rc = recast::recast(recast::Source {
+            a: &a,
+            b: &b,
+            f: &m.nonlinearity,
+            e: &m.expressions,
+            equilibrium: &m.equilibrium,
+            forcing: &forcing,
+            states: &states,
+            n_dof: mechanical.as_ref().map(|mc| mc.n_dof),
+        })
+        .map_err(|source| ModelError::Recast {
+            model: model.clone(),
+            source,
+        })?;
+        for aux in &rc.info.auxiliaries {
+            states.push(StateInfo {
+                name: aux.name.as_str().into(),
+                kind: StateKind::Auxiliary,
+                motion: MotionKind::Unspecified,
+            });
+            if out_names.insert(aux.name.as_str()) {
+                outputs.push(OutputMap {
+                    name: aux.name.clone(),
+                    weights: vec![(aux.state, 1.0)],
+                });
+            }
+        }
         Ok(Self {
             plugin: plugin.to_owned(),
             name: model,
-            a,
-            b,
-            nonlinearity: m.nonlinearity,
-            forcing: m.forcing.into_iter().collect(),
-            states: m.states.into_iter().collect(),
+            a: rc.a,
+            b: rc.b,
+            nonlinearity: rc.nonlinearity,
+            forcing: rc.forcing,
+            states,
             outputs,
             time: m.time,
             mechanical,
+            recast: Some(rc.info),
         })
+    }
+
+    /// The pencil whose finite spectrum is the model's: `(A, B)`, or for a
+    /// recast model the physical pencil with the auxiliaries eliminated
+    /// ([`RecastInfo::physical_a`]), free of the recast's spurious modes.
+    pub fn spectral_pencil(
+        &self,
+    ) -> (
+        faer::sparse::SparseColMatRef<'_, usize, f64>,
+        faer::sparse::SparseColMatRef<'_, usize, f64>,
+    ) {
+        match &self.recast {
+            Some(r) => (r.physical_a.as_ref(), r.physical_b.as_ref()),
+            None => (self.a.as_ref(), self.b.as_ref()),
+        }
+    }
+
+    /// Number of auxiliary states added by a recast.
+    pub fn n_auxiliary(&self) -> usize {
+        self.recast.as_ref().map_or(0, |r| r.auxiliaries.len())
     }
 
     /// Number of states `N`.

@@ -248,6 +248,8 @@ pub fn cubic_map() -> System {
         outputs,
         time: TimeKind::Map { period: 0.1 },
         mechanical: ROption::RNone,
+        expressions: ssm_api::ExprVector::zeros(4, 4),
+        equilibrium: RVec::new(),
     };
     System::from_model("catalogue", model).expect("valid map model")
 }

@@ -98,7 +98,7 @@ fn build(name: &str, params: &str) -> Result<Model, PluginError> {
                 g.push(0, 1.0, &[(l, 2)]);
             }
         }
-        sys.constraints = Some(Constraints { g });
+        sys.constraints = Some(Constraints::polynomial(g));
     }
     let mut cos = PolyVector::zeros(3, 6);
     cos.push(0, p.float("f1"), &[]);
