@@ -298,3 +298,54 @@ fn transient_needs_one_amplitude_per_pair() {
     assert_eq!(line, 11);
     assert!(msg.contains("outputs.transient.rho0"), "{msg}");
 }
+
+/// Runs a zoo scene through the binary and returns its summary.
+fn run_zoo(scene: &str) -> serde_json::Value {
+    let out = tmp_dir(scene);
+    let o = Command::new(engine_binary())
+        .arg(repo_root().join("zoo").join(scene))
+        .arg("--out")
+        .arg(&out)
+        .env("CI", "1")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let _ = std::fs::remove_dir_all(&out);
+    s
+}
+
+/// The pendulum zoo scenes report the recast (auxiliaries u1 = sin, u2 = 1 - cos
+/// with their kinds), the physical finite spectrum (eqs. 31, 37, 45) and, for
+/// the slider, the 1:3 resonant terms in `resonant_terms`.
+#[test]
+fn zoo_pendulum_scenes_report_the_recast() {
+    let s = run_zoo("pendulum_simple_fig7_c0.1.toml");
+    assert_eq!(s["model"]["n_states"], 4);
+    assert_eq!(s["model"]["n_finite_modes"], 2);
+    let aux = s["recast"]["auxiliaries"].as_array().unwrap();
+    assert_eq!(aux[0]["definition"], "u1 = sin(phi)");
+    assert_eq!(aux[0]["equation"], "differential");
+    assert_eq!(aux[1]["definition"], "u2 = 1 - cos(phi)");
+    assert_eq!(aux[1]["equation"], "algebraic");
+    assert_eq!(s["recast"]["equilibrium_shifted"], false);
+    // 17 backbone terms in each of the two equations at O(35)
+    assert_eq!(s["ssm"]["resonant_terms"].as_array().unwrap().len(), 34);
+
+    let s = run_zoo("pendulum_slider_fig10_ic2.toml");
+    assert_eq!(s["model"]["n_states"], 15);
+    assert_eq!(s["spectrum"].as_array().unwrap().len(), 4);
+    assert_eq!(s["recast"]["equilibrium_shifted"], true);
+    let terms = s["ssm"]["resonant_terms"].as_array().unwrap();
+    assert!(terms.contains(&serde_json::json!({"eq": 1, "exponents": [0, 2, 1, 0]})));
+    assert!(terms.contains(&serde_json::json!({"eq": 3, "exponents": [3, 0, 0, 0]})));
+
+    let s = run_zoo("pendulum_chain_fig13.toml");
+    assert_eq!(s["model"]["n_states"], 405);
+    assert_eq!(s["model"]["n_finite_modes"], 2 * (122 - 81));
+    assert_eq!(s["spectrum_method"], "sparse");
+    assert_eq!(s["recast"]["auxiliaries"].as_array().unwrap().len(), 80);
+    let l1 = &s["spectrum"][0];
+    assert!((l1["re"].as_f64().unwrap() + 0.0569).abs() <= 5e-5);
+    assert!((l1["im"].as_f64().unwrap() - 1.9939).abs() <= 5e-5);
+}

@@ -22,6 +22,7 @@
 //! (39)-(42); R. Szalai, D. Ehrhardt, G. Haller, Proc. R. Soc. A 473 (2017),
 //! eqs. (6.3)-(6.7).
 
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 use super::{Dynamics, SsmExpansion};
@@ -223,7 +224,8 @@ pub fn sphere_points(m: usize, radius: f64, n_alpha: usize, n_theta: usize) -> V
     points
 }
 
-/// Invariance error of eq. (41) at `radius` for the expansion truncated at `order`.
+/// Invariance error of eq. (41) at `radius` for the expansion truncated at `order`
+/// (points evaluated in parallel).
 pub fn invariance_error(
     ssm: &SsmExpansion,
     sys: &System,
@@ -234,8 +236,9 @@ pub fn invariance_error(
 ) -> f64 {
     let points = sphere_points(ssm.dim() / 2, radius, n_alpha, n_theta);
     let n = ssm.n_states() as f64;
+    // sample points are independent: spread them over the cores
     let total: f64 = points
-        .iter()
+        .par_iter()
         .map(|p| {
             ssm.residual(sys, p, order)
                 .iter()
