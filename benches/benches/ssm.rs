@@ -13,8 +13,8 @@ use ssm_engine::spectrum;
 use ssm_engine::ssm::analysis::{invariance_error, polar};
 use ssm_engine::ssm::{self, SsmOptions};
 use ssm_tests::{
-    chain_with_sparse_spectrum, oscillator_published_polar, oscillator_with_spectrum, ssm_of,
-    OSCILLATOR_CONSTRAINTS,
+    chain_with_sparse_spectrum, oscillator_published_polar, oscillator_with_spectrum,
+    pendulum_with_spectrum, ssm_of, system, OSCILLATOR_CONSTRAINTS,
 };
 
 fn oscillator(c: &mut Criterion) {
@@ -85,5 +85,46 @@ fn chain(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, oscillator, chain);
+/// The pendulum family after the recast: the simple pendulum at O(35), the
+/// slider's 4-D SSM at O(13), and the 405-state chain of pendulums at O(5) and
+/// O(13) (the paper reports only its 2 s MATLAB FRC at O(5)), plus the whole
+/// front end of the chain: plugin build, recast and sparse spectrum.
+fn pendulum(c: &mut Criterion) {
+    let mut g = c.benchmark_group("ssm pendulum");
+    g.sample_size(20);
+    let cases: [(&str, &str, &[usize], usize, f64); 4] = [
+        ("simple", "c = 0.001", &[1], 35, 0.6),
+        ("slider", "", &[1, 2], 13, 2.0),
+        ("chain", "", &[1], 5, 8.0),
+        ("chain", "", &[1], 13, 8.0),
+    ];
+    for (model, params, pairs, order, radius) in cases {
+        let (sys, sp) = pendulum_with_spectrum(model, params);
+        let masters = spectrum::master_modes(&sys, &sp, pairs, Normalization::Unit).unwrap();
+        let others = ssm::non_master(&sp.eigenvalues, &masters);
+        let o = SsmOptions {
+            order,
+            resonance_tol: 0.02,
+        };
+        let s = ssm::compute(&sys, &masters, &others, &o).unwrap();
+        println!(
+            "ssm pendulum {model} O({order}), {} states: invariance error at rho = {radius}: {:.2e}",
+            sys.n_states(),
+            invariance_error(&s, &sys, order, radius, 4, 12),
+        );
+        g.bench_function(
+            BenchmarkId::new(format!("{model} O({order})"), sys.n_states()),
+            |b| b.iter(|| black_box(ssm::compute(&sys, &masters, &others, &o).unwrap())),
+        );
+    }
+    g.bench_function("chain n = 41: plugin build, recast, sparse spectrum", |b| {
+        b.iter(|| black_box(pendulum_with_spectrum("chain", "")))
+    });
+    g.bench_function("chain n = 41: plugin build and recast", |b| {
+        b.iter(|| black_box(system("pendulum", "chain", "")))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, oscillator, chain, pendulum);
 criterion_main!(benches);

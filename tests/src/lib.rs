@@ -282,3 +282,14 @@ pub fn one_to_two_resonant(zeta: f64) -> System {
     let model = m.into_model().expect("valid mechanical model");
     System::from_model("catalogue", model).expect("valid model")
 }
+
+/// Model `model` of the `pendulum` plugin (parameters `params`, TOML) through its
+/// `.so` and the recast, with the finite spectrum of its physical pencil (no
+/// spurious recast modes); the chain uses the sparse path (8 modes).
+pub fn pendulum_with_spectrum(model: &str, params: &str) -> (System, Spectrum) {
+    let sys = system("pendulum", model, params);
+    let method = (model == "chain").then_some(Method::Sparse);
+    let (a, b) = sys.spectral_pencil();
+    let sp = spectrum::compute(a, b, &spectrum_options(method, 8)).expect("pendulum spectrum");
+    (sys, sp)
+}
