@@ -19,11 +19,12 @@
 //!
 //! ## The chain's rotational damping
 //! The paper prints `c = 0.02` next to the eigenvalues of eq. (45). With
-//! `c = 0.02` the lowest pair is `-0.0556 +- 1.9939i`, which does not match the
-//! printed real part `-0.0569`; with `c = 0.06` it is `-0.0569 +- 1.9939i` and the
-//! second pair `-0.0730 +- 4.9038i`, both to the printed digits. The published
-//! computation behind eq. (45) therefore used `c = 0.06`, which is the default
-//! here (the test `chain_spectrum_matches_eq45` checks both findings).
+//! `c = 0.02` the first two pairs are `-0.0566 +- 1.994i` and `-0.0649 +- 4.9038i`,
+//! so the real parts miss the printed `-0.0569` and `-0.0730`; with `c = 0.06`
+//! they are `-0.0569 +- 1.9939i` and `-0.0730 +- 4.9038i`, both to the printed
+//! digits. The published computation behind eq. (45) therefore used `c = 0.06`,
+//! which is the default here (the test `chain_spectrum_matches_eq45` checks both
+//! findings).
 //!
 //! # References
 //! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical systems
