@@ -15,11 +15,13 @@
 //! - [`poly`]: multi-indices, truncated series, order-by-order composition `F(W(p))`;
 //! - [`ssm`]: autonomous SSMs of flows and maps (parametrization method),
 //!   polar form, backbones, invariance error, reduced-model transients;
+//! - [`frc`]: forced response curves of 2-D SSMs, stability and folds;
 //! - [`results`]: SSM entries of the summary, backbone and transient files;
 //! - [`plot`]: SVG plots;
 //! - [`report`]: `summary.json` and CSV tables, written atomically;
 //! - [`job`]: running a scene end to end.
 
+pub mod frc;
 pub mod job;
 pub mod plot;
 pub mod plugin;

@@ -36,6 +36,7 @@
 //! Proc. R. Soc. A 473 (2017), Sects. 5-6 (maps).
 
 pub mod analysis;
+pub mod forced;
 pub mod homological;
 pub mod rom;
 
@@ -155,7 +156,7 @@ pub struct SsmExpansion {
 }
 
 /// Master eigenvectors of the reduced coordinates, conjugates included.
-fn reduced_modes(masters: &[MasterMode]) -> (Vec<C64>, Vec<Vec<C64>>, Vec<Vec<C64>>) {
+pub(crate) fn reduced_modes(masters: &[MasterMode]) -> (Vec<C64>, Vec<Vec<C64>>, Vec<Vec<C64>>) {
     let mut lambda = Vec::new();
     let mut right = Vec::new();
     let mut left = Vec::new();

@@ -1,0 +1,327 @@
+//! Forced response curves (FRCs) of a two-dimensional SSM: fixed points of the
+//! reduced dynamics in the rotating frame, their stability and bifurcations.
+//!
+//! With one master pair, external resonance ratio `r = 1`, the normal-form
+//! reduced dynamics `p' = p g(|p|^2) + eps s e^{i Omega t}`,
+//! `g(u) = sum_j c_j u^j` (`c_0 = lambda`, the backbone coefficients of
+//! [`crate::ssm::analysis::Polar`]), become autonomous for
+//! `p = q e^{i Omega t}`:
+//!
+//! `q' = G(q) = q (g(|q|^2) - i Omega) + eps s`.
+//!
+//! A fixed point with `|q| = rho`, `g = alpha + i beta` satisfies
+//! `rho^2 (alpha^2 + (beta - Omega)^2) = eps^2 |s|^2`, so every branch is given
+//! explicitly by the amplitude equation
+//! `Omega = beta(rho) -+ sqrt(eps^2 |s|^2 / rho^2 - alpha(rho)^2)` on the
+//! intervals of `rho` where the root is real: one closed curve per interval, the
+//! main branch from the smallest interval and isolas from the others. The
+//! Jacobian of `G` in `(Re q, Im q)` has trace `2 Re(dG/dq)` and determinant
+//! `|dG/dq|^2 - |dG/dconj q|^2`, with `dG/dq = g + u g'(u) - i Omega` and
+//! `dG/dconj q = q^2 g'(u)`: a point is stable when the trace is negative and
+//! the determinant positive; the determinant vanishes at saddle-node (fold)
+//! points and the trace (with a positive determinant) at Hopf points, both
+//! located by bisection along the branch.
+//!
+//! # References
+//! M. Li, S. Jain, G. Haller, *Nonlinear analysis of forced mechanical systems
+//! with internal resonance using spectral submanifolds, Part I*, Nonlinear Dyn.
+//! 110 (2022), Sect. 4; S. Ponsioen, S. Jain, G. Haller, J. Sound Vib. 488 (2020)
+//! 115640 (explicit FRC of two-dimensional SSMs); M. Li, S. Jain, G. Haller,
+//! Nonlinear Dyn. 111 (2023), Sect. 5.1.2.
+
+use crate::ssm::analysis::Polar;
+use crate::C64;
+
+/// Kind of a bifurcation point on an FRC.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BifurcationKind {
+    /// Saddle-node (fold): the determinant of the Jacobian vanishes.
+    SaddleNode,
+    /// Hopf: a complex pair crosses the imaginary axis.
+    Hopf,
+}
+
+impl BifurcationKind {
+    /// `SN` or `HB`, as in the summary.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::SaddleNode => "SN",
+            Self::Hopf => "HB",
+        }
+    }
+}
+
+/// A located bifurcation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bifurcation {
+    /// Kind.
+    pub kind: BifurcationKind,
+    /// Forcing frequency.
+    pub omega: f64,
+    /// Polar amplitude.
+    pub rho: f64,
+    /// Branch number (1 = main branch).
+    pub branch: usize,
+}
+
+/// One fixed point of the rotating-frame reduced dynamics.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrcPoint {
+    /// Forcing frequency.
+    pub omega: f64,
+    /// Polar amplitude `|q|`.
+    pub rho: f64,
+    /// Phase of `q` (the response `p = rho e^{i (theta + Omega t)}`).
+    pub theta: f64,
+    /// Linear stability of the fixed point.
+    pub stable: bool,
+    /// Branch number (1 = main branch, then isolas).
+    pub branch: usize,
+}
+
+/// An FRC at one forcing amplitude and expansion order.
+#[derive(Debug, Clone)]
+pub struct Frc {
+    /// Points, branch by branch, in order along each branch.
+    pub points: Vec<FrcPoint>,
+    /// Located bifurcations.
+    pub bifurcations: Vec<Bifurcation>,
+}
+
+/// The rotating-frame problem of one master pair.
+#[derive(Debug, Clone)]
+pub struct OnePair {
+    /// `c_j`, coefficient of `u^j` in `g(u)`.
+    c: Vec<C64>,
+    /// `eps |s|`.
+    force: f64,
+    /// `arg(eps s)`.
+    phase: f64,
+}
+
+impl OnePair {
+    /// From the polar form truncated at `order` and the resonant forcing
+    /// `eps * s`.
+    pub fn new(polar: &Polar, order: usize, eps_s: C64) -> Self {
+        let c = polar
+            .c
+            .iter()
+            .zip(&polar.orders)
+            .filter(|(_, &o)| o <= order)
+            .map(|(c, _)| *c)
+            .collect();
+        Self {
+            c,
+            force: eps_s.norm(),
+            phase: eps_s.arg(),
+        }
+    }
+
+    /// `g(u)` and `g'(u)`.
+    fn g(&self, u: f64) -> (C64, C64) {
+        let mut g = C64::new(0.0, 0.0);
+        let mut dg = C64::new(0.0, 0.0);
+        for (j, c) in self.c.iter().enumerate().rev() {
+            g = g * u + c;
+            if j > 0 {
+                dg = dg * u + c * j as f64;
+            }
+        }
+        (g, dg)
+    }
+
+    /// `eps^2 |s|^2 / rho^2 - alpha^2`: the squared distance of `Omega` from
+    /// the backbone; a fixed point exists where it is non-negative.
+    pub fn discriminant(&self, rho: f64) -> f64 {
+        let a = self.g(rho * rho).0.re;
+        (self.force / rho).powi(2) - a * a
+    }
+
+    /// The fixed point at amplitude `rho` on side `sign` (`-1`: below the
+    /// backbone frequency, `+1`: above), with its stability data
+    /// `(trace, det)`. `None` where the discriminant is negative.
+    pub fn point(&self, rho: f64, sign: f64) -> Option<(f64, f64, f64, f64)> {
+        let d = self.discriminant(rho);
+        if d < 0.0 {
+            return None;
+        }
+        let u = rho * rho;
+        let (g, dg) = self.g(u);
+        let omega = g.im + sign * d.sqrt();
+        // q (g - i Omega) = -eps s
+        let q = -C64::from_polar(self.force, self.phase) / (g - C64::new(0.0, omega));
+        let jq = g + dg * u - C64::new(0.0, omega);
+        let jqb = q * q * dg;
+        let trace = 2.0 * jq.re;
+        let det = jq.norm_sqr() - jqb.norm_sqr();
+        Some((omega, q.arg(), trace, det))
+    }
+}
+
+/// Bisection for a sign change of `f` between `a` and `b` (`f(a) f(b) < 0`).
+fn bisect(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
+    let fa = f(a);
+    for _ in 0..80 {
+        let m = 0.5 * (a + b);
+        if (f(m) > 0.0) == (fa > 0.0) {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    0.5 * (a + b)
+}
+
+/// All branches of the FRC for `rho` in `(0, rho_max]`, with `samples` points
+/// per side of each branch; points outside `omega_range` are dropped,
+/// bifurcations inside it are located.
+pub fn one_pair_frc(pb: &OnePair, rho_max: f64, samples: usize, omega_range: (f64, f64)) -> Frc {
+    // intervals of rho with a non-negative discriminant, on a fine scan
+    let scan = (20 * samples).max(2000);
+    let h = rho_max / scan as f64;
+    let mut intervals: Vec<(f64, f64)> = Vec::new();
+    let mut start: Option<f64> = None;
+    let d = |r: f64| pb.discriminant(r);
+    for k in 1..=scan {
+        let r = k as f64 * h;
+        let ok = d(r) >= 0.0;
+        match (ok, start) {
+            (true, None) => {
+                start = Some(if k == 1 { r } else { bisect(&d, r - h, r) });
+            }
+            (false, Some(a)) => {
+                intervals.push((a, bisect(&d, r - h, r)));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(a) = start {
+        intervals.push((a, rho_max));
+    }
+    let in_range = |w: f64| w >= omega_range.0 && w <= omega_range.1;
+    let mut points = Vec::new();
+    let mut bifurcations = Vec::new();
+    for (bi, &(a, b)) in intervals.iter().enumerate() {
+        let branch = bi + 1;
+        for sign in [-1.0, 1.0] {
+            // rho samples denser near the ends, where Omega(rho) turns
+            let rhos: Vec<f64> = (0..=samples)
+                .map(|k| {
+                    let t = k as f64 / samples as f64;
+                    let s = 0.5 - 0.5 * (std::f64::consts::PI * t).cos();
+                    a + (b - a) * s
+                })
+                .collect();
+            let ordered: Vec<f64> = if sign < 0.0 {
+                rhos
+            } else {
+                rhos.into_iter().rev().collect()
+            };
+            let mut prev: Option<(f64, f64, f64)> = None;
+            for &r in &ordered {
+                let Some((omega, theta, trace, det)) = pb.point(r, sign) else {
+                    continue;
+                };
+                if let Some((pr, ptr, pdet)) = prev {
+                    for (kind, before, after) in [
+                        (BifurcationKind::SaddleNode, pdet, det),
+                        (BifurcationKind::Hopf, ptr, trace),
+                    ] {
+                        let hopf_ok = kind == BifurcationKind::SaddleNode || det > 0.0;
+                        if before * after < 0.0 && hopf_ok {
+                            let f = |x: f64| {
+                                pb.point(x, sign).map_or(0.0, |p| match kind {
+                                    BifurcationKind::SaddleNode => p.3,
+                                    BifurcationKind::Hopf => p.2,
+                                })
+                            };
+                            let rb = bisect(&f, pr, r);
+                            if let Some(p) = pb.point(rb, sign) {
+                                if in_range(p.0) {
+                                    bifurcations.push(Bifurcation {
+                                        kind,
+                                        omega: p.0,
+                                        rho: rb,
+                                        branch,
+                                    });
+                                }
+                            }
+                        }
+                    }
+                }
+                prev = Some((r, trace, det));
+                if in_range(omega) {
+                    points.push(FrcPoint {
+                        omega,
+                        rho: r,
+                        theta,
+                        stable: trace < 0.0 && det > 0.0,
+                        branch,
+                    });
+                }
+            }
+        }
+    }
+    Frc {
+        points,
+        bifurcations,
+    }
+}
+
+/// Amplitudes of one output on the periodic response of an FRC point:
+/// `max_t |y(t)|` (L-infinity) and the first-harmonic amplitude, with
+/// `y = W(p(t)) + eps X0(Omega t)` sampled at 64 phases over one forcing period
+/// (`series`: the output's coefficients in `W`; `x0`: `(kappa_h, x_h)` of
+/// the output's `X0`).
+pub fn response_amplitudes(
+    ssm: &crate::ssm::SsmExpansion,
+    series: &[C64],
+    order: usize,
+    point: &FrcPoint,
+    x0: &[(f64, C64)],
+    eps: f64,
+) -> (f64, f64) {
+    let n = 64;
+    let end = ssm.set.of_order(order.min(ssm.order)).end;
+    let mut linf: f64 = 0.0;
+    let mut first = C64::new(0.0, 0.0);
+    for k in 0..n {
+        let phi = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+        let q = C64::from_polar(point.rho, point.theta + phi);
+        let mono = ssm.set.monomials(&[q, q.conj()], order);
+        let mut y = (0..end).map(|i| series[i] * mono[i]).sum::<C64>().re;
+        y += x0
+            .iter()
+            .map(|&(m, x)| 2.0 * eps * (x * C64::from_polar(1.0, m * phi)).re)
+            .sum::<f64>();
+        linf = linf.max(y.abs());
+        first += y * C64::from_polar(1.0, -phi);
+    }
+    (linf, 2.0 * first.norm() / n as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Linear oscillator: `g = lambda`; the FRC is `rho = eps |s| / |lambda - i Omega|`,
+    /// stable everywhere, no bifurcation.
+    #[test]
+    fn linear_frc_is_the_resonance_curve() {
+        let lambda = C64::new(-0.01, 1.0);
+        let polar = Polar {
+            c: vec![lambda],
+            orders: vec![1],
+        };
+        let pb = OnePair::new(&polar, 1, C64::new(0.0, -0.005));
+        let frc = one_pair_frc(&pb, 1.0, 200, (0.9, 1.1));
+        assert!(frc.bifurcations.is_empty());
+        assert!(frc.points.len() > 100);
+        for p in &frc.points {
+            let exact = 0.005 / (lambda - C64::new(0.0, p.omega)).norm();
+            assert!((p.rho - exact).abs() < 1e-9 * exact, "{p:?}");
+            assert!(p.stable);
+        }
+    }
+}
