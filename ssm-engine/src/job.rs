@@ -10,6 +10,7 @@ use serde_json::json;
 use crate::plugin::{PluginLoadError, Registry};
 use crate::report::{spectrum_csv, OutputError, OutputSet};
 use crate::results::{self, ResultError};
+use crate::results_frc::{self, FrcError};
 use crate::scene::{SceneError, SceneFile, SpectrumMethod};
 use crate::spectrum::{self, MasterMode, Method, Spectrum, SpectrumError, SpectrumOptions};
 use crate::ssm::{self, Dynamics, SsmError, SsmExpansion, SsmOptions};
@@ -39,6 +40,9 @@ pub enum JobError {
     /// A result (backbone, transient, plot) could not be produced.
     #[error(transparent)]
     Result(#[from] ResultError),
+    /// The forced response could not be produced.
+    #[error(transparent)]
+    Frc(#[from] FrcError),
 }
 
 /// Stages reported to a progress display.
@@ -294,6 +298,16 @@ pub fn run(
         rom_steps = Some(steps);
     }
     let results_s = t_out.elapsed().as_secs_f64();
+    let t_frc = std::time::Instant::now();
+    let mut frc_summary = None;
+    if let Some(sec) = &sc.forcing {
+        progress.stage("forced response curves");
+        let rep = results_frc::frc(&expansion, &system, &masters, sec, &out_maps)?;
+        outputs.add("frc.csv", rep.csv);
+        outputs.add("frc.svg", rep.svg);
+        frc_summary = Some(rep.summary);
+    }
+    let frc_s = t_frc.elapsed().as_secs_f64();
 
     progress.stage("writing outputs");
     let n_finite = match (mechanical_layout, spectrum.complete) {
@@ -337,6 +351,7 @@ pub fn run(
         "polar": results::polar_json(&expansion),
         "invariance_error": invariance,
         "rom_steps": rom_steps,
+        "frc": frc_summary,
         "warnings": warnings,
         "timing_s": {
             "spectrum": spectrum_s,
@@ -345,6 +360,7 @@ pub fn run(
             "ssm_factorization": expansion.timing.linear.factor_s,
             "ssm_solves": expansion.timing.linear.solve_s,
             "results": results_s,
+            "frc": frc_s,
             "total": t0.elapsed().as_secs_f64(),
         },
         "linear_algebra": {

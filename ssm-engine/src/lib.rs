@@ -17,6 +17,7 @@
 //!   polar form, backbones, invariance error, reduced-model transients;
 //! - [`frc`]: forced response curves of 2-D SSMs, stability and folds;
 //! - [`results`]: SSM entries of the summary, backbone and transient files;
+//! - [`results_frc`]: `frc.csv`, `frc.svg` and the summary's `frc`;
 //! - [`plot`]: SVG plots;
 //! - [`report`]: `summary.json` and CSV tables, written atomically;
 //! - [`job`]: running a scene end to end.
@@ -29,6 +30,7 @@ pub mod poly;
 pub mod recast;
 pub mod report;
 pub mod results;
+pub mod results_frc;
 pub mod scene;
 pub mod spectrum;
 pub mod ssm;

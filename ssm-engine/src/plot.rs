@@ -14,12 +14,18 @@ pub struct PlotError {
 }
 
 /// One labelled curve.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Curve {
-    /// Legend label.
+    /// Legend label (curves with an empty label stay out of the legend).
     pub label: String,
     /// Points `(x, y)`; non-finite points are skipped.
     pub points: Vec<(f64, f64)>,
+    /// Drawn dashed (e.g. unstable FRC branches).
+    pub dashed: bool,
+    /// Marked points (e.g. bifurcations), drawn as circles.
+    pub markers: Vec<(f64, f64)>,
+    /// Colour index shared by related curves (`None`: the curve's position).
+    pub color: Option<usize>,
 }
 
 /// Axis scaling.
@@ -101,17 +107,27 @@ pub fn line_plot(
                     .draw()
                     .map_err(|e| fail(&e))?;
                 for (i, c) in curves.iter().enumerate() {
-                    let color = Palette99::pick(i).to_rgba();
-                    chart
-                        .draw_series(LineSeries::new(
-                            c.points.iter().filter(keep).copied(),
-                            color.stroke_width(2),
-                        ))
-                        .map_err(|e| fail(&e))?
-                        .label(c.label.clone())
-                        .legend(move |(x, y)| {
+                    let color = Palette99::pick(c.color.unwrap_or(i)).to_rgba();
+                    let pts = c.points.iter().filter(keep).copied();
+                    let series = if c.dashed {
+                        chart.draw_series(DashedLineSeries::new(pts, 6, 4, color.stroke_width(2)))
+                    } else {
+                        chart.draw_series(LineSeries::new(pts, color.stroke_width(2)))
+                    }
+                    .map_err(|e| fail(&e))?;
+                    if !c.label.is_empty() {
+                        series.label(c.label.clone()).legend(move |(x, y)| {
                             PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
                         });
+                    }
+                    chart
+                        .draw_series(
+                            c.markers
+                                .iter()
+                                .filter(keep)
+                                .map(|&p| Circle::new(p, 5, BLACK.stroke_width(2))),
+                        )
+                        .map_err(|e| fail(&e))?;
                 }
                 chart
                     .configure_series_labels()
@@ -145,10 +161,14 @@ mod tests {
             Curve {
                 label: "O(3)".into(),
                 points: (0..10).map(|i| (i as f64, (i * i) as f64)).collect(),
+                ..Curve::default()
             },
             Curve {
                 label: "O(5)".into(),
                 points: vec![(1.0, 2.0), (f64::NAN, 1.0), (3.0, 4.0)],
+                dashed: true,
+                markers: vec![(3.0, 4.0)],
+                color: Some(0),
             },
         ];
         let svg = line_plot("backbone", "amplitude x1", "omega", &curves, Scale::Linear).unwrap();
@@ -165,5 +185,6 @@ mod tests {
         }
         let log = line_plot("error", "radius", "error", &curves, Scale::LogLog).unwrap();
         assert!(log.contains("polyline"));
+        assert!(svg.contains("<circle"), "bifurcation marker");
     }
 }

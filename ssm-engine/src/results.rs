@@ -149,6 +149,7 @@ pub fn backbone(
         curves.push(Curve {
             label: format!("O({order})"),
             points: pts,
+            ..Curve::default()
         });
     }
     let x_label = outputs

@@ -28,6 +28,11 @@
 //! rho0 = [0.35]
 //! theta0 = [0.5]
 //! t_end = 100.0
+//! [forcing]                       # forced response curves (one master pair)
+//! epsilon = [0.01, 0.02]          # one FRC each; the load shape is the model's Fext
+//! omega_range = [1.9, 2.1]
+//! orders = [3, 5, 7]              # one FRC each (default: [ssm] order)
+//! # resonance = [1], points = 200, rho_max = ...
 //! ```
 
 use std::ops::Range;
@@ -86,6 +91,38 @@ pub struct Scene {
     /// Requested outputs.
     #[serde(default)]
     pub outputs: OutputsSection,
+    /// Harmonic forcing and forced response curves.
+    #[serde(default)]
+    pub forcing: Option<ForcingSection>,
+}
+
+/// `[forcing]`: forced response curves of the periodic SSM. The load's shape is
+/// the model's `Fext` (e.g. the plugin parameter `f1`); `epsilon` scales it.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForcingSection {
+    /// Forcing amplitudes, one FRC each.
+    pub epsilon: Spanned<Vec<f64>>,
+    /// `[Omega_min, Omega_max]`.
+    pub omega_range: Spanned<Vec<f64>>,
+    /// Expansion orders of the reduced dynamics, one FRC each (default: `[ssm] order`).
+    #[serde(default)]
+    pub orders: Option<Spanned<Vec<usize>>>,
+    /// External resonance ratios `r` of eq. (16), one per master pair
+    /// (default: 1 for a single pair).
+    #[serde(default)]
+    pub resonance: Option<Spanned<Vec<f64>>>,
+    /// Points per side of each FRC branch.
+    #[serde(default = "default_frc_points")]
+    pub points: Spanned<usize>,
+    /// Largest polar amplitude searched for branches (default: three times the
+    /// linear peak amplitude at the largest epsilon).
+    #[serde(default)]
+    pub rho_max: Option<Spanned<f64>>,
+}
+
+fn default_frc_points() -> Spanned<usize> {
+    Spanned::new(0..0, 200)
 }
 
 /// `[model]`.
@@ -423,6 +460,7 @@ impl SceneFile {
             ));
         }
         self.check_outputs()?;
+        self.check_forcing()?;
         if let Some(m) = &self.scene.spectrum.modes {
             if *m.get_ref() == 0 {
                 return Err(self.invalid(m.span(), "spectrum.modes", "must be at least 1".into()));
@@ -444,6 +482,49 @@ impl SceneFile {
                 key,
                 format!("order {bad} is outside 1..={max} ([ssm] order)"),
             ));
+        }
+        Ok(())
+    }
+
+    fn check_forcing(&self) -> Result<(), SceneError> {
+        let Some(f) = &self.scene.forcing else {
+            return Ok(());
+        };
+        let eps = f.epsilon.get_ref();
+        if eps.is_empty() || eps.iter().any(|e| !(e.is_finite() && *e > 0.0)) {
+            return Err(self.invalid(
+                f.epsilon.span(),
+                "forcing.epsilon",
+                "needs at least one forcing amplitude, each positive".into(),
+            ));
+        }
+        let r = f.omega_range.get_ref();
+        if r.len() != 2 || !(r[0].is_finite() && r[1].is_finite() && 0.0 < r[0] && r[0] < r[1]) {
+            return Err(self.invalid(
+                f.omega_range.span(),
+                "forcing.omega_range",
+                format!(
+                    "must be [Omega_min, Omega_max] with 0 < Omega_min < Omega_max, found {r:?}"
+                ),
+            ));
+        }
+        if let Some(o) = &f.orders {
+            self.check_orders(o, "forcing.orders")?;
+        }
+        let pairs = self.scene.ssm.master_pairs.get_ref().len();
+        if let Some(res) = &f.resonance {
+            let v = res.get_ref();
+            if v.len() != pairs || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+                return Err(self.invalid(
+                    res.span(),
+                    "forcing.resonance",
+                    format!("needs one positive ratio per master pair ({pairs}), found {v:?}"),
+                ));
+            }
+        }
+        self.check_at_least(&f.points, 2, "forcing.points")?;
+        if let Some(rm) = &f.rho_max {
+            self.check_positive(rm, "forcing.rho_max")?;
         }
         Ok(())
     }

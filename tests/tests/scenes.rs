@@ -349,3 +349,86 @@ fn zoo_pendulum_scenes_report_the_recast() {
     assert!((l1["re"].as_f64().unwrap() + 0.0569).abs() <= 5e-5);
     assert!((l1["im"].as_f64().unwrap() - 1.9939).abs() <= 5e-5);
 }
+
+/// `[forcing]` mistakes name the line and key.
+#[test]
+fn bad_forcing_sections_are_scene_errors() {
+    let forcing = |body: &str| format!("{GOOD}[forcing]\n{body}");
+    let (line, msg) = scene_error(&forcing("epsilon = [0.01]\nomega_range = [2.1, 1.9]\n"));
+    assert_eq!(line, 12, "{msg}");
+    assert!(msg.contains("forcing.omega_range"), "{msg}");
+    let (_, msg) = scene_error(&forcing("epsilon = [-0.01]\nomega_range = [1.9, 2.1]\n"));
+    assert!(msg.contains("forcing.epsilon"), "{msg}");
+    let (_, msg) = scene_error(&forcing(
+        "epsilon = [0.01]\nomega_range = [1.9, 2.1]\norders = [15]\n",
+    ));
+    assert!(msg.contains("outside 1..=13"), "{msg}");
+    let (_, msg) = scene_error(&forcing(
+        "epsilon = [0.01]\nomega_range = [1.9, 2.1]\nresonance = [1, 2]\n",
+    ));
+    assert!(msg.contains("one positive ratio per master pair"), "{msg}");
+}
+
+/// The FRC output contract on the Fig. 5 scene (unconstrained oscillator):
+/// `frc.csv` columns, one curve per (order, epsilon), saddle-nodes only where
+/// the response folds (eps = 0.02, 0.03), unstable points only between them,
+/// an invariance error beside each curve, and `frc.svg` with dashed branches
+/// and bifurcation markers.
+#[test]
+fn zoo_fig5_scene_writes_the_frc() {
+    let out = tmp_dir("fig5");
+    let o = Command::new(engine_binary())
+        .arg(repo_root().join("zoo/spatial_oscillator_none_fig5.toml"))
+        .arg("--out")
+        .arg(&out)
+        .env("CI", "1")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let frc = &s["frc"];
+    let curves = frc["curves"].as_array().unwrap();
+    assert_eq!(curves.len(), 15);
+    assert!(curves
+        .iter()
+        .all(|c| c["invariance_error_at_peak"].as_f64().unwrap() < 1e-2));
+    let bif = frc["bifurcations"].as_array().unwrap();
+    assert!(bif.iter().all(|b| b["kind"] == "SN"));
+    for order in [3, 5, 7, 9, 11] {
+        let sn = |eps: f64| {
+            bif.iter()
+                .filter(|b| b["order"] == order && b["epsilon"].as_f64().unwrap() == eps)
+                .count()
+        };
+        assert_eq!((sn(0.01), sn(0.02), sn(0.03)), (0, 2, 2), "O({order})");
+    }
+    let csv = std::fs::read_to_string(out.join("frc.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "order,epsilon,omega,stable,branch,x1_linf,rho_1,x1_h1"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len() as u64, frc["points"].as_u64().unwrap());
+    for r in rows.iter().filter(|r| r[3] == 0.0) {
+        let (order, eps) = (r[0] as u64, r[1]);
+        let folds: Vec<f64> = bif
+            .iter()
+            .filter(|b| b["order"] == order && b["epsilon"].as_f64().unwrap() == eps)
+            .map(|b| b["omega"].as_f64().unwrap())
+            .collect();
+        let (lo, hi) = (folds[0].min(folds[1]), folds[0].max(folds[1]));
+        assert!(
+            r[2] >= lo - 1e-9 && r[2] <= hi + 1e-9,
+            "{r:?} outside {lo}..{hi}"
+        );
+    }
+    // the response amplitude is at least its first harmonic
+    assert!(rows.iter().all(|r| r[5] >= r[7] * (1.0 - 1e-12)));
+    let svg = std::fs::read_to_string(out.join("frc.svg")).unwrap();
+    assert!(svg.contains("<circle") && svg.contains("O(11), eps = 0.03"));
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -1,0 +1,226 @@
+//! Forced response curves for the report: `frc.csv`, `frc.svg` and the `frc`
+//! entry of `summary.json`, from the leading-order periodic SSM
+//! ([`crate::ssm::forced`]) and the rotating-frame fixed points ([`crate::frc`]).
+
+use serde_json::{json, Value};
+
+use crate::frc::{one_pair_frc, response_amplitudes, OnePair};
+use crate::plot::{line_plot, Curve, PlotError, Scale};
+use crate::scene::ForcingSection;
+use crate::spectrum::MasterMode;
+use crate::ssm::analysis::{invariance_error, polar, PolarError};
+use crate::ssm::forced::{ForcedError, ForcedSsm};
+use crate::ssm::SsmExpansion;
+use crate::system::{OutputMap, System};
+use crate::C64;
+
+/// Why an FRC could not be produced.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FrcError {
+    /// The periodic SSM failed.
+    #[error("forced SSM: {0}")]
+    Forced(#[from] ForcedError),
+    /// No polar form.
+    #[error("FRC: {0}")]
+    Polar(#[from] PolarError),
+    /// Plot failure.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    /// What the FRC path does not cover.
+    #[error("FRC: {0}")]
+    Unsupported(String),
+}
+
+/// The three products of the `[forcing]` section.
+#[derive(Debug, Clone)]
+pub struct FrcReport {
+    /// `frc.csv`.
+    pub csv: String,
+    /// `frc.svg`.
+    pub svg: String,
+    /// `"frc"` of the summary.
+    pub summary: Value,
+}
+
+/// FRCs for every `(order, epsilon)` of `sec`; columns
+/// `order,epsilon,omega,stable,branch,<output>_linf...,rho_1,<output>_h1...`.
+pub fn frc(
+    ssm: &SsmExpansion,
+    sys: &System,
+    masters: &[MasterMode],
+    sec: &ForcingSection,
+    outputs: &[&OutputMap],
+) -> Result<FrcReport, FrcError> {
+    if masters.len() != 1 {
+        return Err(FrcError::Unsupported(format!(
+            "{} master pairs: FRCs with internal resonance need the continuation of the polar reduced dynamics, which is not implemented yet; use one master pair",
+            masters.len()
+        )));
+    }
+    let ratios = sec
+        .resonance
+        .as_ref()
+        .map_or(vec![1.0], |r| r.get_ref().clone());
+    if ratios[0] != 1.0 {
+        return Err(FrcError::Unsupported(format!(
+            "resonance ratio {} for a single pair: only primary resonance (r = 1) is implemented",
+            ratios[0]
+        )));
+    }
+    let range = (sec.omega_range.get_ref()[0], sec.omega_range.get_ref()[1]);
+    let mut forced = ForcedSsm::new(sys, masters, &ratios)?;
+    let s = forced.at(0.5 * (range.0 + range.1))?.resonant_forcing(0);
+    if s.norm() == 0.0 {
+        return Err(FrcError::Unsupported(
+            "the forcing does not reach the master mode (u^* F = 0): no resonant response".into(),
+        ));
+    }
+    let pol = polar(ssm)?;
+    let eps_list = sec.epsilon.get_ref();
+    let orders = sec
+        .orders
+        .as_ref()
+        .map_or(vec![ssm.order], |o| o.get_ref().clone());
+    let eps_max = eps_list.iter().copied().fold(0.0, f64::max);
+    let rho_max = sec.rho_max.as_ref().map_or_else(
+        || 3.0 * eps_max * s.norm() / masters[0].lambda.re.abs().max(1e-300),
+        |r| *r.get_ref(),
+    );
+    let points = *sec.points.get_ref();
+    let series: Vec<Vec<C64>> = outputs
+        .iter()
+        .map(|o| ssm.output_series(&o.weights))
+        .collect();
+    let mut csv = String::from("order,epsilon,omega,stable,branch");
+    for o in outputs {
+        csv.push_str(&format!(",{}_linf", o.name));
+    }
+    csv.push_str(",rho_1");
+    for o in outputs {
+        csv.push_str(&format!(",{}_h1", o.name));
+    }
+    csv.push('\n');
+    let mut curves: Vec<Curve> = Vec::new();
+    let mut bifurcations = Vec::new();
+    let mut summaries = Vec::new();
+    let mut n_points = 0;
+    for (ci, (&order, &eps)) in orders
+        .iter()
+        .flat_map(|o| eps_list.iter().map(move |e| (o, e)))
+        .enumerate()
+    {
+        let pb = OnePair::new(&pol, order, eps * s);
+        let f = one_pair_frc(&pb, rho_max, points, range);
+        let mut first_amp = Vec::with_capacity(f.points.len());
+        for p in &f.points {
+            let x0 = forced.at(p.omega)?;
+            let mut linf = Vec::with_capacity(outputs.len());
+            let mut h1 = Vec::with_capacity(outputs.len());
+            for (o, ser) in outputs.iter().zip(&series) {
+                let x0o: Vec<(f64, C64)> = x0
+                    .harmonics
+                    .iter()
+                    .map(|h| (h.multiple, o.weights.iter().map(|&(s, w)| h.x[s] * w).sum()))
+                    .collect();
+                let (l, a) = response_amplitudes(ssm, ser, order, p, &x0o, eps);
+                linf.push(l);
+                h1.push(a);
+            }
+            csv.push_str(&format!(
+                "{order},{eps:e},{:.10e},{},{}",
+                p.omega,
+                u8::from(p.stable),
+                p.branch
+            ));
+            for l in &linf {
+                csv.push_str(&format!(",{l:.10e}"));
+            }
+            csv.push_str(&format!(",{:.10e}", p.rho));
+            for a in &h1 {
+                csv.push_str(&format!(",{a:.10e}"));
+            }
+            csv.push('\n');
+            first_amp.push(linf.first().copied().unwrap_or(p.rho));
+        }
+        n_points += f.points.len();
+        // the error figure beside the answer: eq. (41) at the largest amplitude
+        let rho_peak = f.points.iter().map(|p| p.rho).fold(0.0, f64::max);
+        let err = (rho_peak > 0.0).then(|| invariance_error(ssm, sys, order, rho_peak, 2, 30));
+        summaries.push(json!({
+            "order": order,
+            "epsilon": eps,
+            "points": f.points.len(),
+            "branches": f.points.iter().map(|p| p.branch).max().unwrap_or(0),
+            "rho_peak": rho_peak,
+            "invariance_error_at_peak": err.filter(|e| e.is_finite()),
+        }));
+        // one segment per run of equal stability on a branch; dashed when unstable
+        let mut k = 0;
+        let mut labelled = false;
+        while k < f.points.len() {
+            let (st, br) = (f.points[k].stable, f.points[k].branch);
+            let mut seg = Vec::new();
+            // the segment shares its first point with the previous one
+            if k > 0 && f.points[k - 1].branch == br {
+                seg.push((f.points[k - 1].omega, first_amp[k - 1]));
+            }
+            while k < f.points.len() && f.points[k].stable == st && f.points[k].branch == br {
+                seg.push((f.points[k].omega, first_amp[k]));
+                k += 1;
+            }
+            curves.push(Curve {
+                label: if labelled {
+                    String::new()
+                } else {
+                    format!("O({order}), eps = {eps}")
+                },
+                points: seg,
+                dashed: !st,
+                markers: Vec::new(),
+                color: Some(ci),
+            });
+            labelled = true;
+        }
+        for b in &f.bifurcations {
+            let nearest = f
+                .points
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.branch == b.branch)
+                .min_by(|x, y| (x.1.rho - b.rho).abs().total_cmp(&(y.1.rho - b.rho).abs()));
+            if let (Some((i, _)), Some(c)) = (nearest, curves.last_mut()) {
+                c.markers.push((b.omega, first_amp[i]));
+            }
+            bifurcations.push(json!({
+                "kind": b.kind.label(),
+                "omega": b.omega,
+                "epsilon": eps,
+                "order": order,
+                "rho": b.rho,
+                "branch": b.branch,
+            }));
+        }
+    }
+    let y_label = outputs
+        .first()
+        .map_or("rho".to_owned(), |o| format!("max |{}|", o.name));
+    let svg = line_plot(
+        "forced response (dashed: unstable, circles: bifurcations)",
+        "Omega",
+        &y_label,
+        &curves,
+        Scale::Linear,
+    )?;
+    Ok(FrcReport {
+        csv,
+        svg,
+        summary: json!({
+            "bifurcations": bifurcations,
+            "points": n_points,
+            "curves": summaries,
+            "resonance": ratios,
+            "rho_max": rho_max,
+            "forcing_on_master": {"re": s.re, "im": s.im},
+        }),
+    })
+}
