@@ -214,3 +214,75 @@ fn unstable_fixed_points_are_left_by_the_reduced_dynamics() {
     }
     assert!(checked[0] > 5 && checked[1] > 2, "{checked:?}");
 }
+
+/// Reference: Li, Jain & Haller (2023), Fig. 6: on the saddle-node periodic
+/// orbit "A" of the unconstrained spatial oscillator (O(11), eps = 0.03, the
+/// fold at the top of the FRC) the residual of eq. (60) of the leading-order
+/// periodic SSM exceeds 0.015 over the period; we require the same order of
+/// magnitude, 0.015 < max ||Res||_2 < 0.15. The residual is also checked to
+/// reduce to the autonomous invariance residual at eps = 0, and to shrink on
+/// the eps = 0.01 orbit at the same frequency side (it is O(eps |p|)).
+#[test]
+fn fig6_residual_of_the_leading_order_periodic_ssm() {
+    use ssm_engine::ssm::forced::residual;
+    let sys = system("spatial-oscillator", "", "constraint = \"none\"");
+    let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &spectrum_options(None, 0))
+        .expect("spectrum");
+    let norm = Normalization::Scale(0.8306);
+    let masters = spectrum::master_modes(&sys, &sp, &[1], norm).unwrap();
+    let ssm = ssm_of(&sys, &sp, &[1], 11, norm);
+    let mut forced = ForcedSsm::new(&sys, &masters, &[1.0]).unwrap();
+    let s = forced.at(2.0).unwrap().resonant_forcing(0);
+    let p = polar(&ssm).unwrap();
+    let mut max_residual = |eps: f64| -> (f64, f64) {
+        let pb = OnePair::new(&p, 11, eps * s);
+        let frc = one_pair_frc(&pb, 0.5, 400, (1.8, 2.2));
+        let a = frc
+            .bifurcations
+            .iter()
+            .filter(|b| b.kind == BifurcationKind::SaddleNode)
+            .max_by(|x, y| x.rho.total_cmp(&y.rho))
+            .copied();
+        // the top of the curve when there is no fold (small eps)
+        let (rho, omega) = match a {
+            Some(b) => (b.rho, b.omega),
+            None => {
+                let top = frc
+                    .points
+                    .iter()
+                    .max_by(|x, y| x.rho.total_cmp(&y.rho))
+                    .unwrap();
+                (top.rho, top.omega)
+            }
+        };
+        let theta = [-1.0, 1.0]
+            .iter()
+            .filter_map(|&sg| pb.point(rho, sg))
+            .min_by(|x, y| (x.0 - omega).abs().total_cmp(&(y.0 - omega).abs()))
+            .unwrap()
+            .1;
+        let terms = forced.at(omega).unwrap();
+        let worst = (0..200)
+            .map(|k| {
+                let phi = 2.0 * std::f64::consts::PI * k as f64 / 200.0;
+                let q = C64::from_polar(rho, theta + phi);
+                let r = residual(&ssm, &sys, &terms, eps, &[q, q.conj()], phi, 11);
+                r.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt()
+            })
+            .fold(0.0, f64::max);
+        (worst, omega)
+    };
+    let (res_a, omega_a) = max_residual(0.03);
+    let (res_small, _) = max_residual(0.01);
+    eprintln!("orbit A at Omega = {omega_a}: max residual {res_a:e}; eps = 0.01: {res_small:e}");
+    assert!(res_a > 0.015 && res_a < 0.15, "{res_a}");
+    assert!(res_small < res_a / 3.0, "{res_small} vs {res_a}");
+    // eps = 0: the autonomous residual of eq. (55)
+    let terms = forced.at(2.0).unwrap();
+    let q = C64::from_polar(0.2, 0.7);
+    let r0 = residual(&ssm, &sys, &terms, 0.0, &[q, q.conj()], 0.3, 11);
+    let ra = ssm.residual(&sys, &[q, q.conj()], 11);
+    for (x, y) in r0.iter().zip(&ra) {
+        assert!((x - y).norm() <= 1e-14 * (1.0 + y.norm()));
+    }
+}
