@@ -146,6 +146,22 @@ pub fn frc(
         // the error figure beside the answer: eq. (41) at the largest amplitude
         let rho_peak = f.points.iter().map(|p| p.rho).fold(0.0, f64::max);
         let err = (rho_peak > 0.0).then(|| invariance_error(ssm, sys, order, rho_peak, 2, 30));
+        // and the residual of eq. (60) along the peak's periodic orbit (Fig. 6)
+        let peak = f.points.iter().max_by(|a, b| a.rho.total_cmp(&b.rho));
+        let res60 = match peak {
+            Some(pk) => {
+                let na = forced.expansion(ssm, sys, pk.omega, 0)?;
+                (0..64)
+                    .map(|k| {
+                        let phi = 2.0 * std::f64::consts::PI * f64::from(k) / 64.0;
+                        let q = C64::from_polar(pk.rho, pk.theta + phi);
+                        let r = na.residual(ssm, sys, eps, &[q, q.conj()], phi, order);
+                        r.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt()
+                    })
+                    .fold(0.0, f64::max)
+            }
+            None => 0.0,
+        };
         summaries.push(json!({
             "order": order,
             "epsilon": eps,
@@ -153,6 +169,7 @@ pub fn frc(
             "branches": f.points.iter().map(|p| p.branch).max().unwrap_or(0),
             "rho_peak": rho_peak,
             "invariance_error_at_peak": err.filter(|e| e.is_finite()),
+            "residual_eq60_at_peak": res60.is_finite().then_some(res60),
         }));
         // one segment per run of equal stability on a branch; dashed when unstable
         let mut k = 0;

@@ -46,6 +46,9 @@ pub enum ForcedError {
         /// Master pairs.
         pairs: usize,
     },
+    /// Higher-order non-autonomous terms need state-independent forcing.
+    #[error("the forcing depends on the state; higher-order non-autonomous terms need a state-independent Fext")]
+    StateDependentForcing,
     /// A harmonic's homological equation failed.
     #[error("harmonic {harmonic} at Omega = {omega}: {source}")]
     Solve {
@@ -113,6 +116,8 @@ pub struct ForcedSsm<'a> {
     solver: Homological<'a>,
     forcing: Vec<(f64, Vec<C64>, Vec<usize>)>,
     n_coords: usize,
+    lambda: Vec<C64>,
+    coord_ratios: Vec<f64>,
 }
 
 impl<'a> ForcedSsm<'a> {
@@ -157,11 +162,49 @@ impl<'a> ForcedSsm<'a> {
                 (h.multiple, f, set)
             })
             .collect();
+        let coord_ratios = ratios.iter().flat_map(|&r| [r, -r]).collect();
         Ok(Self {
             solver,
             forcing,
             n_coords: lambda.len(),
+            lambda,
+            coord_ratios,
         })
+    }
+
+    /// Master eigenvalues per reduced coordinate (`lambda_1, conj lambda_1, ...`).
+    pub(crate) fn lambda(&self) -> &[C64] {
+        &self.lambda
+    }
+
+    /// Resonance ratio per reduced coordinate (`r_j` for `p_j`, `-r_j` for its conjugate).
+    pub(crate) fn coord_ratios(&self) -> &[f64] {
+        &self.coord_ratios
+    }
+
+    /// Number of forcing harmonics.
+    pub(crate) fn n_harmonics(&self) -> usize {
+        self.forcing.len()
+    }
+
+    /// `(kappa_h, F_h)` of harmonic `h`.
+    pub(crate) fn harmonic(&self, h: usize) -> (f64, &[C64]) {
+        (self.forcing[h].0, &self.forcing[h].1)
+    }
+
+    /// One bordered solve (see [`Homological::solve`]).
+    pub(crate) fn solve(
+        &mut self,
+        big: C64,
+        set: &[usize],
+        rhs: &[C64],
+    ) -> Result<(Vec<C64>, Vec<C64>), HomologicalError> {
+        self.solver.solve(big, set, rhs)
+    }
+
+    /// Forgets cached numeric factorizations.
+    pub(crate) fn clear(&mut self) {
+        self.solver.clear_numeric();
     }
 
     /// `X0`, `S0` at forcing frequency `omega`.
@@ -190,93 +233,4 @@ impl<'a> ForcedSsm<'a> {
         self.solver.clear_numeric();
         Ok(ForcedTerms { omega, harmonics })
     }
-}
-
-/// Residual of the invariance equation (60) of the leading-order periodic SSM
-/// truncated at `order`, at reduced point `p` and phase `phi`:
-///
-/// `B [DW(p) (R(p) + eps S0(phi)) + eps Omega X0'(phi)]
-///  - A (W(p) + eps X0(phi)) - F(W(p) + eps X0(phi)) - eps Fext(phi)`.
-///
-/// The neglected terms `O(eps |p|)` and `O(eps^2)` are what remains (Fig. 6).
-pub fn residual(
-    ssm: &super::SsmExpansion,
-    sys: &System,
-    terms: &ForcedTerms,
-    eps: f64,
-    p: &[C64],
-    phi: f64,
-    order: usize,
-) -> Vec<C64> {
-    use crate::poly::eval_poly;
-    use crate::spectrum::modes::spmv;
-    let order = order.min(ssm.order);
-    let n = sys.n_states();
-    let nvar = p.len();
-    // S0(phi) per reduced coordinate, X0(phi) and its phase derivative
-    let mut s0 = vec![C64::new(0.0, 0.0); nvar];
-    let mut x0 = vec![C64::new(0.0, 0.0); n];
-    let mut dx0 = vec![C64::new(0.0, 0.0); n];
-    for h in &terms.harmonics {
-        let e = C64::from_polar(1.0, h.multiple * phi);
-        for (j, s) in h.s.iter().enumerate() {
-            // conj p_j carries the conjugate harmonic
-            let (src, ph) = if j % 2 == 0 {
-                (*s, e)
-            } else {
-                (h.s[j - 1].conj(), e.conj())
-            };
-            s0[j] += src * ph;
-        }
-        for i in 0..n {
-            let c = h.x[i] * e;
-            x0[i] += 2.0 * c.re;
-            dx0[i] += 2.0 * (c * C64::new(0.0, h.multiple)).re;
-        }
-    }
-    let mono = ssm.set.monomials(p, order);
-    let w = ssm.w_at(&mono, order);
-    let mut r = ssm.r_at(&mono, order);
-    for (rv, sv) in r.iter_mut().zip(&s0) {
-        *rv += eps * sv;
-    }
-    // DW(p) r = sum_k w_k sum_v k_v p^{k - e_v} r_v
-    let mut lhs = vec![C64::new(0.0, 0.0); n];
-    let end = ssm.set.of_order(order).end;
-    for idx in ssm.set.of_order(1).start..end {
-        let e = ssm.set.exponents(idx);
-        let mut s = C64::new(0.0, 0.0);
-        for (v, &ev) in e.iter().enumerate() {
-            if ev > 0 {
-                let low = ssm.set.lower(idx, v).expect("k_v > 0");
-                s += mono[low] * r[v] * f64::from(ev);
-            }
-        }
-        for (l, wk) in lhs.iter_mut().zip(&ssm.w[idx]) {
-            *l += s * wk;
-        }
-    }
-    for (l, d) in lhs.iter_mut().zip(&dx0) {
-        *l += eps * terms.omega * d;
-    }
-    let z: Vec<C64> = w.iter().zip(&x0).map(|(a, b)| a + eps * b).collect();
-    let mut res = spmv(sys.b.as_ref(), &lhs);
-    let az = spmv(sys.a.as_ref(), &z);
-    let mut fz = vec![C64::new(0.0, 0.0); n];
-    eval_poly(&sys.nonlinearity, &z, &mut fz);
-    let mut fext = vec![C64::new(0.0, 0.0); n];
-    for h in &sys.forcing {
-        let (c, s) = ((h.multiple * phi).cos(), (h.multiple * phi).sin());
-        let mut fc = vec![C64::new(0.0, 0.0); n];
-        let mut fs = vec![C64::new(0.0, 0.0); n];
-        eval_poly(&h.cos, &z, &mut fc);
-        eval_poly(&h.sin, &z, &mut fs);
-        for i in 0..n {
-            fext[i] += c * fc[i] + s * fs[i];
-        }
-    }
-    for i in 0..n {
-        res[i] -= az[i] + fz[i] + eps * fext[i];
-    }
-    res
 }

@@ -38,6 +38,7 @@
 pub mod analysis;
 pub mod forced;
 pub mod homological;
+pub mod nonautonomous;
 pub mod rom;
 
 use std::time::Instant;

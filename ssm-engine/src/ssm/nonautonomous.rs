@@ -1,0 +1,407 @@
+//! Higher-order non-autonomous terms of the periodic SSM, `O(eps |p|^k)`, beyond
+//! the leading order `X0`, `S0` used by Li, Jain & Haller (2023).
+//!
+//! With `W_eps = W(p) + eps sum_h (X_h(p) e^{i kappa_h phi} + c.c.)` and
+//! `R_eps = R(p) + eps sum_h (S_h(p) e^{i kappa_h phi} + c.c.)`,
+//! `X_h = sum_k x_{h,k} p^k`, `S_h = sum_k s_{h,k} p^k`, the `eps e^{i kappa phi} p^k`
+//! part of eq. (60) is, order by order in `|k|`,
+//!
+//! `(Lambda B - A) x_k + B V_I s_k = F_h delta_{k0} + [DF(W(p)) X(p)]_k
+//!   - B [DX(p) R_nl(p) + DW_nl(p) S(p)]_k`,  `Lambda = i kappa Omega + k . lambda`,
+//!
+//! where `R_nl`, `W_nl` are `R`, `W` without their linear parts. Every term on the
+//! right involves only `x_j`, `s_j` with `|j| < |k|` (because `DF(0) = 0`), so the
+//! same bordered solver as for the autonomous SSM applies. Normal-form style: the
+//! resonant set `I` holds the reduced coordinates `c` with
+//! `kappa + k . r = r_c` (`r` of eq. (16), `-r` for conjugate coordinates), so
+//! that the reduced dynamics are autonomous in the rotating frame. `k = 0`
+//! reproduces [`super::forced::ForcedSsm::at`]. The model's forcing must not
+//! depend on the state here.
+//!
+//! # References
+//! M. Li, S. Jain, G. Haller, *Nonlinear analysis of forced mechanical systems
+//! with internal resonance using spectral submanifolds, Part I*, Nonlinear Dyn.
+//! 110 (2022), Sect. 3.2 and Appendix B (non-autonomous expansion);
+//! M. Li, S. Jain, G. Haller, Nonlinear Dyn. 111 (2023), eq. (60).
+
+use super::forced::{ForcedError, ForcedSsm};
+use super::SsmExpansion;
+use crate::poly::MultiIndexSet;
+use crate::spectrum::modes::spmv;
+use crate::system::System;
+use crate::C64;
+
+/// One harmonic's expansion: coefficient of `e^{i kappa phi} p^k`.
+#[derive(Debug, Clone)]
+pub struct NaHarmonic {
+    /// `kappa`.
+    pub multiple: f64,
+    /// `x_{h,k}` per multi-index of [`NonAutonomous::set`] (`N` states).
+    pub x: Vec<Vec<C64>>,
+    /// `s_{h,k}` per multi-index, per reduced coordinate (zero where not resonant).
+    pub s: Vec<Vec<C64>>,
+}
+
+/// The non-autonomous part of the periodic SSM to order `order` in `p`, at one `Omega`.
+#[derive(Debug, Clone)]
+pub struct NonAutonomous {
+    /// Forcing frequency.
+    pub omega: f64,
+    /// Highest order in `p`.
+    pub order: usize,
+    /// Multi-indices up to `order`.
+    pub set: MultiIndexSet,
+    /// One entry per forcing harmonic.
+    pub harmonics: Vec<NaHarmonic>,
+}
+
+/// `sum_v sum_j j_v y_j f_v[k - j + e_v]`: the `p^k` coefficient (`ek`) of
+/// `DY(p) f(p)` for a vector series `y` over `jset` (indices `1..jlen`, `None`
+/// where absent) and scalar series `f_v` given by exponents.
+fn derivative_apply(
+    jset: &MultiIndexSet,
+    jlen: usize,
+    ek: &[u16],
+    y: &dyn Fn(usize) -> Option<Vec<C64>>,
+    f: &dyn Fn(usize, &[u16]) -> C64,
+    n: usize,
+) -> Vec<C64> {
+    let nvar = jset.nvar();
+    let mut out = vec![C64::new(0.0, 0.0); n];
+    let mut m = vec![0u16; nvar];
+    for j in 1..jlen {
+        let ej = jset.exponents(j);
+        let mut yj: Option<Vec<C64>> = None;
+        for v in 0..nvar {
+            if ej[v] == 0 {
+                continue;
+            }
+            // m = k - j + e_v, all components non-negative
+            let mut ok = true;
+            for u in 0..nvar {
+                let val = i32::from(ek[u]) - i32::from(ej[u]) + i32::from(u == v);
+                if val < 0 {
+                    ok = false;
+                    break;
+                }
+                m[u] = val as u16;
+            }
+            if !ok {
+                continue;
+            }
+            let c = f(v, &m) * f64::from(ej[v]);
+            if c == C64::new(0.0, 0.0) {
+                continue;
+            }
+            if yj.is_none() {
+                yj = y(j);
+            }
+            if let Some(yv) = &yj {
+                for (o, yy) in out.iter_mut().zip(yv) {
+                    *o += c * yy;
+                }
+            }
+        }
+    }
+    out
+}
+
+impl ForcedSsm<'_> {
+    /// The non-autonomous expansion to order `order` in `p` at `omega`, on top
+    /// of the autonomous expansion `ssm` (`order <= ssm.order`).
+    pub fn expansion(
+        &mut self,
+        ssm: &SsmExpansion,
+        sys: &System,
+        omega: f64,
+        order: usize,
+    ) -> Result<NonAutonomous, ForcedError> {
+        let order = order.min(ssm.order);
+        if order > 0
+            && sys.forcing.iter().any(|h| {
+                h.cos
+                    .terms
+                    .iter()
+                    .chain(h.sin.terms.iter())
+                    .any(|t| !t.factors.is_empty())
+            })
+        {
+            return Err(ForcedError::StateDependentForcing);
+        }
+        let n = sys.n_states();
+        let nvar = ssm.dim();
+        let set = MultiIndexSet::new(nvar, order);
+        let wset = MultiIndexSet::new(nvar, order + 1);
+        let ssm_index = |e: &[u16]| ssm.set.index(e);
+        // Jacobian series DF(W(p)) = sum over terms and factors, orders >= 1
+        let w_of = |idx: usize, state: usize| ssm.w[idx][state];
+        let mut jac: Vec<(usize, usize, Vec<C64>)> = Vec::new();
+        for t in sys.nonlinearity.terms.iter() {
+            for (fi, fv) in t.factors.iter().enumerate() {
+                let mut series = vec![C64::new(0.0, 0.0); set.len()];
+                series[0] = C64::new(t.coeff * f64::from(fv.power), 0.0);
+                for (gi, gv) in t.factors.iter().enumerate() {
+                    let pw = if gi == fi { gv.power - 1 } else { gv.power };
+                    for _ in 0..pw {
+                        series = mul_series(&set, &series, &|idx| {
+                            ssm_index(set.exponents(idx)).map_or(C64::new(0.0, 0.0), |si| {
+                                if idx == 0 {
+                                    C64::new(0.0, 0.0)
+                                } else {
+                                    w_of(si, gv.var as usize)
+                                }
+                            })
+                        });
+                    }
+                }
+                jac.push((t.eq as usize, fv.var as usize, series));
+            }
+        }
+        let lambda = self.lambda().to_vec();
+        let coord_ratio = self.coord_ratios().to_vec();
+        let mut harmonics = Vec::new();
+        for h in 0..self.n_harmonics() {
+            let (multiple, f) = self.harmonic(h);
+            let f = f.to_vec();
+            let mut x: Vec<Vec<C64>> = vec![Vec::new(); set.len()];
+            let mut s: Vec<Vec<C64>> = vec![vec![C64::new(0.0, 0.0); nvar]; set.len()];
+            for k in 0..=order {
+                for idx in set.of_order(k) {
+                    let e = set.exponents(idx).to_vec();
+                    let mut rhs = if k == 0 {
+                        f.clone()
+                    } else {
+                        vec![C64::new(0.0, 0.0); n]
+                    };
+                    // [DF(W) X]_k
+                    for (eq, var, series) in &jac {
+                        for (j, xj) in x.iter().enumerate().take(set.of_order(k).start) {
+                            if let Some(t) = sub_index(&set, &e, set.exponents(j)) {
+                                rhs[*eq] += series[t] * xj[*var];
+                            }
+                        }
+                    }
+                    // - B [DX R_nl + DW_nl S]_k
+                    let done = set.of_order(k).start;
+                    let dx_r = derivative_apply(
+                        &set,
+                        done,
+                        &e,
+                        &|j| Some(x[j].clone()),
+                        &|v, m| r_nl(ssm, v, m),
+                        n,
+                    );
+                    let dw_s = derivative_apply(
+                        &wset,
+                        wset.of_order(k + 1).end,
+                        &e,
+                        &|j| {
+                            let ej = wset.exponents(j);
+                            let o: u16 = ej.iter().sum();
+                            if o < 2 {
+                                return None;
+                            }
+                            ssm_index(ej).map(|si| ssm.w[si].clone())
+                        },
+                        &|v, m| {
+                            set.index(m)
+                                .filter(|&mi| mi < done)
+                                .map_or(C64::new(0.0, 0.0), |mi| s[mi][v])
+                        },
+                        n,
+                    );
+                    let corr: Vec<C64> = dx_r.iter().zip(&dw_s).map(|(a, b)| a + b).collect();
+                    let bc = spmv(sys.b.as_ref(), &corr);
+                    for (r, c) in rhs.iter_mut().zip(&bc) {
+                        *r -= c;
+                    }
+                    let big = C64::new(0.0, multiple * omega)
+                        + lambda
+                            .iter()
+                            .zip(&e)
+                            .map(|(l, &kv)| l * f64::from(kv))
+                            .sum::<C64>();
+                    let phase: f64 = multiple
+                        + coord_ratio
+                            .iter()
+                            .zip(&e)
+                            .map(|(r, &kv)| r * f64::from(kv))
+                            .sum::<f64>();
+                    let set_res: Vec<usize> = coord_ratio
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, &rc)| (phase - rc).abs() <= 1e-9 * rc.abs().max(1.0))
+                        .map(|(c, _)| c)
+                        .collect();
+                    let (xk, sk) =
+                        self.solve(big, &set_res, &rhs)
+                            .map_err(|source| ForcedError::Solve {
+                                harmonic: h + 1,
+                                omega,
+                                source,
+                            })?;
+                    x[idx] = xk;
+                    for (&c, v) in set_res.iter().zip(sk) {
+                        s[idx][c] = v;
+                    }
+                }
+                self.clear();
+            }
+            harmonics.push(NaHarmonic { multiple, x, s });
+        }
+        Ok(NonAutonomous {
+            omega,
+            order,
+            set,
+            harmonics,
+        })
+    }
+}
+
+impl NonAutonomous {
+    /// Residual of the invariance equation (60) of the periodic SSM (autonomous
+    /// part truncated at `order`, this non-autonomous part at its own order),
+    /// at reduced point `p` (conjugate pairs) and phase `phi`:
+    /// `B [D_p W_eps R_eps + Omega D_phi W_eps] - A W_eps - F(W_eps) - eps Fext(phi)`.
+    /// What remains is `O(eps |p|^(K+1))` and `O(eps^2)` (Fig. 6 for `K = 0`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn residual(
+        &self,
+        ssm: &SsmExpansion,
+        sys: &System,
+        eps: f64,
+        p: &[C64],
+        phi: f64,
+        order: usize,
+    ) -> Vec<C64> {
+        let order = order.min(ssm.order);
+        let n = sys.n_states();
+        let nvar = p.len();
+        let mono = self.set.monomials(p, self.order);
+        // reduced dynamics with forcing
+        let mono_ssm = ssm.set.monomials(p, order);
+        let mut r = ssm.r_at(&mono_ssm, order);
+        for h in &self.harmonics {
+            let e = C64::from_polar(1.0, h.multiple * phi);
+            for c in 0..nvar {
+                let own: C64 = h.s.iter().zip(&mono).map(|(sk, m)| sk[c] * m).sum();
+                let partner: C64 = h.s.iter().zip(&mono).map(|(sk, m)| sk[c ^ 1] * m).sum();
+                r[c] += eps * (own * e + partner.conj() * e.conj());
+            }
+        }
+        // z = W + eps sum 2 Re(X e^{i kappa phi}); lhs = Dz r + eps Omega d_phi
+        let mut z = ssm.w_at(&mono_ssm, order);
+        let mut lhs = vec![C64::new(0.0, 0.0); n];
+        let end = ssm.set.of_order(order).end;
+        for idx in ssm.set.of_order(1).start..end {
+            let s = dmono(&ssm.set, idx, &mono_ssm, &r);
+            for (l, wk) in lhs.iter_mut().zip(&ssm.w[idx]) {
+                *l += s * wk;
+            }
+        }
+        for h in &self.harmonics {
+            let e = C64::from_polar(1.0, h.multiple * phi);
+            let mut xp = vec![C64::new(0.0, 0.0); n];
+            let mut dxr = vec![C64::new(0.0, 0.0); n];
+            for (idx, xk) in h.x.iter().enumerate() {
+                let d = if idx == 0 {
+                    C64::new(0.0, 0.0)
+                } else {
+                    dmono(&self.set, idx, &mono, &r)
+                };
+                for i in 0..n {
+                    xp[i] += mono[idx] * xk[i];
+                    dxr[i] += d * xk[i];
+                }
+            }
+            for i in 0..n {
+                z[i] += 2.0 * eps * (xp[i] * e).re;
+                lhs[i] += 2.0 * eps * (dxr[i] * e).re;
+                lhs[i] += 2.0 * eps * self.omega * (xp[i] * e * C64::new(0.0, h.multiple)).re;
+            }
+        }
+        let mut res = spmv(sys.b.as_ref(), &lhs);
+        let az = spmv(sys.a.as_ref(), &z);
+        let mut fz = vec![C64::new(0.0, 0.0); n];
+        crate::poly::eval_poly(&sys.nonlinearity, &z, &mut fz);
+        for h in &sys.forcing {
+            let (c, s) = ((h.multiple * phi).cos(), (h.multiple * phi).sin());
+            let mut fc = vec![C64::new(0.0, 0.0); n];
+            let mut fs = vec![C64::new(0.0, 0.0); n];
+            crate::poly::eval_poly(&h.cos, &z, &mut fc);
+            crate::poly::eval_poly(&h.sin, &z, &mut fs);
+            for i in 0..n {
+                fz[i] += eps * (c * fc[i] + s * fs[i]);
+            }
+        }
+        for i in 0..n {
+            res[i] -= az[i] + fz[i];
+        }
+        res
+    }
+}
+
+/// `d(p^k)/dp . r = sum_v k_v p^{k - e_v} r_v` for multi-index `idx`.
+fn dmono(set: &MultiIndexSet, idx: usize, mono: &[C64], r: &[C64]) -> C64 {
+    let e = set.exponents(idx);
+    let mut s = C64::new(0.0, 0.0);
+    for (v, &ev) in e.iter().enumerate() {
+        if ev > 0 {
+            let low = set.lower(idx, v).expect("k_v > 0");
+            s += mono[low] * r[v] * f64::from(ev);
+        }
+    }
+    s
+}
+
+/// Coefficient of `p^m` in the nonlinear part of `R_v`.
+fn r_nl(ssm: &SsmExpansion, v: usize, m: &[u16]) -> C64 {
+    let o: u16 = m.iter().sum();
+    if o < 2 {
+        return C64::new(0.0, 0.0);
+    }
+    match ssm.set.index(m) {
+        Some(mi) => ssm
+            .r
+            .iter()
+            .filter(|t| t.coord == v && t.index == mi)
+            .map(|t| t.coeff)
+            .sum(),
+        None => C64::new(0.0, 0.0),
+    }
+}
+
+/// Index of `e - f` when it is a multi-index of the set.
+fn sub_index(set: &MultiIndexSet, e: &[u16], f: &[u16]) -> Option<usize> {
+    let mut d = Vec::with_capacity(e.len());
+    for (a, b) in e.iter().zip(f) {
+        if b > a {
+            return None;
+        }
+        d.push(a - b);
+    }
+    set.index(&d)
+}
+
+/// `a * b` truncated to the set, with `b` given by index.
+fn mul_series(set: &MultiIndexSet, a: &[C64], b: &dyn Fn(usize) -> C64) -> Vec<C64> {
+    let mut out = vec![C64::new(0.0, 0.0); set.len()];
+    let bv: Vec<C64> = (0..set.len()).map(b).collect();
+    for (i, ai) in a.iter().enumerate() {
+        if *ai == C64::new(0.0, 0.0) {
+            continue;
+        }
+        for (j, bj) in bv.iter().enumerate() {
+            if *bj == C64::new(0.0, 0.0) {
+                continue;
+            }
+            let ei = set.exponents(i);
+            let ej = set.exponents(j);
+            let sum: Vec<u16> = ei.iter().zip(ej).map(|(x, y)| x + y).collect();
+            if let Some(t) = set.index(&sum) {
+                out[t] += ai * bj;
+            }
+        }
+    }
+    out
+}
