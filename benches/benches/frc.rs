@@ -77,7 +77,10 @@ fn frc(c: &mut Criterion) {
                             .iter()
                             .map(|h| (h.multiple, weights.iter().map(|&(s, w)| h.x[s] * w).sum()))
                             .collect();
-                        response_amplitudes(&ssm, &series, order, q, &x0o, eps).0
+                        response_amplitudes(&ssm, &series, order, q, &|_, phi| {
+                            x0_part(&x0o, eps, phi)
+                        })
+                        .0
                     })
                     .collect();
                 black_box(amps)
@@ -89,3 +92,10 @@ fn frc(c: &mut Criterion) {
 
 criterion_group!(benches, frc);
 criterion_main!(benches);
+
+/// `eps sum_h 2 Re(x_h e^{i kappa_h phi})` for the output coefficients `x0` of `X0`.
+fn x0_part(x0: &[(f64, C64)], eps: f64, phi: f64) -> f64 {
+    x0.iter()
+        .map(|&(m, x)| 2.0 * eps * (x * C64::from_polar(1.0, m * phi)).re)
+        .sum()
+}

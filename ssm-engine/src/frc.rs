@@ -88,6 +88,97 @@ pub struct Frc {
     pub bifurcations: Vec<Bifurcation>,
 }
 
+/// Higher-order non-autonomous coefficients of the rotating-frame dynamics
+/// `q' = q (g(u) - i Omega) + eps (sigma(u) + q^2 tau(u))`, `u = |q|^2`, as
+/// functions of `Omega` (Chebyshev interpolation between exact expansions).
+#[derive(Debug, Clone)]
+pub struct ForcedCoefficients {
+    /// Interpolation nodes in `Omega`.
+    nodes: Vec<f64>,
+    /// `(sigma_0, sigma_1, ..., tau_0, tau_1, ...)` at each node.
+    values: Vec<Vec<C64>>,
+    /// Number of `sigma` coefficients.
+    n_sigma: usize,
+    /// `eps`.
+    eps: f64,
+}
+
+impl ForcedCoefficients {
+    /// Chebyshev nodes (second kind) on `[a, b]`.
+    pub fn nodes(a: f64, b: f64, count: usize) -> Vec<f64> {
+        (0..count)
+            .map(|k| {
+                let t = (std::f64::consts::PI * k as f64 / (count - 1) as f64).cos();
+                0.5 * (a + b) + 0.5 * (b - a) * t
+            })
+            .collect()
+    }
+
+    /// From `(sigma, tau)` evaluated at [`ForcedCoefficients::nodes`].
+    pub fn new(nodes: Vec<f64>, sigma_tau: Vec<(Vec<C64>, Vec<C64>)>, eps: f64) -> Self {
+        let n_sigma = sigma_tau.first().map_or(0, |v| v.0.len());
+        let values = sigma_tau
+            .into_iter()
+            .map(|(s, t)| s.into_iter().chain(t).collect())
+            .collect();
+        Self {
+            nodes,
+            values,
+            n_sigma,
+            eps,
+        }
+    }
+
+    /// `(eps sigma_a, eps tau_b)` at `omega` (barycentric interpolation; held
+    /// at the end values outside the nodes, where the FRC is not reported).
+    fn at(&self, omega: f64) -> (Vec<C64>, Vec<C64>) {
+        let lo = self.nodes.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = self.nodes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let all: Vec<C64> = chebyshev_interpolate(&self.nodes, &self.values, omega.clamp(lo, hi))
+            .iter()
+            .map(|c| c * self.eps)
+            .collect();
+        (all[..self.n_sigma].to_vec(), all[self.n_sigma..].to_vec())
+    }
+}
+
+/// Barycentric interpolation at `x` of vectors given at the Chebyshev nodes
+/// of [`ForcedCoefficients::nodes`] (weights `(-1)^k`, halved at the ends).
+pub fn chebyshev_interpolate(nodes: &[f64], values: &[Vec<C64>], x: f64) -> Vec<C64> {
+    let n = nodes.len();
+    let len = values[0].len();
+    let mut num = vec![C64::new(0.0, 0.0); len];
+    let mut den = 0.0;
+    for (k, (&xk, v)) in nodes.iter().zip(values).enumerate() {
+        let mut w = if k == 0 || k == n - 1 { 0.5 } else { 1.0 };
+        if k % 2 == 1 {
+            w = -w;
+        }
+        let d = x - xk;
+        if d == 0.0 {
+            return v.clone();
+        }
+        den += w / d;
+        for (o, c) in num.iter_mut().zip(v) {
+            *o += c * (w / d);
+        }
+    }
+    num.iter().map(|c| c / den).collect()
+}
+
+/// `sum_a c_a u^a` and its derivative in `u`.
+fn series_u(c: &[C64], u: f64) -> (C64, C64) {
+    let mut v = C64::new(0.0, 0.0);
+    let mut d = C64::new(0.0, 0.0);
+    for (j, cj) in c.iter().enumerate().rev() {
+        v = v * u + cj;
+        if j > 0 {
+            d = d * u + cj * j as f64;
+        }
+    }
+    (v, d)
+}
+
 /// The rotating-frame problem of one master pair.
 #[derive(Debug, Clone)]
 pub struct OnePair {
@@ -97,6 +188,8 @@ pub struct OnePair {
     force: f64,
     /// `arg(eps s)`.
     phase: f64,
+    /// Higher-order non-autonomous terms, if any.
+    forced: Option<ForcedCoefficients>,
 }
 
 impl OnePair {
@@ -114,7 +207,15 @@ impl OnePair {
             c,
             force: eps_s.norm(),
             phase: eps_s.arg(),
+            forced: None,
         }
+    }
+
+    /// With the higher-order non-autonomous terms `coeffs` (which replace the
+    /// leading-order forcing `eps s`, their `sigma_0`).
+    pub fn with_forced(mut self, coeffs: ForcedCoefficients) -> Self {
+        self.forced = Some(coeffs);
+        self
     }
 
     /// `g(u)` and `g'(u)`.
@@ -141,6 +242,9 @@ impl OnePair {
     /// backbone frequency, `+1`: above), with its stability data
     /// `(trace, det)`. `None` where the discriminant is negative.
     pub fn point(&self, rho: f64, sign: f64) -> Option<(f64, f64, f64, f64)> {
+        if self.forced.is_some() {
+            return self.point_forced(rho, sign);
+        }
         let d = self.discriminant(rho);
         if d < 0.0 {
             return None;
@@ -155,6 +259,72 @@ impl OnePair {
         let trace = 2.0 * jq.re;
         let det = jq.norm_sqr() - jqb.norm_sqr();
         Some((omega, q.arg(), trace, det))
+    }
+}
+
+impl OnePair {
+    /// Fixed point with the higher-order terms: for frozen `sigma`, `tau`,
+    /// `rho (g - i Omega) + sigma e^{-i theta} + rho^2 tau e^{i theta} = 0`
+    /// gives `theta` from its real part (roots on the circle) and `Omega` from
+    /// its imaginary part; `Omega` is then iterated to consistency with the
+    /// `Omega`-dependence of `sigma`, `tau`.
+    fn point_forced(&self, rho: f64, sign: f64) -> Option<(f64, f64, f64, f64)> {
+        let fc = self.forced.as_ref()?;
+        let u = rho * rho;
+        let (g, dg) = self.g(u);
+        // start from the leading-order point
+        let lead = OnePair {
+            forced: None,
+            ..self.clone()
+        };
+        let mut omega = match lead.point(rho, sign) {
+            Some(p) => p.0,
+            None => g.im,
+        };
+        let mut theta = 0.0;
+        for _ in 0..20 {
+            let (sig, tau) = fc.at(omega);
+            let (sv, _) = series_u(&sig, u);
+            let (tv, _) = series_u(&tau, u);
+            // real part: rho alpha + A cos(theta) + B sin(theta) = 0
+            let a = sv.re + u * tv.re;
+            let b = sv.im - u * tv.im;
+            let amp = a.hypot(b);
+            let c = -rho * g.re / amp;
+            if !(amp > 0.0 && c.abs() <= 1.0) {
+                return None;
+            }
+            let psi = b.atan2(a);
+            let om = |t: f64| {
+                g.im + (sv * C64::from_polar(1.0, -t) + u * tv * C64::from_polar(1.0, t)).im / rho
+            };
+            let (t1, t2) = (psi + c.acos(), psi - c.acos());
+            let (w1, w2) = (om(t1), om(t2));
+            let (t, w) = if (sign < 0.0) == (w1 <= w2) {
+                (t1, w1)
+            } else {
+                (t2, w2)
+            };
+            theta = t;
+            let done = (w - omega).abs() <= 1e-12 * omega.abs().max(1.0);
+            omega = w;
+            if done {
+                break;
+            }
+        }
+        let (sig, tau) = fc.at(omega);
+        let (_, ds) = series_u(&sig, u);
+        let (tv, dt) = series_u(&tau, u);
+        let q = C64::from_polar(rho, theta);
+        // G = q (g - i Omega) + sigma(u) + q^2 tau(u), u = q conj(q)
+        let jq = g + dg * u - C64::new(0.0, omega)
+            + ds * q.conj()
+            + 2.0 * q * tv
+            + q * q * dt * q.conj();
+        let jqb = q * q * dg + ds * q + q * q * dt * q;
+        let trace = 2.0 * jq.re;
+        let det = jq.norm_sqr() - jqb.norm_sqr();
+        Some((omega, theta, trace, det))
     }
 }
 
@@ -181,7 +351,18 @@ pub fn one_pair_frc(pb: &OnePair, rho_max: f64, samples: usize, omega_range: (f6
     let h = rho_max / scan as f64;
     let mut intervals: Vec<(f64, f64)> = Vec::new();
     let mut start: Option<f64> = None;
-    let d = |r: f64| pb.discriminant(r);
+    // existence of fixed points: the discriminant, or a root pair with the
+    // higher-order terms
+    let d = |r: f64| match pb.forced {
+        None => pb.discriminant(r),
+        Some(_) => {
+            if pb.point(r, -1.0).is_some() {
+                1.0
+            } else {
+                -1.0
+            }
+        }
+    };
     for k in 1..=scan {
         let r = k as f64 * h;
         let ok = d(r) >= 0.0;
@@ -271,16 +452,16 @@ pub fn one_pair_frc(pb: &OnePair, rho_max: f64, samples: usize, omega_range: (f6
 
 /// Amplitudes of one output on the periodic response of an FRC point:
 /// `max_t |y(t)|` (L-infinity) and the first-harmonic amplitude, with
-/// `y = W(p(t)) + eps X0(Omega t)` sampled at 64 phases over one forcing period
-/// (`series`: the output's coefficients in `W`; `x0`: `(kappa_h, x_h)` of
-/// the output's `X0`).
+/// `y = W(p(t)) + eps X(p(t), Omega t)` sampled at 64 phases over one forcing
+/// period (`series`: the output's coefficients in `W`; `forced(q, phi)`: the
+/// output's non-autonomous part `eps sum_h 2 Re(X_h(p) e^{i kappa_h phi})` at
+/// `p = (q, conj q)`).
 pub fn response_amplitudes(
     ssm: &crate::ssm::SsmExpansion,
     series: &[C64],
     order: usize,
     point: &FrcPoint,
-    x0: &[(f64, C64)],
-    eps: f64,
+    forced: &dyn Fn(C64, f64) -> f64,
 ) -> (f64, f64) {
     let n = 64;
     let end = ssm.set.of_order(order.min(ssm.order)).end;
@@ -290,11 +471,7 @@ pub fn response_amplitudes(
         let phi = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
         let q = C64::from_polar(point.rho, point.theta + phi);
         let mono = ssm.set.monomials(&[q, q.conj()], order);
-        let mut y = (0..end).map(|i| series[i] * mono[i]).sum::<C64>().re;
-        y += x0
-            .iter()
-            .map(|&(m, x)| 2.0 * eps * (x * C64::from_polar(1.0, m * phi)).re)
-            .sum::<f64>();
+        let y = (0..end).map(|i| series[i] * mono[i]).sum::<C64>().re + forced(q, phi);
         linf = linf.max(y.abs());
         first += y * C64::from_polar(1.0, -phi);
     }

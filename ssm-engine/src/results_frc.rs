@@ -4,8 +4,11 @@
 
 use serde_json::{json, Value};
 
-use crate::frc::{one_pair_frc, response_amplitudes, OnePair};
+use crate::frc::{
+    chebyshev_interpolate, one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair,
+};
 use crate::plot::{line_plot, Curve, PlotError, Scale};
+use crate::poly::MultiIndexSet;
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{invariance_error, polar, PolarError};
@@ -29,6 +32,16 @@ pub enum FrcError {
     /// What the FRC path does not cover.
     #[error("FRC: {0}")]
     Unsupported(String),
+}
+
+/// Exact non-autonomous data at the Chebyshev nodes in `Omega`.
+struct NaTable {
+    /// `(sigma, tau)` per node.
+    coeffs: Vec<(Vec<C64>, Vec<C64>)>,
+    /// Per node: the outputs' `x_k`, output after output, over `set`.
+    xs: Vec<Vec<C64>>,
+    /// Multi-indices of the expansion.
+    set: MultiIndexSet,
 }
 
 /// The three products of the `[forcing]` section.
@@ -100,6 +113,51 @@ pub fn frc(
         csv.push_str(&format!(",{}_h1", o.name));
     }
     csv.push('\n');
+    // higher-order non-autonomous terms: exact expansions at Chebyshev nodes in
+    // Omega, interpolated in between (sigma, tau and the outputs' X), one table
+    // per effective order min(K, order - 1)
+    let k_na = sec.nonautonomous_order.as_ref().map_or(0, |k| *k.get_ref());
+    if k_na > 0 && (sys.forcing.len() != 1 || sys.forcing[0].multiple != 1.0) {
+        return Err(FrcError::Unsupported(
+            "nonautonomous_order > 0 needs a single forcing harmonic at Omega".into(),
+        ));
+    }
+    let width = range.1 - range.0;
+    let nodes = ForcedCoefficients::nodes(range.0 - 0.1 * width, range.1 + 0.1 * width, 17);
+    let mut tables: std::collections::HashMap<usize, NaTable> = std::collections::HashMap::new();
+    for &order in &orders {
+        let k_eff = k_na.min(order.saturating_sub(1));
+        if k_eff == 0 || tables.contains_key(&k_eff) {
+            continue;
+        }
+        let mut coeffs = Vec::with_capacity(nodes.len());
+        let mut xs = Vec::with_capacity(nodes.len());
+        let mut set = None;
+        for &w in &nodes {
+            let na = forced.expansion(ssm, sys, w, k_eff)?;
+            coeffs.push(na.rotating_frame_coefficients());
+            let h = &na.harmonics[0];
+            xs.push(
+                outputs
+                    .iter()
+                    .flat_map(|o| {
+                        h.x.iter()
+                            .map(|xk| o.weights.iter().map(|&(s, wt)| xk[s] * wt).sum::<C64>())
+                            .collect::<Vec<_>>()
+                    })
+                    .collect::<Vec<C64>>(),
+            );
+            set = Some(na.set);
+        }
+        tables.insert(
+            k_eff,
+            NaTable {
+                coeffs,
+                xs,
+                set: set.expect("at least one node"),
+            },
+        );
+    }
     let mut curves: Vec<Curve> = Vec::new();
     let mut bifurcations = Vec::new();
     let mut summaries = Vec::new();
@@ -109,22 +167,55 @@ pub fn frc(
         .flat_map(|o| eps_list.iter().map(move |e| (o, e)))
         .enumerate()
     {
-        let pb = OnePair::new(&pol, order, eps * s);
+        let k_eff = k_na.min(order.saturating_sub(1));
+        let table = tables.get(&k_eff);
+        let mut pb = OnePair::new(&pol, order, eps * s);
+        if let Some(t) = table {
+            pb = pb.with_forced(ForcedCoefficients::new(
+                nodes.clone(),
+                t.coeffs.clone(),
+                eps,
+            ));
+        }
         let f = one_pair_frc(&pb, rho_max, points, range);
         let mut first_amp = Vec::with_capacity(f.points.len());
         for p in &f.points {
-            let x0 = forced.at(p.omega)?;
             let mut linf = Vec::with_capacity(outputs.len());
             let mut h1 = Vec::with_capacity(outputs.len());
-            for (o, ser) in outputs.iter().zip(&series) {
-                let x0o: Vec<(f64, C64)> = x0
-                    .harmonics
-                    .iter()
-                    .map(|h| (h.multiple, o.weights.iter().map(|&(s, w)| h.x[s] * w).sum()))
-                    .collect();
-                let (l, a) = response_amplitudes(ssm, ser, order, p, &x0o, eps);
-                linf.push(l);
-                h1.push(a);
+            match table {
+                Some(t) => {
+                    let x = chebyshev_interpolate(&nodes, &t.xs, p.omega);
+                    let len = t.set.len();
+                    for (oi, ser) in series.iter().enumerate() {
+                        let xo = &x[oi * len..(oi + 1) * len];
+                        let part = |q: C64, phi: f64| {
+                            let mono = t.set.monomials(&[q, q.conj()], t.set.max_order());
+                            let v: C64 = xo.iter().zip(&mono).map(|(a, b)| a * b).sum();
+                            2.0 * eps * (v * C64::from_polar(1.0, phi)).re
+                        };
+                        let (l, a) = response_amplitudes(ssm, ser, order, p, &part);
+                        linf.push(l);
+                        h1.push(a);
+                    }
+                }
+                None => {
+                    let x0 = forced.at(p.omega)?;
+                    for (o, ser) in outputs.iter().zip(&series) {
+                        let x0o: Vec<(f64, C64)> = x0
+                            .harmonics
+                            .iter()
+                            .map(|h| (h.multiple, o.weights.iter().map(|&(s, w)| h.x[s] * w).sum()))
+                            .collect();
+                        let part = |_: C64, phi: f64| -> f64 {
+                            x0o.iter()
+                                .map(|&(m, x)| 2.0 * eps * (x * C64::from_polar(1.0, m * phi)).re)
+                                .sum()
+                        };
+                        let (l, a) = response_amplitudes(ssm, ser, order, p, &part);
+                        linf.push(l);
+                        h1.push(a);
+                    }
+                }
             }
             csv.push_str(&format!(
                 "{order},{eps:e},{:.10e},{},{}",
@@ -150,7 +241,7 @@ pub fn frc(
         let peak = f.points.iter().max_by(|a, b| a.rho.total_cmp(&b.rho));
         let res60 = match peak {
             Some(pk) => {
-                let na = forced.expansion(ssm, sys, pk.omega, 0)?;
+                let na = forced.expansion(ssm, sys, pk.omega, k_eff)?;
                 (0..64)
                     .map(|k| {
                         let phi = 2.0 * std::f64::consts::PI * f64::from(k) / 64.0;
@@ -170,6 +261,7 @@ pub fn frc(
             "rho_peak": rho_peak,
             "invariance_error_at_peak": err.filter(|e| e.is_finite()),
             "residual_eq60_at_peak": res60.is_finite().then_some(res60),
+            "nonautonomous_order": k_eff,
         }));
         // one segment per run of equal stability on a branch; dashed when unstable
         let mut k = 0;

@@ -33,6 +33,7 @@
 //! omega_range = [1.9, 2.1]
 //! orders = [3, 5, 7]              # one FRC each (default: [ssm] order)
 //! # resonance = [1], points = 200, rho_max = ...
+//! # nonautonomous_order = 4       # O(eps |p|^k) terms beyond the leading order
 //! ```
 
 use std::ops::Range;
@@ -119,6 +120,10 @@ pub struct ForcingSection {
     /// linear peak amplitude at the largest epsilon).
     #[serde(default)]
     pub rho_max: Option<Spanned<f64>>,
+    /// Order in `p` of the non-autonomous terms `O(eps |p|^k)` (0: the leading
+    /// order `X0`, `S0` of the paper).
+    #[serde(default)]
+    pub nonautonomous_order: Option<Spanned<usize>>,
 }
 
 fn default_frc_points() -> Spanned<usize> {
@@ -525,6 +530,16 @@ impl SceneFile {
         self.check_at_least(&f.points, 2, "forcing.points")?;
         if let Some(rm) = &f.rho_max {
             self.check_positive(rm, "forcing.rho_max")?;
+        }
+        if let Some(k) = &f.nonautonomous_order {
+            let max = self.scene.ssm.order.get_ref().saturating_sub(1);
+            if *k.get_ref() > max {
+                return Err(self.invalid(
+                    k.span(),
+                    "forcing.nonautonomous_order",
+                    format!("must be at most [ssm] order - 1 = {max}"),
+                ));
+            }
         }
         Ok(())
     }

@@ -432,3 +432,23 @@ fn zoo_fig5_scene_writes_the_frc() {
     assert!(svg.contains("<circle") && svg.contains("O(11), eps = 0.03"));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// The Fig. 5 scene with `nonautonomous_order = 6`: one branch per curve, the
+/// order used is reported, and the residual of eq. (60) on the peak orbit at
+/// O(11) is far below the leading order's (above 0.015, Fig. 6 and the test
+/// `fig6_residual_of_the_leading_order_periodic_ssm`).
+#[test]
+fn zoo_fig5_nonautonomous_scene_lowers_the_residual() {
+    let s = run_zoo("spatial_oscillator_none_fig5_nonautonomous.toml");
+    let curves = s["frc"]["curves"].as_array().unwrap();
+    assert_eq!(curves.len(), 2);
+    let c11 = curves.iter().find(|c| c["order"] == 11).unwrap();
+    assert_eq!(c11["nonautonomous_order"], 6);
+    assert_eq!(c11["branches"], 1);
+    assert!(
+        c11["residual_eq60_at_peak"].as_f64().unwrap() < 3e-3,
+        "{c11}"
+    );
+    let sn = s["frc"]["bifurcations"].as_array().unwrap();
+    assert_eq!(sn.iter().filter(|b| b["order"] == 11).count(), 2);
+}

@@ -341,6 +341,37 @@ impl NonAutonomous {
     }
 }
 
+impl NonAutonomous {
+    /// One master pair, first harmonic, `r = 1`: the coefficients of the
+    /// rotating-frame forcing `sigma(u) + q^2 tau(u)` (`u = |q|^2`) of
+    /// [`crate::frc::ForcedCoefficients`]: `sigma_a = s_{(a,a)}` of `p`,
+    /// `tau_b = conj(s_{(b,b+2)})` of `conj p` (the conjugate harmonic's terms
+    /// in the equation of `p`).
+    pub fn rotating_frame_coefficients(&self) -> (Vec<C64>, Vec<C64>) {
+        let h = &self.harmonics[0];
+        let mut sigma = Vec::new();
+        let mut tau = Vec::new();
+        for a in 0..=(self.order / 2) as u16 {
+            sigma.push(
+                self.set
+                    .index(&[a, a])
+                    .map_or(C64::new(0.0, 0.0), |i| h.s[i][0]),
+            );
+            if 2 * a + 2 <= self.order as u16 {
+                tau.push(
+                    self.set
+                        .index(&[a, a + 2])
+                        .map_or(C64::new(0.0, 0.0), |i| h.s[i][1].conj()),
+                );
+            }
+        }
+        if tau.is_empty() {
+            tau.push(C64::new(0.0, 0.0));
+        }
+        (sigma, tau)
+    }
+}
+
 /// `d(p^k)/dp . r = sum_v k_v p^{k - e_v} r_v` for multi-index `idx`.
 fn dmono(set: &MultiIndexSet, idx: usize, mono: &[C64], r: &[C64]) -> C64 {
     let e = set.exponents(idx);
