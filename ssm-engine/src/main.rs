@@ -22,7 +22,7 @@ SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
   [ssm]
   master_pairs = [1]              # 1-based underdamped mode pairs, slowest first
   order = 13                      # expansion order; non-resonance checks go up to it
-  normalization = \"unit\"          # \"unit\" (||v|| = 1) or \"mass\" (x^H M x = 1)
+  normalization = \"unit\"          # \"unit\" (||v|| = 1), \"mass\" (x^H M x = 1), or { scale = s }
   resonance_tol = 0.02            # relative distance counted as a near resonance
 
   [spectrum]
@@ -32,8 +32,24 @@ SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
 
   [outputs]
   coordinates = [\"x1\"]            # named outputs of the model
+  [outputs.invariance_error]      # eq. (41): radii, orders, n_alpha = 10, n_theta = 30
+  radii = [0.01, 0.1]
+  orders = [3, 5, 7]
+  [outputs.backbone]              # one master pair: rho_max, points = 101, orders
+  rho_max = 0.35
+  [outputs.transient]             # reduced model from (rho0, theta0) per pair, lifted by W
+  rho0 = [0.35]                   # theta0, t_end, samples = 1001, order, rtol = 1e-9
+  t_end = 100.0
 
-OUTPUTS (in --out DIR, default ./out/<scene file stem>): summary.json, spectrum.csv.
+  [forcing]                       # forced response curves (one master pair)
+  epsilon = [0.01, 0.02]          # one curve each; the load shape is the model's Fext
+  omega_range = [1.9, 2.1]
+  orders = [3, 5, 7]              # one curve each (default [ssm] order)
+  # points = 200, rho_max = ..., resonance = [1]
+  # nonautonomous_order = 4       # O(eps |p|^k) terms beyond the leading order
+
+OUTPUTS (in --out DIR, default ./out/<scene file stem>): summary.json, spectrum.csv,
+backbone.csv/.svg, rom_trajectory.csv, frc.csv/.svg (as requested).
 Files are written to temporary names and renamed; a failed run writes nothing.
 
 PLUGINS are found from --plugin PATH, from SSM_PLUGIN_PATH (':'-separated files or
