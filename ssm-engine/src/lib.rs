@@ -16,12 +16,15 @@
 //! - [`ssm`]: autonomous SSMs of flows and maps (parametrization method),
 //!   polar form, backbones, invariance error, reduced-model transients;
 //! - [`frc`]: forced response curves of 2-D SSMs, stability and folds;
+//! - [`continuation`]: forced response of several pairs (pseudo-arclength,
+//!   folds, branch points with switching, Hopf points);
 //! - [`results`]: SSM entries of the summary, backbone and transient files;
 //! - [`results_frc`]: `frc.csv`, `frc.svg` and the summary's `frc`;
 //! - [`plot`]: SVG plots;
 //! - [`report`]: `summary.json` and CSV tables, written atomically;
 //! - [`job`]: running a scene end to end.
 
+pub mod continuation;
 pub mod frc;
 pub mod job;
 pub mod plot;
@@ -31,6 +34,7 @@ pub mod recast;
 pub mod report;
 pub mod results;
 pub mod results_frc;
+pub mod results_frc_multi;
 pub mod scene;
 pub mod spectrum;
 pub mod ssm;

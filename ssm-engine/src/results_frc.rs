@@ -32,6 +32,33 @@ pub enum FrcError {
     /// What the FRC path does not cover.
     #[error("FRC: {0}")]
     Unsupported(String),
+    /// The continuation could not start.
+    #[error("FRC: {0}")]
+    Continuation(#[from] crate::continuation::ContinuationError),
+}
+
+/// External resonance ratios chosen from the forcing frequency (eq. 16): the
+/// pair whose frequency is nearest `omega` gets `r = 1`; the others the
+/// nearest fraction `k/d`, `d <= 3`, of their frequency ratio to it.
+pub fn auto_ratios(masters: &[MasterMode], omega: f64) -> Vec<f64> {
+    let main = masters
+        .iter()
+        .min_by(|a, b| {
+            (a.lambda.im - omega)
+                .abs()
+                .total_cmp(&(b.lambda.im - omega).abs())
+        })
+        .map_or(1.0, |m| m.lambda.im);
+    masters
+        .iter()
+        .map(|m| {
+            let x = m.lambda.im / main;
+            (1..=3)
+                .map(|d| (x * f64::from(d)).round().max(1.0) / f64::from(d))
+                .min_by(|a, b| (a - x).abs().total_cmp(&(b - x).abs()))
+                .unwrap_or(1.0)
+        })
+        .collect()
 }
 
 /// Exact non-autonomous data at the Chebyshev nodes in `Omega`.
@@ -64,16 +91,14 @@ pub fn frc(
     sec: &ForcingSection,
     outputs: &[&OutputMap],
 ) -> Result<FrcReport, FrcError> {
-    if masters.len() != 1 {
-        return Err(FrcError::Unsupported(format!(
-            "{} master pairs: FRCs with internal resonance need the continuation of the polar reduced dynamics, which is not implemented yet; use one master pair",
-            masters.len()
-        )));
+    let range0 = (sec.omega_range.get_ref()[0], sec.omega_range.get_ref()[1]);
+    let ratios = match &sec.resonance {
+        Some(r) => r.get_ref().clone(),
+        None => auto_ratios(masters, 0.5 * (range0.0 + range0.1)),
+    };
+    if masters.len() > 1 {
+        return crate::results_frc_multi::frc_multi(ssm, sys, masters, sec, outputs, &ratios);
     }
-    let ratios = sec
-        .resonance
-        .as_ref()
-        .map_or(vec![1.0], |r| r.get_ref().clone());
     if ratios[0] != 1.0 {
         return Err(FrcError::Unsupported(format!(
             "resonance ratio {} for a single pair: only primary resonance (r = 1) is implemented",

@@ -452,3 +452,41 @@ fn zoo_fig5_nonautonomous_scene_lowers_the_residual() {
     let sn = s["frc"]["bifurcations"].as_array().unwrap();
     assert_eq!(sn.iter().filter(|b| b["order"] == 11).count(), 2);
 }
+
+/// Fig. 11 scene (pendulum slider, 4-D SSM, 1:3 internal resonance): the
+/// resonance ratios are chosen from the frequency range as (1, 3), the
+/// continuation produces one curve per order with folds, and `frc.csv` has a
+/// column per pair amplitude.
+#[test]
+fn zoo_fig11_scene_continues_the_internally_resonant_frc() {
+    let out = tmp_dir("fig11");
+    let o = Command::new(engine_binary())
+        .arg(repo_root().join("zoo/pendulum_slider_fig11.toml"))
+        .arg("--out")
+        .arg(&out)
+        .env("CI", "1")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["frc"]["resonance"], serde_json::json!([1.0, 3.0]));
+    let curves = s["frc"]["curves"].as_array().unwrap();
+    assert_eq!(curves.len(), 3);
+    assert!(curves
+        .iter()
+        .all(|c| c["continuation_steps"].as_u64().unwrap() > 10));
+    let sn = s["frc"]["bifurcations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|b| b["kind"] == "SN")
+        .count();
+    assert!(sn >= 2, "{}", s["frc"]);
+    let csv = std::fs::read_to_string(out.join("frc.csv")).unwrap();
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        "order,epsilon,omega,stable,branch,x1_linf,phi2_linf,rho_1,rho_2,x1_h1,phi2_h1"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}

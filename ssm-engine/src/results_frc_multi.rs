@@ -1,0 +1,300 @@
+//! Forced response of several master pairs (internal resonance) for the
+//! report: continuation of the rotating-frame reduced dynamics
+//! ([`crate::continuation`]) with branch switching at branch points, and the
+//! physical amplitudes of each point rebuilt from `W(p(t)) + eps X0(Omega t)`.
+
+use serde_json::{json, Value};
+
+use crate::continuation::{Branch, LocatedKind, PolarTerm, RotatingFrame, Settings};
+use crate::plot::{line_plot, Curve, Scale};
+use crate::results_frc::{FrcError, FrcReport};
+use crate::scene::ForcingSection;
+use crate::spectrum::MasterMode;
+use crate::ssm::forced::ForcedSsm;
+use crate::ssm::SsmExpansion;
+use crate::system::{OutputMap, System};
+use crate::C64;
+
+/// Branch switches at most per curve (each branch point found is switched once).
+const MAX_SWITCHES: usize = 6;
+
+/// The rotating-frame terms of `R` truncated at `order`: those autonomous for
+/// `p_{2j} = q_j e^{i r_j Omega t}` (all of a consistent normal form).
+fn rotating_terms(ssm: &SsmExpansion, ratios: &[f64], order: usize) -> (Vec<PolarTerm>, usize) {
+    let mut terms = Vec::new();
+    let mut dropped = 0;
+    for t in &ssm.r {
+        if t.coord % 2 == 1 || ssm.set.order(t.index) > order {
+            continue;
+        }
+        let e = ssm.set.exponents(t.index);
+        let phase: f64 = e
+            .iter()
+            .enumerate()
+            .map(|(v, &k)| {
+                let r = ratios[v / 2];
+                f64::from(k) * if v % 2 == 0 { r } else { -r }
+            })
+            .sum();
+        if (phase - ratios[t.coord / 2]).abs() > 1e-9 {
+            dropped += 1;
+            continue;
+        }
+        terms.push(PolarTerm {
+            pair: t.coord / 2,
+            exponents: e.to_vec(),
+            coeff: t.coeff,
+        });
+    }
+    (terms, dropped)
+}
+
+/// Least common denominator of the ratios (at most 6), for the response period.
+fn period_multiple(ratios: &[f64]) -> f64 {
+    (1..=6)
+        .find(|&d| {
+            ratios
+                .iter()
+                .all(|r| ((r * f64::from(d)) - (r * f64::from(d)).round()).abs() < 1e-9)
+        })
+        .map_or(1.0, f64::from)
+}
+
+/// FRCs of several pairs for every `(order, epsilon)` of `sec`.
+pub fn frc_multi(
+    ssm: &SsmExpansion,
+    sys: &System,
+    masters: &[MasterMode],
+    sec: &ForcingSection,
+    outputs: &[&OutputMap],
+    ratios: &[f64],
+) -> Result<FrcReport, FrcError> {
+    if sec
+        .nonautonomous_order
+        .as_ref()
+        .is_some_and(|k| *k.get_ref() > 0)
+    {
+        return Err(FrcError::Unsupported(
+            "nonautonomous_order > 0 is implemented for one master pair only".into(),
+        ));
+    }
+    let m = masters.len();
+    let range = (sec.omega_range.get_ref()[0], sec.omega_range.get_ref()[1]);
+    let mut forced = ForcedSsm::new(sys, masters, ratios)?;
+    let center = forced.at(0.5 * (range.0 + range.1))?;
+    let s: Vec<C64> = (0..m).map(|j| center.resonant_forcing(2 * j)).collect();
+    if s.iter().all(|v| v.norm() == 0.0) {
+        return Err(FrcError::Unsupported(
+            "the forcing reaches no master pair at these resonance ratios (u^* F = 0)".into(),
+        ));
+    }
+    let orders = sec
+        .orders
+        .as_ref()
+        .map_or(vec![ssm.order], |o| o.get_ref().clone());
+    let series: Vec<Vec<C64>> = outputs
+        .iter()
+        .map(|o| ssm.output_series(&o.weights))
+        .collect();
+    let periods = period_multiple(ratios);
+    let mut csv = String::from("order,epsilon,omega,stable,branch");
+    for o in outputs {
+        csv.push_str(&format!(",{}_linf", o.name));
+    }
+    for j in 1..=m {
+        csv.push_str(&format!(",rho_{j}"));
+    }
+    for o in outputs {
+        csv.push_str(&format!(",{}_h1", o.name));
+    }
+    csv.push('\n');
+    let mut curves = Vec::new();
+    let mut bifurcations = Vec::new();
+    let mut summaries = Vec::new();
+    let mut n_points = 0;
+    let mut warnings = Vec::new();
+    for (ci, (&order, &eps)) in orders
+        .iter()
+        .flat_map(|o| sec.epsilon.get_ref().iter().map(move |e| (o, e)))
+        .enumerate()
+    {
+        let (terms, dropped) = rotating_terms(ssm, ratios, order);
+        if dropped > 0 {
+            warnings.push(format!(
+                "O({order}): {dropped} near-resonant terms of R are not autonomous for the resonance ratios {ratios:?} and were left out of the forced response"
+            ));
+        }
+        let frame = RotatingFrame {
+            terms,
+            ratios: ratios.to_vec(),
+            force: s.iter().map(|v| v * eps).collect(),
+        };
+        let scale = masters.iter().map(|mm| mm.lambda.im).fold(0.0, f64::max);
+        let settings = Settings {
+            omega_range: range,
+            h_max: 2e-3 * scale.max(range.1 - range.0),
+            h_min: 1e-10 * scale,
+            max_steps: 20 * *sec.points.get_ref(),
+        };
+        let guess: Vec<f64> = (0..m)
+            .flat_map(|j| {
+                let q = -frame.force[j] / (masters[j].lambda - C64::new(0.0, ratios[j] * range.0));
+                [q.re, q.im]
+            })
+            .collect();
+        let main = frame.start(range.0, guess, &settings)?;
+        let mut branches: Vec<Branch> = vec![main];
+        let mut switched = 0;
+        let mut k = 0;
+        while k < branches.len() && switched < MAX_SWITCHES {
+            let bps: Vec<_> = branches[k]
+                .located
+                .iter()
+                .filter(|l| l.kind == LocatedKind::BranchPoint)
+                .cloned()
+                .collect();
+            for bp in bps {
+                // skip branch points already reached by an earlier branch
+                let seen = branches[..k].iter().any(|b| {
+                    b.located.iter().any(|l| {
+                        l.kind == LocatedKind::BranchPoint
+                            && (l.at.omega - bp.at.omega).abs() < 1e-6 * bp.at.omega
+                    })
+                });
+                if seen || switched >= MAX_SWITCHES {
+                    continue;
+                }
+                branches.extend(frame.switch(&bp, &settings));
+                switched += 1;
+            }
+            k += 1;
+        }
+        let mut count = 0;
+        for (bi, br) in branches.iter().enumerate() {
+            let mut seg: Vec<(f64, f64)> = Vec::new();
+            let mut seg_stable = None;
+            for p in br
+                .points
+                .iter()
+                .filter(|p| p.omega >= range.0 && p.omega <= range.1)
+            {
+                let x0 = forced.at(p.omega)?;
+                let mut linf = vec![0.0f64; outputs.len()];
+                let mut h1 = vec![C64::new(0.0, 0.0); outputs.len()];
+                let samples = 64 * periods as usize;
+                for k in 0..samples {
+                    let phi = 2.0 * std::f64::consts::PI * periods * k as f64 / samples as f64;
+                    let pz: Vec<C64> = (0..m)
+                        .flat_map(|j| {
+                            let q = p.q[j] * C64::from_polar(1.0, ratios[j] * phi);
+                            [q, q.conj()]
+                        })
+                        .collect();
+                    let mono = ssm.set.monomials(&pz, order);
+                    let end = ssm.set.of_order(order.min(ssm.order)).end;
+                    for (oi, (o, ser)) in outputs.iter().zip(&series).enumerate() {
+                        let mut y = (0..end).map(|i| ser[i] * mono[i]).sum::<C64>().re;
+                        for h in &x0.harmonics {
+                            let c: C64 = o.weights.iter().map(|&(st, w)| h.x[st] * w).sum();
+                            y += 2.0 * eps * (c * C64::from_polar(1.0, h.multiple * phi)).re;
+                        }
+                        linf[oi] = linf[oi].max(y.abs());
+                        h1[oi] += y * C64::from_polar(1.0, -phi);
+                    }
+                }
+                csv.push_str(&format!(
+                    "{order},{eps:e},{:.10e},{},{}",
+                    p.omega,
+                    u8::from(p.stable),
+                    bi + 1
+                ));
+                for l in &linf {
+                    csv.push_str(&format!(",{l:.10e}"));
+                }
+                for q in &p.q {
+                    csv.push_str(&format!(",{:.10e}", q.norm()));
+                }
+                for a in &h1 {
+                    csv.push_str(&format!(",{:.10e}", 2.0 * a.norm() / samples as f64));
+                }
+                csv.push('\n');
+                count += 1;
+                let y = linf.first().copied().unwrap_or(p.q[0].norm());
+                if seg_stable.is_some_and(|st| st != p.stable) {
+                    let last = *seg.last().expect("non-empty segment");
+                    curves.push(Curve {
+                        label: String::new(),
+                        points: std::mem::take(&mut seg),
+                        dashed: seg_stable == Some(false),
+                        markers: Vec::new(),
+                        color: Some(ci),
+                    });
+                    seg.push(last);
+                }
+                seg_stable = Some(p.stable);
+                seg.push((p.omega, y));
+            }
+            if !seg.is_empty() {
+                curves.push(Curve {
+                    label: if bi == 0 {
+                        format!("O({order}), eps = {eps}")
+                    } else {
+                        String::new()
+                    },
+                    points: seg,
+                    dashed: seg_stable == Some(false),
+                    markers: Vec::new(),
+                    color: Some(ci),
+                });
+            }
+            for l in &br.located {
+                if l.at.omega < range.0 || l.at.omega > range.1 {
+                    continue;
+                }
+                let kind = match l.kind {
+                    LocatedKind::BranchPoint => "BP",
+                    LocatedKind::Bifurcation(b) => b.label(),
+                };
+                bifurcations.push(json!({
+                    "kind": kind,
+                    "omega": l.at.omega,
+                    "epsilon": eps,
+                    "order": order,
+                    "branch": bi + 1,
+                    "rho": l.at.q.iter().map(|q| q.norm()).collect::<Vec<_>>(),
+                }));
+            }
+        }
+        n_points += count;
+        summaries.push(json!({
+            "order": order,
+            "epsilon": eps,
+            "points": count,
+            "branches": branches.len(),
+            "branch_switches": switched,
+            "continuation_steps": branches.iter().map(|b| b.points.len()).sum::<usize>(),
+        }));
+    }
+    let y_label = outputs
+        .first()
+        .map_or("rho_1".to_owned(), |o| format!("max |{}|", o.name));
+    let svg = line_plot(
+        "forced response (dashed: unstable)",
+        "Omega",
+        &y_label,
+        &curves,
+        Scale::Linear,
+    )?;
+    Ok(FrcReport {
+        csv,
+        svg,
+        summary: json!({
+            "bifurcations": bifurcations,
+            "points": n_points,
+            "curves": summaries,
+            "resonance": ratios,
+            "forcing_on_master": s.iter().map(|v| json!({"re": v.re, "im": v.im})).collect::<Vec<Value>>(),
+            "warnings": warnings,
+        }),
+    })
+}
