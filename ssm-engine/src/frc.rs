@@ -501,4 +501,83 @@ mod tests {
             assert!(p.stable);
         }
     }
+
+    /// Negative nonlinear damping: `g(u) = lambda + c1 u + c2 u^2` with
+    /// `Re c1 > 0 > Re c2`. The trace `2 Re(g + u g') = 2 Re(lambda + 2 c1 u + 3 c2 u^2)`
+    /// vanishes at the roots of that quadratic in `u`; where the determinant is
+    /// positive there, a Hopf point must be reported at that `rho`, and the same
+    /// point must be found by the continuation of the Cartesian rotating frame.
+    #[test]
+    fn hopf_points_match_the_trace_condition() {
+        let lambda = C64::new(-0.01, 1.0);
+        let (c1, c2) = (C64::new(0.2, 0.3), C64::new(-0.3, 0.1));
+        let polar = Polar {
+            c: vec![lambda, c1, c2],
+            orders: vec![1, 3, 5],
+        };
+        let pb = OnePair::new(&polar, 5, C64::new(0.0, -0.02));
+        let frc = one_pair_frc(&pb, 1.5, 400, (0.5, 1.5));
+        let hopf: Vec<_> = frc
+            .bifurcations
+            .iter()
+            .filter(|b| b.kind == BifurcationKind::Hopf)
+            .collect();
+        assert!(!hopf.is_empty(), "{:?}", frc.bifurcations);
+        // roots of Re(lambda) + 2 Re(c1) u + 3 Re(c2) u^2 = 0
+        let (a, b, c) = (3.0 * c2.re, 2.0 * c1.re, lambda.re);
+        let disc = (b * b - 4.0 * a * c).sqrt();
+        let roots = [(-b + disc) / (2.0 * a), (-b - disc) / (2.0 * a)];
+        for h in &hopf {
+            let u = h.rho * h.rho;
+            let d = roots
+                .iter()
+                .map(|r| (r - u).abs())
+                .fold(f64::INFINITY, f64::min);
+            assert!(d < 1e-9, "Hopf at u = {u}, trace roots {roots:?}");
+        }
+        // the continuation finds the same Hopf frequencies
+        use crate::continuation::{LocatedKind, PolarTerm, RotatingFrame, Settings};
+        let frame = RotatingFrame {
+            terms: vec![
+                PolarTerm {
+                    pair: 0,
+                    exponents: vec![1, 0],
+                    coeff: lambda,
+                },
+                PolarTerm {
+                    pair: 0,
+                    exponents: vec![2, 1],
+                    coeff: c1,
+                },
+                PolarTerm {
+                    pair: 0,
+                    exponents: vec![3, 2],
+                    coeff: c2,
+                },
+            ],
+            ratios: vec![1.0],
+            force: vec![C64::new(0.0, -0.02)],
+        };
+        let settings = Settings {
+            omega_range: (0.5, 1.5),
+            h_max: 2e-3,
+            h_min: 1e-12,
+            max_steps: 20_000,
+        };
+        let q = C64::new(0.0, 0.02) / (lambda - C64::new(0.0, 0.5));
+        let br = frame.start(0.5, vec![q.re, q.im], &settings).unwrap();
+        let found: Vec<f64> = br
+            .located
+            .iter()
+            .filter(|l| l.kind == LocatedKind::Bifurcation(BifurcationKind::Hopf))
+            .map(|l| l.at.omega)
+            .collect();
+        for h in &hopf {
+            assert!(
+                found.iter().any(|w| (w - h.omega).abs() < 1e-6),
+                "Hopf at Omega = {} not found by continuation: {found:?}",
+                h.omega
+            );
+        }
+    }
 }
