@@ -10,7 +10,6 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use num_complex::Complex64 as C64;
 use ssm_engine::frc::{one_pair_frc, response_amplitudes, OnePair};
 use ssm_engine::scene::Normalization;
 use ssm_engine::spectrum;
@@ -72,13 +71,8 @@ fn frc(c: &mut Criterion) {
                     .iter()
                     .map(|q| {
                         let x0 = forced.at(q.omega).unwrap();
-                        let x0o: Vec<(f64, C64)> = x0
-                            .harmonics
-                            .iter()
-                            .map(|h| (h.multiple, weights.iter().map(|&(s, w)| h.x[s] * w).sum()))
-                            .collect();
                         response_amplitudes(&ssm, &series, order, q, &|_, phi| {
-                            x0_part(&x0o, eps, phi)
+                            eps * x0.output_at(&weights, phi)
                         })
                         .0
                     })
@@ -92,10 +86,3 @@ fn frc(c: &mut Criterion) {
 
 criterion_group!(benches, frc);
 criterion_main!(benches);
-
-/// `eps sum_h 2 Re(x_h e^{i kappa_h phi})` for the output coefficients `x0` of `X0`.
-fn x0_part(x0: &[(f64, C64)], eps: f64, phi: f64) -> f64 {
-    x0.iter()
-        .map(|&(m, x)| 2.0 * eps * (x * C64::from_polar(1.0, m * phi)).re)
-        .sum()
-}

@@ -226,16 +226,7 @@ pub fn frc(
                 None => {
                     let x0 = forced.at(p.omega)?;
                     for (o, ser) in outputs.iter().zip(&series) {
-                        let x0o: Vec<(f64, C64)> = x0
-                            .harmonics
-                            .iter()
-                            .map(|h| (h.multiple, o.weights.iter().map(|&(s, w)| h.x[s] * w).sum()))
-                            .collect();
-                        let part = |_: C64, phi: f64| -> f64 {
-                            x0o.iter()
-                                .map(|&(m, x)| 2.0 * eps * (x * C64::from_polar(1.0, m * phi)).re)
-                                .sum()
-                        };
+                        let part = |_: C64, phi: f64| eps * x0.output_at(&o.weights, phi);
                         let (l, a) = response_amplitudes(ssm, ser, order, p, &part);
                         linf.push(l);
                         h1.push(a);

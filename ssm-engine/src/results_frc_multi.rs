@@ -193,11 +193,8 @@ pub fn frc_multi(
                     let mono = ssm.set.monomials(&pz, order);
                     let end = ssm.set.of_order(order.min(ssm.order)).end;
                     for (oi, (o, ser)) in outputs.iter().zip(&series).enumerate() {
-                        let mut y = (0..end).map(|i| ser[i] * mono[i]).sum::<C64>().re;
-                        for h in &x0.harmonics {
-                            let c: C64 = o.weights.iter().map(|&(st, w)| h.x[st] * w).sum();
-                            y += 2.0 * eps * (c * C64::from_polar(1.0, h.multiple * phi)).re;
-                        }
+                        let y = (0..end).map(|i| ser[i] * mono[i]).sum::<C64>().re
+                            + eps * x0.output_at(&o.weights, phi);
                         linf[oi] = linf[oi].max(y.abs());
                         h1[oi] += y * C64::from_polar(1.0, -phi);
                     }

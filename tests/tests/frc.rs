@@ -49,13 +49,11 @@ fn frc_with_amplitudes(d: &Duffing, order: usize, eps: f64, range: (f64, f64)) -
         .points
         .iter()
         .map(|pt| {
-            let f = forced.at(pt.omega).unwrap();
-            let x0: Vec<(f64, C64)> = f
-                .harmonics
-                .iter()
-                .map(|h| (h.multiple, weights.iter().map(|&(s, w)| h.x[s] * w).sum()))
-                .collect();
-            response_amplitudes(&d.ssm, &series, order, pt, &|_, phi| x0_part(&x0, eps, phi)).0
+            let x0 = forced.at(pt.omega).unwrap();
+            response_amplitudes(&d.ssm, &series, order, pt, &|_, phi| {
+                eps * x0.output_at(weights, phi)
+            })
+            .0
         })
         .collect();
     (frc, amps)
@@ -384,12 +382,10 @@ fn higher_order_nonautonomous_terms_improve_the_frc() {
             .expect("frequency on the curve");
         let mut amp = |q: &ssm_engine::frc::FrcPoint| {
             let x0 = forced.at(q.omega).unwrap();
-            let x0o: Vec<(f64, C64)> = x0
-                .harmonics
-                .iter()
-                .map(|h| (h.multiple, weights.iter().map(|&(s, wt)| h.x[s] * wt).sum()))
-                .collect();
-            response_amplitudes(&ssm, &series, order, q, &|_, phi| x0_part(&x0o, eps, phi)).0
+            response_amplitudes(&ssm, &series, order, q, &|_, phi| {
+                eps * x0.output_at(&weights, phi)
+            })
+            .0
         };
         let (a, b) = (pts[k - 1], pts[k]);
         let t = (w - a.omega) / (b.omega - a.omega);
@@ -402,11 +398,4 @@ fn higher_order_nonautonomous_terms_improve_the_frc() {
         eprintln!("Omega {w}: simulation {reference:.6}, relative error leading {e0:.2e}, with O(eps p^6) {e6:.2e}");
         assert!(e6 < e0 / 2.0 && e6 < 1e-3, "Omega {w}: {e6:e} vs {e0:e}");
     }
-}
-
-/// `eps sum_h 2 Re(x_h e^{i kappa_h phi})` for the output coefficients `x0` of `X0`.
-fn x0_part(x0: &[(f64, C64)], eps: f64, phi: f64) -> f64 {
-    x0.iter()
-        .map(|&(m, x)| 2.0 * eps * (x * C64::from_polar(1.0, m * phi)).re)
-        .sum()
 }

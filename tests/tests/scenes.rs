@@ -299,8 +299,8 @@ fn transient_needs_one_amplitude_per_pair() {
     assert!(msg.contains("outputs.transient.rho0"), "{msg}");
 }
 
-/// Runs a zoo scene through the binary and returns its summary.
-fn run_zoo(scene: &str) -> serde_json::Value {
+/// Runs a zoo scene through the binary; returns its summary and output directory.
+fn run_zoo_in(scene: &str) -> (serde_json::Value, PathBuf) {
     let out = tmp_dir(scene);
     let o = Command::new(engine_binary())
         .arg(repo_root().join("zoo").join(scene))
@@ -311,6 +311,12 @@ fn run_zoo(scene: &str) -> serde_json::Value {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    (s, out)
+}
+
+/// Runs a zoo scene through the binary and returns its summary.
+fn run_zoo(scene: &str) -> serde_json::Value {
+    let (s, out) = run_zoo_in(scene);
     let _ = std::fs::remove_dir_all(&out);
     s
 }
@@ -376,17 +382,7 @@ fn bad_forcing_sections_are_scene_errors() {
 /// and bifurcation markers.
 #[test]
 fn zoo_fig5_scene_writes_the_frc() {
-    let out = tmp_dir("fig5");
-    let o = Command::new(engine_binary())
-        .arg(repo_root().join("zoo/spatial_oscillator_none_fig5.toml"))
-        .arg("--out")
-        .arg(&out)
-        .env("CI", "1")
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let (s, out) = run_zoo_in("spatial_oscillator_none_fig5.toml");
     let frc = &s["frc"];
     let curves = frc["curves"].as_array().unwrap();
     assert_eq!(curves.len(), 15);
@@ -459,17 +455,7 @@ fn zoo_fig5_nonautonomous_scene_lowers_the_residual() {
 /// column per pair amplitude.
 #[test]
 fn zoo_fig11_scene_continues_the_internally_resonant_frc() {
-    let out = tmp_dir("fig11");
-    let o = Command::new(engine_binary())
-        .arg(repo_root().join("zoo/pendulum_slider_fig11.toml"))
-        .arg("--out")
-        .arg(&out)
-        .env("CI", "1")
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let (s, out) = run_zoo_in("pendulum_slider_fig11.toml");
     assert_eq!(s["frc"]["resonance"], serde_json::json!([1.0, 3.0]));
     let curves = s["frc"]["curves"].as_array().unwrap();
     assert_eq!(curves.len(), 3);
