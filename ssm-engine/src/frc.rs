@@ -258,7 +258,11 @@ impl OnePair {
         let jqb = q * q * dg;
         let trace = 2.0 * jq.re;
         let det = jq.norm_sqr() - jqb.norm_sqr();
-        Some((omega, q.arg(), trace, det))
+        // beyond the convergence domain the series overflow: no point there
+        [omega, q.arg(), trace, det]
+            .iter()
+            .all(|v| v.is_finite())
+            .then_some((omega, q.arg(), trace, det))
     }
 }
 
@@ -324,7 +328,10 @@ impl OnePair {
         let jqb = q * q * dg + ds * q + q * q * dt * q;
         let trace = 2.0 * jq.re;
         let det = jq.norm_sqr() - jqb.norm_sqr();
-        Some((omega, theta, trace, det))
+        [omega, theta, trace, det]
+            .iter()
+            .all(|v| v.is_finite())
+            .then_some((omega, theta, trace, det))
     }
 }
 

@@ -91,6 +91,11 @@ pub fn frc(
     sec: &ForcingSection,
     outputs: &[&OutputMap],
 ) -> Result<FrcReport, FrcError> {
+    if let crate::ssm::Dynamics::Map { .. } = ssm.dynamics {
+        return Err(FrcError::Unsupported(
+            "the model is a map; [forcing] needs a flow".into(),
+        ));
+    }
     let range0 = (sec.omega_range.get_ref()[0], sec.omega_range.get_ref()[1]);
     let ratios = match &sec.resonance {
         Some(r) => r.get_ref().clone(),
@@ -232,6 +237,12 @@ pub fn frc(
                         h1.push(a);
                     }
                 }
+            }
+            if linf.iter().chain(&h1).any(|v| !v.is_finite()) {
+                return Err(FrcError::Unsupported(format!(
+                    "O({order}), eps = {eps}: non-finite response amplitude at rho = {}: the expansion diverges there; lower [forcing] rho_max",
+                    p.rho
+                )));
             }
             csv.push_str(&format!(
                 "{order},{eps:e},{:.10e},{},{}",
