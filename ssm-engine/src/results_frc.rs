@@ -134,15 +134,7 @@ pub fn frc(
         .iter()
         .map(|o| ssm.output_series(&o.weights))
         .collect();
-    let mut csv = String::from("order,epsilon,omega,stable,branch");
-    for o in outputs {
-        csv.push_str(&format!(",{}_linf", o.name));
-    }
-    csv.push_str(",rho_1");
-    for o in outputs {
-        csv.push_str(&format!(",{}_h1", o.name));
-    }
-    csv.push('\n');
+    let mut csv = csv_header(outputs, 1);
     // higher-order non-autonomous terms: exact expansions at Chebyshev nodes in
     // Omega, interpolated in between (sigma, tau and the outputs' X), one table
     // per effective order min(K, order - 1)
@@ -337,20 +329,11 @@ pub fn frc(
             }));
         }
     }
-    let y_label = outputs
-        .first()
-        .map_or("rho".to_owned(), |o| format!("max |{}|", o.name));
-    let svg = line_plot(
-        "forced response (dashed: unstable, circles: bifurcations)",
-        "Omega",
-        &y_label,
-        &curves,
-        Scale::Linear,
-    )?;
-    Ok(FrcReport {
+    assemble(
         csv,
-        svg,
-        summary: json!({
+        &curves,
+        outputs,
+        json!({
             "bifurcations": bifurcations,
             "points": n_points,
             "curves": summaries,
@@ -358,5 +341,43 @@ pub fn frc(
             "rho_max": rho_max,
             "forcing_on_master": {"re": s.re, "im": s.im},
         }),
-    })
+    )
+}
+
+/// Header of `frc.csv` for `m` pairs:
+/// `order,epsilon,omega,stable,branch,<out>_linf...,rho_1..rho_m,<out>_h1...`.
+pub(crate) fn csv_header(outputs: &[&OutputMap], m: usize) -> String {
+    let mut csv = String::from("order,epsilon,omega,stable,branch");
+    for o in outputs {
+        csv.push_str(&format!(",{}_linf", o.name));
+    }
+    for j in 1..=m {
+        csv.push_str(&format!(",rho_{j}"));
+    }
+    for o in outputs {
+        csv.push_str(&format!(",{}_h1", o.name));
+    }
+    csv.push('\n');
+    csv
+}
+
+/// `frc.svg` (amplitude of the first output, or `rho_1`, against `Omega`) and
+/// the report around `csv` and `summary`.
+pub(crate) fn assemble(
+    csv: String,
+    curves: &[Curve],
+    outputs: &[&OutputMap],
+    summary: Value,
+) -> Result<FrcReport, FrcError> {
+    let y_label = outputs
+        .first()
+        .map_or("rho_1".to_owned(), |o| format!("max |{}|", o.name));
+    let svg = line_plot(
+        "forced response (dashed: unstable, circles: bifurcations)",
+        "Omega",
+        &y_label,
+        curves,
+        Scale::Linear,
+    )?;
+    Ok(FrcReport { csv, svg, summary })
 }

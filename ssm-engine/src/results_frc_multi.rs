@@ -6,8 +6,8 @@
 use serde_json::{json, Value};
 
 use crate::continuation::{Branch, LocatedKind, PolarTerm, RotatingFrame, Settings};
-use crate::plot::{line_plot, Curve, Scale};
-use crate::results_frc::{FrcError, FrcReport};
+use crate::plot::Curve;
+use crate::results_frc::{assemble, csv_header, FrcError, FrcReport};
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::forced::ForcedSsm;
@@ -97,17 +97,7 @@ pub fn frc_multi(
         .map(|o| ssm.output_series(&o.weights))
         .collect();
     let periods = period_multiple(ratios);
-    let mut csv = String::from("order,epsilon,omega,stable,branch");
-    for o in outputs {
-        csv.push_str(&format!(",{}_linf", o.name));
-    }
-    for j in 1..=m {
-        csv.push_str(&format!(",rho_{j}"));
-    }
-    for o in outputs {
-        csv.push_str(&format!(",{}_h1", o.name));
-    }
-    csv.push('\n');
+    let mut csv = csv_header(outputs, m);
     let mut curves = Vec::new();
     let mut bifurcations = Vec::new();
     let mut summaries = Vec::new();
@@ -172,6 +162,8 @@ pub fn frc_multi(
         let mut count = 0;
         for (bi, br) in branches.iter().enumerate() {
             let mut seg: Vec<(f64, f64)> = Vec::new();
+            // (point, plotted amplitude) of the branch, for bifurcation markers
+            let mut plotted: Vec<(&crate::continuation::BranchPoint, f64)> = Vec::new();
             let mut seg_stable = None;
             for p in br
                 .points
@@ -230,6 +222,7 @@ pub fn frc_multi(
                 }
                 seg_stable = Some(p.stable);
                 seg.push((p.omega, y));
+                plotted.push((p, y));
             }
             if !seg.is_empty() {
                 curves.push(Curve {
@@ -247,6 +240,21 @@ pub fn frc_multi(
             for l in &br.located {
                 if l.at.omega < range.0 || l.at.omega > range.1 {
                     continue;
+                }
+                let dist = |p: &crate::continuation::BranchPoint| {
+                    (p.omega - l.at.omega).abs()
+                        + p.q
+                            .iter()
+                            .zip(&l.at.q)
+                            .map(|(a, b)| (a - b).norm())
+                            .sum::<f64>()
+                };
+                let nearest = plotted
+                    .iter()
+                    .min_by(|a, b| dist(a.0).total_cmp(&dist(b.0)))
+                    .map(|&(_, y)| y);
+                if let (Some(y), Some(c)) = (nearest, curves.last_mut()) {
+                    c.markers.push((l.at.omega, y));
                 }
                 let kind = match l.kind {
                     LocatedKind::BranchPoint => "BP",
@@ -272,20 +280,11 @@ pub fn frc_multi(
             "continuation_steps": branches.iter().map(|b| b.points.len()).sum::<usize>(),
         }));
     }
-    let y_label = outputs
-        .first()
-        .map_or("rho_1".to_owned(), |o| format!("max |{}|", o.name));
-    let svg = line_plot(
-        "forced response (dashed: unstable)",
-        "Omega",
-        &y_label,
-        &curves,
-        Scale::Linear,
-    )?;
-    Ok(FrcReport {
+    assemble(
         csv,
-        svg,
-        summary: json!({
+        &curves,
+        outputs,
+        json!({
             "bifurcations": bifurcations,
             "points": n_points,
             "curves": summaries,
@@ -293,5 +292,5 @@ pub fn frc_multi(
             "forcing_on_master": s.iter().map(|v| json!({"re": v.re, "im": v.im})).collect::<Vec<Value>>(),
             "warnings": warnings,
         }),
-    })
+    )
 }

@@ -474,5 +474,7 @@ fn zoo_fig11_scene_continues_the_internally_resonant_frc() {
         csv.lines().next().unwrap(),
         "order,epsilon,omega,stable,branch,x1_linf,phi2_linf,rho_1,rho_2,x1_h1,phi2_h1"
     );
+    let svg = std::fs::read_to_string(out.join("frc.svg")).unwrap();
+    assert!(svg.contains("<circle"), "fold markers missing from frc.svg");
     let _ = std::fs::remove_dir_all(&out);
 }
