@@ -18,6 +18,8 @@
 //! - [`frc`]: forced response curves of 2-D SSMs, stability and folds;
 //! - [`continuation`]: forced response of several pairs (pseudo-arclength,
 //!   folds, branch points with switching, Hopf points);
+//! - [`simulate`]: full-system Radau IIA integration of the DAE, consistent
+//!   initial values, steady states by criterion (47);
 //! - [`results`]: SSM entries of the summary, backbone and transient files;
 //! - [`results_frc`]: `frc.csv`, `frc.svg` and the summary's `frc`;
 //! - [`plot`]: SVG plots;
@@ -36,6 +38,7 @@ pub mod results;
 pub mod results_frc;
 pub mod results_frc_multi;
 pub mod scene;
+pub mod simulate;
 pub mod spectrum;
 pub mod ssm;
 pub mod system;

@@ -293,3 +293,57 @@ pub fn pendulum_with_spectrum(model: &str, params: &str) -> (System, Spectrum) {
     let sp = spectrum::compute(a, b, &spectrum_options(method, 8)).expect("pendulum spectrum");
     (sys, sp)
 }
+
+/// Two masses tied by the linear constraint `x1 - x2 = 0` (masses 1 and 2,
+/// springs 3 and 5, dampers 0.1 and 0.2): an index-3 DAE whose motion is the
+/// damped oscillator `3 x'' + 0.3 x' + 8 x = 0`. Returns the system and the
+/// closed-form solution [`LinearConstrained`] from `x(0) = x0`, `x'(0) = 0`.
+pub fn linear_constrained_oscillator(x0: f64) -> (System, LinearConstrained) {
+    use ssm_api::{Constraints, MechanicalSystem, PolyVector, SparseMatrix};
+    let mut m = MechanicalSystem::new("linear-constrained", &["x1", "x2"]);
+    m.mass = SparseMatrix::diagonal(&[1.0, 2.0]);
+    m.damping = SparseMatrix::diagonal(&[0.1, 0.2]);
+    m.stiffness = SparseMatrix::diagonal(&[3.0, 5.0]);
+    let mut g = PolyVector::zeros(1, 2);
+    g.push(0, 1.0, &[(0, 1)]);
+    g.push(0, -1.0, &[(1, 1)]);
+    m.constraints = Some(Constraints::polynomial(g));
+    let model = m.into_model().expect("valid mechanical model");
+    let sys = System::from_model("catalogue", model).expect("valid model");
+    let zeta_w: f64 = 0.3 / (2.0 * 3.0);
+    let wd = (8.0 / 3.0 - zeta_w * zeta_w).sqrt();
+    (
+        sys,
+        LinearConstrained {
+            x0,
+            decay: zeta_w,
+            wd,
+        },
+    )
+}
+
+/// Closed-form motion of [`linear_constrained_oscillator`]:
+/// `x(t) = x0 e^{-d t} (cos wd t + (d / wd) sin wd t)`, and the multiplier
+/// `mu = -(m1 x'' + c1 x' + k1 x)` of the first mass's equation.
+#[derive(Debug, Clone, Copy)]
+pub struct LinearConstrained {
+    /// Initial displacement.
+    pub x0: f64,
+    /// Decay rate `d`.
+    pub decay: f64,
+    /// Damped frequency `wd`.
+    pub wd: f64,
+}
+
+impl LinearConstrained {
+    /// `(x, x', mu)` at time `t`.
+    pub fn at(&self, t: f64) -> (f64, f64, f64) {
+        let (d, wd) = (self.decay, self.wd);
+        let e = (-d * t).exp();
+        let (s, c) = (wd * t).sin_cos();
+        let x = self.x0 * e * (c + d / wd * s);
+        let v = -self.x0 * e * (d * d / wd + wd) * s;
+        let a = -0.3 / 3.0 * v - 8.0 / 3.0 * x;
+        (x, v, -(a + 0.1 * v + 3.0 * x))
+    }
+}

@@ -1,0 +1,279 @@
+//! The right-hand side `f(t, z) = A z + F(z) + eps Fext(z, Omega t)`, its sparse
+//! Jacobian on a fixed pattern, and the differentiation index of each state.
+
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use ssm_api::{PolyVector, StateKind};
+
+use crate::system::System;
+
+/// One monomial derivative `d F_eq / d z_var`, accumulated into `slot`.
+#[derive(Debug, Clone, Copy)]
+struct JacEntry {
+    term: u32,
+    factor: u32,
+    slot: u32,
+}
+
+/// A polynomial vector prepared for evaluation and differentiation on the
+/// Jacobian pattern.
+#[derive(Debug, Clone)]
+struct PreparedPoly {
+    poly: PolyVector,
+    jac: Vec<JacEntry>,
+}
+
+/// One forcing harmonic `cos(k Omega t) P_c(z) + sin(k Omega t) P_s(z)`.
+#[derive(Debug, Clone)]
+struct PreparedHarmonic {
+    multiple: f64,
+    cos: PreparedPoly,
+    sin: PreparedPoly,
+}
+
+/// The system to integrate, with forcing amplitude and frequency fixed.
+///
+/// The Jacobian pattern is the union of the patterns of `A`, `B`, `DF` and
+/// `DFext`; [`DaeProblem::jacobian`] and [`DaeProblem::b_values`] fill values
+/// in that pattern's order, so one symbolic LU serves the whole run.
+#[derive(Debug, Clone)]
+pub struct DaeProblem<'a> {
+    /// The system.
+    pub sys: &'a System,
+    /// Forcing amplitude `eps`.
+    pub epsilon: f64,
+    /// Forcing frequency `Omega`.
+    pub omega: f64,
+    pattern: SymbolicSparseColMat<usize>,
+    a_vals: Vec<f64>,
+    b_vals: Vec<f64>,
+    f: PreparedPoly,
+    forcing: Vec<PreparedHarmonic>,
+    index: Vec<u8>,
+}
+
+impl<'a> DaeProblem<'a> {
+    /// Prepares `sys` forced with `epsilon cos(Omega t)`-type harmonics
+    /// (`epsilon = 0` for the autonomous system).
+    pub fn new(sys: &'a System, epsilon: f64, omega: f64) -> Self {
+        let n = sys.n_states();
+        let mut entries: Vec<(usize, usize)> = Vec::new();
+        for m in [sys.a.as_ref(), sys.b.as_ref()] {
+            for j in 0..n {
+                entries.extend(m.row_idx_of_col(j).map(|i| (j, i)));
+            }
+        }
+        let mut polys: Vec<&PolyVector> = vec![&sys.nonlinearity];
+        if epsilon != 0.0 {
+            for h in &sys.forcing {
+                polys.push(&h.cos);
+                polys.push(&h.sin);
+            }
+        }
+        for p in &polys {
+            for t in p.terms.iter() {
+                entries.extend(t.factors.iter().map(|v| (v.var as usize, t.eq as usize)));
+            }
+        }
+        entries.sort_unstable();
+        entries.dedup();
+        let mut col_ptr = vec![0usize; n + 1];
+        for &(c, _) in &entries {
+            col_ptr[c + 1] += 1;
+        }
+        for j in 0..n {
+            col_ptr[j + 1] += col_ptr[j];
+        }
+        let row_idx: Vec<usize> = entries.iter().map(|&(_, r)| r).collect();
+        let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let slot = |row: usize, col: usize| -> u32 {
+            let p = pattern.as_ref();
+            let start = p.col_ptr()[col];
+            let rows = &p.row_idx()[start..p.col_ptr()[col + 1]];
+            (start
+                + rows
+                    .binary_search(&row)
+                    .expect("entry is in the union pattern")) as u32
+        };
+        let scatter = |m: SparseColMatRef<'_, usize, f64>| {
+            let mut vals = vec![0.0; entries.len()];
+            for j in 0..n {
+                for (i, v) in m.row_idx_of_col(j).zip(m.val_of_col(j)) {
+                    vals[slot(i, j) as usize] += v;
+                }
+            }
+            vals
+        };
+        let a_vals = scatter(sys.a.as_ref());
+        let b_vals = scatter(sys.b.as_ref());
+        let prepare = |p: &PolyVector| PreparedPoly {
+            poly: p.clone(),
+            jac: p
+                .terms
+                .iter()
+                .enumerate()
+                .flat_map(|(k, t)| {
+                    t.factors
+                        .iter()
+                        .enumerate()
+                        .map(move |(q, v)| (k, q, t.eq as usize, v.var as usize))
+                })
+                .map(|(k, q, eq, var)| JacEntry {
+                    term: k as u32,
+                    factor: q as u32,
+                    slot: slot(eq, var),
+                })
+                .collect(),
+        };
+        let f = prepare(&sys.nonlinearity);
+        let forcing = if epsilon != 0.0 {
+            sys.forcing
+                .iter()
+                .map(|h| PreparedHarmonic {
+                    multiple: h.multiple,
+                    cos: prepare(&h.cos),
+                    sin: prepare(&h.sin),
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Self {
+            sys,
+            epsilon,
+            omega,
+            pattern,
+            a_vals,
+            b_vals,
+            f,
+            forcing,
+            index: differentiation_index(sys),
+        }
+    }
+
+    /// Number of states `N`.
+    pub fn n(&self) -> usize {
+        self.index.len()
+    }
+
+    /// The Jacobian pattern (union of `A`, `B`, `DF`, `DFext`).
+    pub fn pattern(&self) -> &SymbolicSparseColMat<usize> {
+        &self.pattern
+    }
+
+    /// `B` in the pattern's order.
+    pub fn b_values(&self) -> &[f64] {
+        &self.b_vals
+    }
+
+    /// Differentiation index of each state's component (1, 2 or 3): used to
+    /// scale the error estimate. Multipliers of configuration constraints are
+    /// index 3 and the velocities index 2; all other states index 1.
+    pub fn index(&self) -> &[u8] {
+        &self.index
+    }
+
+    /// Name of state `i`.
+    pub fn state_name(&self, i: usize) -> &str {
+        self.sys.states[i].name.as_str()
+    }
+
+    /// `out = A z + F(z) + eps Fext(z, Omega t)`.
+    pub fn rhs(&self, t: f64, z: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let a = self.sys.a.as_ref();
+        for (j, zj) in z.iter().enumerate() {
+            if *zj != 0.0 {
+                for (i, v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                    out[i] += v * zj;
+                }
+            }
+        }
+        eval_into(&self.f.poly, z, 1.0, out);
+        for h in &self.forcing {
+            let (s, c) = (h.multiple * self.omega * t).sin_cos();
+            eval_into(&h.cos.poly, z, self.epsilon * c, out);
+            eval_into(&h.sin.poly, z, self.epsilon * s, out);
+        }
+    }
+
+    /// The autonomous part `A z + F(z)` (no forcing).
+    pub fn autonomous_rhs(&self, z: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let a = self.sys.a.as_ref();
+        for (j, zj) in z.iter().enumerate() {
+            for (i, v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                out[i] += v * zj;
+            }
+        }
+        eval_into(&self.f.poly, z, 1.0, out);
+    }
+
+    /// `J = A + DF(z) + eps DFext(z, Omega t)` in the pattern's order.
+    pub fn jacobian(&self, t: f64, z: &[f64], vals: &mut [f64]) {
+        vals.copy_from_slice(&self.a_vals);
+        jac_into(&self.f, z, 1.0, vals);
+        for h in &self.forcing {
+            let (s, c) = (h.multiple * self.omega * t).sin_cos();
+            jac_into(&h.cos, z, self.epsilon * c, vals);
+            jac_into(&h.sin, z, self.epsilon * s, vals);
+        }
+    }
+
+    /// `out = B v`.
+    pub fn b_mul(&self, v: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let b = self.sys.b.as_ref();
+        for (j, vj) in v.iter().enumerate() {
+            for (i, bv) in b.row_idx_of_col(j).zip(b.val_of_col(j)) {
+                out[i] += bv * vj;
+            }
+        }
+    }
+}
+
+fn eval_into(p: &PolyVector, z: &[f64], scale: f64, out: &mut [f64]) {
+    if scale == 0.0 {
+        return;
+    }
+    for t in p.terms.iter() {
+        let v = t.factors.iter().fold(t.coeff * scale, |acc, f| {
+            acc * z[f.var as usize].powi(f.power as i32)
+        });
+        out[t.eq as usize] += v;
+    }
+}
+
+fn jac_into(p: &PreparedPoly, z: &[f64], scale: f64, vals: &mut [f64]) {
+    if scale == 0.0 {
+        return;
+    }
+    let terms = &p.poly.terms;
+    for e in &p.jac {
+        let t = &terms[e.term as usize];
+        let mut d = t.coeff * scale;
+        for (q, f) in t.factors.iter().enumerate() {
+            let zv = z[f.var as usize];
+            if q == e.factor as usize {
+                d *= f.power as f64 * zv.powi(f.power as i32 - 1);
+            } else {
+                d *= zv.powi(f.power as i32);
+            }
+        }
+        vals[e.slot as usize] += d;
+    }
+}
+
+/// Index of each state: with configuration constraints, velocities are index 2
+/// and multipliers index 3 (Hairer & Wanner II, Sect. VII.1); everything else,
+/// including a recast's algebraic auxiliaries, is index 1.
+fn differentiation_index(sys: &System) -> Vec<u8> {
+    let constrained = sys.states.iter().any(|s| s.kind == StateKind::Multiplier);
+    sys.states
+        .iter()
+        .map(|s| match s.kind {
+            StateKind::Multiplier => 3,
+            StateKind::Velocity if constrained => 2,
+            _ => 1,
+        })
+        .collect()
+}
