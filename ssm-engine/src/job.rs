@@ -11,10 +11,13 @@ use crate::plugin::{PluginLoadError, Registry};
 use crate::report::{spectrum_csv, OutputError, OutputSet};
 use crate::results::{self, ResultError};
 use crate::results_frc::{self, FrcError};
+use crate::results_report::{self, ReportError, ReportInputs};
+use crate::results_validate;
 use crate::scene::{SceneError, SceneFile, SpectrumMethod};
 use crate::spectrum::{self, MasterMode, Method, Spectrum, SpectrumError, SpectrumOptions};
 use crate::ssm::{self, Dynamics, SsmError, SsmExpansion, SsmOptions};
 use crate::system::{ModelError, OutputMap, System};
+use crate::validate::ValidateError;
 
 /// Anything that stops a run; each variant says where.
 #[derive(Debug, thiserror::Error)]
@@ -43,6 +46,12 @@ pub enum JobError {
     /// The forced response could not be produced.
     #[error(transparent)]
     Frc(#[from] FrcError),
+    /// A full-system reference failed.
+    #[error("validation: {0}")]
+    Validate(#[from] ValidateError),
+    /// The speed-against-error report failed.
+    #[error(transparent)]
+    Report(#[from] ReportError),
 }
 
 /// Stages reported to a progress display.
@@ -299,15 +308,114 @@ pub fn run(
     }
     let results_s = t_out.elapsed().as_secs_f64();
     let t_frc = std::time::Instant::now();
-    let mut frc_summary = None;
+    let mut frc_report = None;
     if let Some(sec) = &sc.forcing {
         progress.stage("forced response curves");
-        let rep = results_frc::frc(&expansion, &system, &masters, sec, &out_maps)?;
-        outputs.add("frc.csv", rep.csv);
-        outputs.add("frc.svg", rep.svg);
-        frc_summary = Some(rep.summary);
+        frc_report = Some(results_frc::frc(
+            &expansion, &system, &masters, sec, &out_maps,
+        )?);
     }
     let frc_s = t_frc.elapsed().as_secs_f64();
+    let t_val = Instant::now();
+    let mut validation = None;
+    if let Some(vsec) = &sc.validate {
+        progress.stage("full-system validation");
+        let compared = match &vsec.outputs {
+            Some(names) => {
+                let mut v = Vec::new();
+                for n in names.get_ref() {
+                    v.push(system.output(n).ok_or_else(|| {
+                        scene.invalid(
+                            names.span(),
+                            "validate.outputs",
+                            format!("model '{}' has no output '{n}'", system.name),
+                        )
+                    })?);
+                }
+                v
+            }
+            None => out_maps.clone(),
+        };
+        let vp = results_validate::validation(
+            &expansion,
+            &system,
+            vsec,
+            &compared,
+            &out_maps,
+            frc_report.as_mut(),
+        )?;
+        for (name, contents) in &vp.files {
+            outputs.add(name, contents.clone());
+        }
+        validation = Some(vp);
+    }
+    let validation_s = t_val.elapsed().as_secs_f64();
+    let frc_summary = frc_report.map(|rep| {
+        outputs.add("frc.csv", rep.csv);
+        outputs.add("frc.svg", rep.svg);
+        rep.summary
+    });
+    let t_rep = Instant::now();
+    let mut report_summary = None;
+    if let Some(rsec) = &sc.report {
+        progress.stage("speed-against-error report");
+        let max = *sc.ssm.order.get_ref();
+        let orders = rsec.orders.as_ref().map_or_else(
+            || {
+                let mut o: Vec<usize> = (1..=max).filter(|k| k % 2 == 1 && *k >= 3).collect();
+                if o.last() != Some(&max) {
+                    o.push(max);
+                }
+                o
+            },
+            |o| o.get_ref().clone(),
+        );
+        let p0 = sc.validate.as_ref().and_then(|v| {
+            let rho0 = v.rho0.as_ref()?.get_ref();
+            let theta0 = v
+                .theta0
+                .as_ref()
+                .map_or_else(|| vec![0.0; rho0.len()], |t| t.get_ref().clone());
+            Some(
+                rho0.iter()
+                    .zip(&theta0)
+                    .flat_map(|(&r, &t)| {
+                        let q = crate::C64::from_polar(r, t);
+                        [q, q.conj()]
+                    })
+                    .collect::<Vec<_>>(),
+            )
+        });
+        let compared: Vec<&OutputMap> = match sc.validate.as_ref().and_then(|v| v.outputs.as_ref())
+        {
+            Some(names) => names
+                .get_ref()
+                .iter()
+                .filter_map(|n| system.output(n))
+                .collect(),
+            None => out_maps.clone(),
+        };
+        let inputs = ReportInputs {
+            orders: &orders,
+            masters: &masters,
+            others: &others,
+            resonance_tol: *sc.ssm.resonance_tol.get_ref(),
+            outputs: &compared,
+            forcing: sc.forcing.as_ref(),
+            validation: validation.as_ref(),
+            p0,
+        };
+        let rows = results_report::rows(&system, &inputs)?;
+        let full = results_report::full_costs(validation.as_ref());
+        outputs.add("report.csv", results_report::csv(&rows, &full));
+        outputs.add("report.md", results_report::markdown(&system, &rows, &full));
+        outputs.add(
+            "report.svg",
+            results_report::svg(&rows, &full).map_err(ReportError::from)?,
+        );
+        report_summary = Some(results_report::json(&rows, &full));
+    }
+    let report_s = t_rep.elapsed().as_secs_f64();
 
     progress.stage("writing outputs");
     let n_finite = match (mechanical_layout, spectrum.complete) {
@@ -352,6 +460,8 @@ pub fn run(
         "invariance_error": invariance,
         "rom_steps": rom_steps,
         "frc": frc_summary,
+        "validation": validation.as_ref().map(|v| v.summary.clone()),
+        "report": report_summary,
         "warnings": warnings,
         "timing_s": {
             "spectrum": spectrum_s,
@@ -361,6 +471,8 @@ pub fn run(
             "ssm_solves": expansion.timing.linear.solve_s,
             "results": results_s,
             "frc": frc_s,
+            "validation": validation_s,
+            "report": report_s,
             "total": t0.elapsed().as_secs_f64(),
         },
         "linear_algebra": {

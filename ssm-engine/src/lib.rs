@@ -20,6 +20,8 @@
 //!   folds, branch points with switching, Hopf points);
 //! - [`simulate`]: full-system Radau IIA integration of the DAE, consistent
 //!   initial values, steady states by criterion (47);
+//! - [`validate`]: full against reduced trajectories, distance to the SSM,
+//!   steady-state references in parallel;
 //! - [`results`]: SSM entries of the summary, backbone and transient files;
 //! - [`results_frc`]: `frc.csv`, `frc.svg` and the summary's `frc`;
 //! - [`plot`]: SVG plots;
@@ -37,10 +39,13 @@ pub mod report;
 pub mod results;
 pub mod results_frc;
 pub mod results_frc_multi;
+pub mod results_report;
+pub mod results_validate;
 pub mod scene;
 pub mod simulate;
 pub mod spectrum;
 pub mod ssm;
 pub mod system;
+pub mod validate;
 
 pub use num_complex::Complex64 as C64;

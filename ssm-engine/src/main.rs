@@ -8,7 +8,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ssm_engine::job::{self, Progress};
 use ssm_engine::plugin::Registry;
-use ssm_engine::scene::SceneFile;
+use ssm_engine::scene::{ReportSection, SceneFile};
 
 const SCENE_HELP: &str = "\
 SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
@@ -48,8 +48,21 @@ SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
   # points = 200, rho_max = ..., resonance = [1]
   # nonautonomous_order = 4       # O(eps |p|^k) terms beyond the leading order
 
+  [validate]                      # full-system references (Radau IIA on the DAE)
+  rho0 = [0.35]                   # transient from W(p0), p0 = rho0 e^(i theta0), against the ROM
+  theta0 = [0.5]                  # t_end, samples = 1001, order = [ssm] order,
+  t_end = 100.0                   # outputs = [outputs] coordinates (multipliers are added),
+                                  # rtol = 1e-8, atol = 1e-10
+  [validate.steady_state]         # periodic response by integration from rest, criterion (47)
+  epsilon = 0.6                   # omega = [...] or omega_range = [min, max] with points = 21
+  omega_range = [1.8, 2.2]        # delta = 1e-3, max_periods = 2000, samples_per_period = 128
+
+  [report]                        # speed against error, one row per order
+  orders = [3, 5, 7]              # default: the odd orders up to [ssm] order
+
 OUTPUTS (in --out DIR, default ./out/<scene file stem>): summary.json, spectrum.csv,
-backbone.csv/.svg, rom_trajectory.csv, frc.csv/.svg (as requested).
+backbone.csv/.svg, rom_trajectory.csv, frc.csv/.svg, validation.csv/.svg,
+steady_state.csv (also drawn into frc.svg), report.csv/.md/.svg (as requested).
 Files are written to temporary names and renamed; a failed run writes nothing.
 
 PLUGINS are found from --plugin PATH, from SSM_PLUGIN_PATH (':'-separated files or
@@ -81,6 +94,16 @@ struct Cli {
 enum Command {
     /// List every plugin found, its version, and its models with parameters and defaults.
     Plugins,
+    /// Run a scene with its speed-against-error report (report.csv, report.md,
+    /// report.svg), whether or not the scene has a [report] section.
+    Report {
+        /// Scene file to run.
+        #[arg(value_name = "SCENE.toml")]
+        scene: PathBuf,
+        /// Output directory (default ./out/<scene name>).
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+    },
 }
 
 struct Spinner(ProgressBar);
@@ -134,20 +157,25 @@ fn list_plugins(registry: &Registry) -> anyhow::Result<()> {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     let mut registry = Registry::discover(&cli.plugins)?;
-    if let Some(Command::Plugins) = cli.command {
-        return list_plugins(&registry);
-    }
-    let Some(scene_path) = cli.scene else {
-        anyhow::bail!(
-            "no scene given: ssm-engine SCENE.toml [--out DIR], or ssm-engine plugins (see --help)"
-        );
+    let (scene_path, out, report) = match cli.command {
+        Some(Command::Plugins) => return list_plugins(&registry),
+        Some(Command::Report { scene, out }) => (scene, out, true),
+        None => match cli.scene {
+            Some(s) => (s, cli.out, false),
+            None => anyhow::bail!(
+                "no scene given: ssm-engine SCENE.toml [--out DIR], ssm-engine report SCENE.toml, or ssm-engine plugins (see --help)"
+            ),
+        },
     };
-    let scene = SceneFile::load(&scene_path)?;
+    let mut scene = SceneFile::load(&scene_path)?;
+    if report && scene.scene.report.is_none() {
+        scene.scene.report = Some(ReportSection { orders: None });
+    }
     let progress = spinner();
     let result = job::run(&scene, &mut registry, &progress);
     progress.0.finish_and_clear();
     let result = result?;
-    let out = cli.out.unwrap_or_else(|| job::default_out_dir(&scene));
+    let out = out.unwrap_or_else(|| job::default_out_dir(&scene));
     result.outputs.write(&out)?;
     for w in &result.warnings {
         eprintln!("warning: {w}");

@@ -71,7 +71,26 @@ struct NaTable {
     set: MultiIndexSet,
 }
 
-/// The three products of the `[forcing]` section.
+/// One point of an FRC as written to `frc.csv`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrcRow {
+    /// Expansion order.
+    pub order: usize,
+    /// Forcing amplitude.
+    pub epsilon: f64,
+    /// Forcing frequency.
+    pub omega: f64,
+    /// Branch number (points of one branch are consecutive, in arc order).
+    pub branch: usize,
+    /// Stability.
+    pub stable: bool,
+    /// Polar amplitude `|p|` of the fixed point (all pairs).
+    pub rho: f64,
+    /// Largest `|output|` over the response period, per output.
+    pub linf: Vec<f64>,
+}
+
+/// The products of the `[forcing]` section.
 #[derive(Debug, Clone)]
 pub struct FrcReport {
     /// `frc.csv`.
@@ -80,6 +99,10 @@ pub struct FrcReport {
     pub svg: String,
     /// `"frc"` of the summary.
     pub summary: Value,
+    /// The rows of `frc.csv`.
+    pub rows: Vec<FrcRow>,
+    /// The curves of `frc.svg` (for overlays such as full-system references).
+    pub curves: Vec<Curve>,
 }
 
 /// FRCs for every `(order, epsilon)` of `sec`; columns
@@ -135,6 +158,7 @@ pub fn frc(
         .map(|o| ssm.output_series(&o.weights))
         .collect();
     let mut csv = csv_header(outputs, 1);
+    let mut rows = Vec::new();
     // higher-order non-autonomous terms: exact expansions at Chebyshev nodes in
     // Omega, interpolated in between (sigma, tau and the outputs' X), one table
     // per effective order min(K, order - 1)
@@ -251,6 +275,15 @@ pub fn frc(
             }
             csv.push('\n');
             first_amp.push(linf.first().copied().unwrap_or(p.rho));
+            rows.push(FrcRow {
+                order,
+                epsilon: eps,
+                omega: p.omega,
+                branch: p.branch,
+                stable: p.stable,
+                rho: p.rho,
+                linf: linf.clone(),
+            });
         }
         n_points += f.points.len();
         // the error figure beside the answer: eq. (41) at the largest amplitude
@@ -331,7 +364,8 @@ pub fn frc(
     }
     assemble(
         csv,
-        &curves,
+        rows,
+        curves,
         outputs,
         json!({
             "bifurcations": bifurcations,
@@ -365,19 +399,31 @@ pub(crate) fn csv_header(outputs: &[&OutputMap], m: usize) -> String {
 /// the report around `csv` and `summary`.
 pub(crate) fn assemble(
     csv: String,
-    curves: &[Curve],
+    rows: Vec<FrcRow>,
+    curves: Vec<Curve>,
     outputs: &[&OutputMap],
     summary: Value,
 ) -> Result<FrcReport, FrcError> {
+    let svg = frc_svg(&curves, outputs)?;
+    Ok(FrcReport {
+        csv,
+        svg,
+        summary,
+        rows,
+        curves,
+    })
+}
+
+/// `frc.svg` of `curves`: amplitude of the first output (or `rho_1`) against `Omega`.
+pub fn frc_svg(curves: &[Curve], outputs: &[&OutputMap]) -> Result<String, PlotError> {
     let y_label = outputs
         .first()
         .map_or("rho_1".to_owned(), |o| format!("max |{}|", o.name));
-    let svg = line_plot(
+    line_plot(
         "forced response (dashed: unstable, circles: bifurcations)",
         "Omega",
         &y_label,
         curves,
         Scale::Linear,
-    )?;
-    Ok(FrcReport { csv, svg, summary })
+    )
 }

@@ -7,7 +7,7 @@ use serde_json::{json, Value};
 
 use crate::continuation::{Branch, LocatedKind, PolarTerm, RotatingFrame, Settings};
 use crate::plot::Curve;
-use crate::results_frc::{assemble, csv_header, FrcError, FrcReport};
+use crate::results_frc::{assemble, csv_header, FrcError, FrcReport, FrcRow};
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::forced::ForcedSsm;
@@ -98,6 +98,7 @@ pub fn frc_multi(
         .collect();
     let periods = period_multiple(ratios);
     let mut csv = csv_header(outputs, m);
+    let mut rows = Vec::new();
     let mut curves = Vec::new();
     let mut bifurcations = Vec::new();
     let mut summaries = Vec::new();
@@ -207,6 +208,15 @@ pub fn frc_multi(
                     csv.push_str(&format!(",{:.10e}", 2.0 * a.norm() / samples as f64));
                 }
                 csv.push('\n');
+                rows.push(FrcRow {
+                    order,
+                    epsilon: eps,
+                    omega: p.omega,
+                    branch: bi + 1,
+                    stable: p.stable,
+                    rho: p.q.iter().map(|q| q.norm_sqr()).sum::<f64>().sqrt(),
+                    linf: linf.clone(),
+                });
                 count += 1;
                 let y = linf.first().copied().unwrap_or(p.q[0].norm());
                 if seg_stable.is_some_and(|st| st != p.stable) {
@@ -282,7 +292,8 @@ pub fn frc_multi(
     }
     assemble(
         csv,
-        &curves,
+        rows,
+        curves,
         outputs,
         json!({
             "bifurcations": bifurcations,

@@ -42,6 +42,10 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::Spanned;
 
+mod validate;
+
+pub use validate::{ReportSection, SteadyStateSection, ValidateSection};
+
 /// A scene that cannot be used, with the place and the problem.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -95,6 +99,12 @@ pub struct Scene {
     /// Harmonic forcing and forced response curves.
     #[serde(default)]
     pub forcing: Option<ForcingSection>,
+    /// Full-system references.
+    #[serde(default)]
+    pub validate: Option<ValidateSection>,
+    /// Speed-against-error report.
+    #[serde(default)]
+    pub report: Option<ReportSection>,
 }
 
 /// `[forcing]`: forced response curves of the periodic SSM. The load's shape is
@@ -466,6 +476,7 @@ impl SceneFile {
         }
         self.check_outputs()?;
         self.check_forcing()?;
+        self.check_validate()?;
         if let Some(m) = &self.scene.spectrum.modes {
             if *m.get_ref() == 0 {
                 return Err(self.invalid(m.span(), "spectrum.modes", "must be at least 1".into()));

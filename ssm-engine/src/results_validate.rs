@@ -1,0 +1,378 @@
+//! The products of `[validate]`: `validation.csv`, `validation.svg`,
+//! `steady_state.csv`, the full-system reference drawn into `frc.svg`, and the
+//! summary's `validation`.
+
+use std::time::Instant;
+
+use serde_json::{json, Value};
+use ssm_api::StateKind;
+
+use crate::plot::{line_plot, Curve, Scale};
+use crate::results_frc::{frc_svg, FrcReport, FrcRow};
+use crate::scene::ValidateSection;
+use crate::simulate::{RadauOptions, SteadyOptions, SteadyState};
+use crate::ssm::SsmExpansion;
+use crate::system::{OutputMap, System};
+use crate::validate::{self, TransientValidation, ValidateError};
+use crate::C64;
+
+/// Steady-state reference points of one forcing amplitude.
+#[derive(Debug, Clone)]
+pub struct SteadyReference {
+    /// Forcing amplitude.
+    pub epsilon: f64,
+    /// One converged response per frequency.
+    pub points: Vec<SteadyState>,
+    /// Names of the outputs whose amplitudes are in `points`.
+    pub outputs: Vec<String>,
+    /// Wall time of all points (run in parallel).
+    pub wall_s: f64,
+}
+
+/// Everything `[validate]` produced.
+#[derive(Debug, Clone)]
+pub struct ValidationProducts {
+    /// Files to write, `(name, contents)`.
+    pub files: Vec<(String, String)>,
+    /// `"validation"` of the summary.
+    pub summary: Value,
+    /// The transient comparison, if requested.
+    pub transient: Option<TransientValidation>,
+    /// The steady-state reference, if requested.
+    pub steady: Option<SteadyReference>,
+}
+
+/// Multiplier outputs (`mu1`, ...) of the model, for the Appendix G.1 comparison.
+fn multiplier_outputs(sys: &System) -> Vec<&OutputMap> {
+    sys.states
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.kind == StateKind::Multiplier)
+        .filter_map(|(i, s)| {
+            sys.output(s.name.as_str())
+                .filter(|o| o.weights.len() == 1 && o.weights[0].0 == i)
+        })
+        .collect()
+}
+
+/// Runs the comparisons of `sec`: `compared` are the outputs of the transient
+/// (the multipliers are added), `coordinates` those of the steady state (the
+/// FRC's outputs, in its order), `frc` the FRCs to draw the steady-state
+/// reference into and to measure against it.
+pub fn validation(
+    ssm: &SsmExpansion,
+    sys: &System,
+    sec: &ValidateSection,
+    compared: &[&OutputMap],
+    coordinates: &[&OutputMap],
+    frc: Option<&mut FrcReport>,
+) -> Result<ValidationProducts, ValidateError> {
+    let mut files = Vec::new();
+    let mut summary = serde_json::Map::new();
+    let opts = RadauOptions {
+        rtol: *sec.rtol.get_ref(),
+        atol: *sec.atol.get_ref(),
+        ..RadauOptions::default()
+    };
+    let mut transient = None;
+    if let (Some(rho0), Some(t_end)) = (&sec.rho0, &sec.t_end) {
+        let order = sec.order.as_ref().map_or(ssm.order, |o| *o.get_ref());
+        let theta0 = sec
+            .theta0
+            .as_ref()
+            .map_or_else(|| vec![0.0; rho0.get_ref().len()], |t| t.get_ref().clone());
+        let p0: Vec<C64> = rho0
+            .get_ref()
+            .iter()
+            .zip(&theta0)
+            .flat_map(|(&r, &t)| {
+                let q = C64::from_polar(r, t);
+                [q, q.conj()]
+            })
+            .collect();
+        let mut outs: Vec<&OutputMap> = compared.to_vec();
+        for m in multiplier_outputs(sys) {
+            if !outs.iter().any(|o| o.name == m.name) {
+                outs.push(m);
+            }
+        }
+        let tv = validate::transient(
+            ssm,
+            sys,
+            &validate::TransientSettings {
+                order,
+                p0: &p0,
+                t_end: *t_end.get_ref(),
+                samples: *sec.samples.get_ref(),
+                outputs: &outs,
+                radau: opts,
+            },
+        )?;
+        files.push(("validation.csv".to_owned(), transient_csv(&tv, &outs)));
+        files.push((
+            "validation.svg".to_owned(),
+            transient_svg(&tv, &outs[..compared.len()], order)?,
+        ));
+        summary.insert(
+            "transient".into(),
+            transient_json(&tv, &outs, order, rho0.get_ref(), &theta0, *t_end.get_ref()),
+        );
+        transient = Some(tv);
+    }
+    let mut steady = None;
+    if let Some(ss) = &sec.steady_state {
+        let eps = *ss.epsilon.get_ref();
+        let omegas = ss.omegas();
+        let sopts = SteadyOptions {
+            delta: *ss.delta.get_ref(),
+            max_periods: *ss.max_periods.get_ref(),
+            samples_per_period: *ss.samples_per_period.get_ref(),
+            radau: opts,
+        };
+        let t0 = Instant::now();
+        let points = validate::steady_state_reference(sys, eps, &omegas, coordinates, &sopts)?;
+        let reference = SteadyReference {
+            epsilon: eps,
+            points,
+            outputs: coordinates.iter().map(|o| o.name.clone()).collect(),
+            wall_s: t0.elapsed().as_secs_f64(),
+        };
+        files.push(("steady_state.csv".to_owned(), steady_csv(&reference)));
+        let mut js = steady_json(&reference, *ss.delta.get_ref());
+        if let Some(frc) = frc {
+            js["frc_error"] = frc_errors(&frc.rows, &reference).into();
+            overlay(frc, &reference, coordinates)?;
+        }
+        summary.insert("steady_state".into(), js);
+        steady = Some(reference);
+    }
+    Ok(ValidationProducts {
+        files,
+        summary: Value::Object(summary),
+        transient,
+        steady,
+    })
+}
+
+/// `t,<out>_full,<out>_rom,...,rel_error,manifold_distance,algebraic_residual`.
+fn transient_csv(tv: &TransientValidation, outs: &[&OutputMap]) -> String {
+    let mut csv = String::from("t");
+    for o in outs {
+        csv.push_str(&format!(",{0}_full,{0}_rom", o.name));
+    }
+    csv.push_str(",rel_error,manifold_distance,algebraic_residual\n");
+    for (j, t) in tv.times.iter().enumerate() {
+        csv.push_str(&format!("{t:.10e}"));
+        for k in 0..outs.len() {
+            csv.push_str(&format!(",{:.10e},{:.10e}", tv.full[k][j], tv.rom[k][j]));
+        }
+        csv.push_str(&format!(
+            ",{:.6e},{:.6e},{:.6e}\n",
+            tv.relative_error_at(j),
+            tv.distance[j],
+            tv.algebraic_residual[j]
+        ));
+    }
+    csv
+}
+
+fn transient_svg(
+    tv: &TransientValidation,
+    outs: &[&OutputMap],
+    order: usize,
+) -> Result<String, ValidateError> {
+    let mut curves = Vec::new();
+    for (k, o) in outs.iter().enumerate() {
+        let pts = |v: &[f64]| tv.times.iter().copied().zip(v.iter().copied()).collect();
+        curves.push(Curve {
+            label: format!("{} full system", o.name),
+            points: pts(&tv.full[k]),
+            dashed: true,
+            color: Some(k),
+            ..Curve::default()
+        });
+        curves.push(Curve {
+            label: format!("{} SSM O({order})", o.name),
+            points: pts(&tv.rom[k]),
+            color: Some(k),
+            ..Curve::default()
+        });
+    }
+    Ok(line_plot(
+        "full system (dashed) against the reduced model from W(p0)",
+        "t",
+        "output",
+        &curves,
+        Scale::Linear,
+    )?)
+}
+
+fn transient_json(
+    tv: &TransientValidation,
+    outs: &[&OutputMap],
+    order: usize,
+    rho0: &[f64],
+    theta0: &[f64],
+    t_end: f64,
+) -> Value {
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    let errs: Vec<f64> = (0..outs.len()).map(|k| tv.relative_error(k)).collect();
+    json!({
+        "order": order,
+        "rho0": rho0,
+        "theta0": theta0,
+        "t_end": t_end,
+        "samples": tv.times.len(),
+        "initial_projection": {
+            "position_correction": tv.initial.position_correction,
+            "velocity_correction": tv.initial.velocity_correction,
+            "constraint_residual": tv.initial.constraint_residual,
+            "velocity_constraint_residual": tv.initial.velocity_residual,
+        },
+        "full_system": {
+            "steps": tv.stats.accepted,
+            "rejected_steps": tv.stats.rejected,
+            "jacobians": tv.stats.jacobians,
+            "factorizations": tv.stats.factorizations,
+            "newton_iterations": tv.stats.newton,
+            "wall_s": tv.full_s,
+            "steps_per_s": tv.stats.accepted as f64 / tv.full_s.max(1e-12),
+        },
+        "rom_wall_s": tv.rom_s,
+        "max_relative_error": max(&errs),
+        "max_manifold_distance": max(&tv.distance),
+        "max_algebraic_residual": max(&tv.algebraic_residual),
+        "outputs": outs.iter().zip(&errs).map(|(o, e)| json!({
+            "name": o.name,
+            "relative_error": e,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// `epsilon,omega,<out>_linf...,periods,change,steps`.
+fn steady_csv(r: &SteadyReference) -> String {
+    let mut csv = String::from("epsilon,omega");
+    for o in &r.outputs {
+        csv.push_str(&format!(",{o}_linf"));
+    }
+    csv.push_str(",periods,change,steps\n");
+    for p in &r.points {
+        csv.push_str(&format!("{:e},{:.10e}", r.epsilon, p.omega));
+        for a in &p.amplitudes {
+            csv.push_str(&format!(",{a:.10e}"));
+        }
+        csv.push_str(&format!(
+            ",{},{:.3e},{}\n",
+            p.periods, p.change, p.stats.accepted
+        ));
+    }
+    csv
+}
+
+fn steady_json(r: &SteadyReference, delta: f64) -> Value {
+    let steps: usize = r.points.iter().map(|p| p.stats.accepted).sum();
+    json!({
+        "epsilon": r.epsilon,
+        "delta": delta,
+        "points": r.points.len(),
+        "wall_s": r.wall_s,
+        "steps": steps,
+        "responses": r.points.iter().map(|p| json!({
+            "omega": p.omega,
+            "periods": p.periods,
+            "change": p.change,
+            "steps": p.stats.accepted,
+            "amplitudes": r.outputs.iter().zip(&p.amplitudes)
+                .map(|(n, a)| (n.clone(), json!(a))).collect::<serde_json::Map<_, _>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The FRC amplitude of output `k` at `omega` on the curve `(order, epsilon)`:
+/// linear interpolation on every branch segment that crosses `omega`, the
+/// crossing nearest `near` (the reference from rest sits on one branch).
+pub fn frc_amplitude_at(
+    rows: &[FrcRow],
+    order: usize,
+    epsilon: f64,
+    k: usize,
+    omega: f64,
+    near: f64,
+) -> Option<f64> {
+    let same = |r: &FrcRow| r.order == order && (r.epsilon - epsilon).abs() <= 1e-12 * epsilon;
+    let curve: Vec<&FrcRow> = rows.iter().filter(|r| same(r)).collect();
+    curve
+        .windows(2)
+        .filter(|w| w[0].branch == w[1].branch)
+        .filter(|w| (w[0].omega - omega) * (w[1].omega - omega) <= 0.0 && w[0].omega != w[1].omega)
+        .map(|w| {
+            let s = (omega - w[0].omega) / (w[1].omega - w[0].omega);
+            w[0].linf[k] + s * (w[1].linf[k] - w[0].linf[k])
+        })
+        .min_by(|a, b| (a - near).abs().total_cmp(&(b - near).abs()))
+}
+
+/// Per FRC order at the reference's epsilon: the largest relative amplitude
+/// error against the reference over the frequencies the FRC covers.
+pub fn frc_errors(rows: &[FrcRow], r: &SteadyReference) -> Vec<Value> {
+    let mut orders: Vec<usize> = rows
+        .iter()
+        .filter(|w| (w.epsilon - r.epsilon).abs() <= 1e-12 * r.epsilon)
+        .map(|w| w.order)
+        .collect();
+    orders.sort_unstable();
+    orders.dedup();
+    orders
+        .into_iter()
+        .map(|order| {
+            let (err, compared) = frc_error(rows, r, order);
+            json!({
+                "order": order,
+                "epsilon": r.epsilon,
+                "max_relative_error": err,
+                "points_compared": compared,
+                "output": r.outputs.first(),
+            })
+        })
+        .collect()
+}
+
+/// Largest `|A_frc - A_ref| / max A_ref` of the first output over the
+/// reference points covered by the FRC of `order`, and how many were covered.
+pub fn frc_error(rows: &[FrcRow], r: &SteadyReference, order: usize) -> (Option<f64>, usize) {
+    let scale = r
+        .points
+        .iter()
+        .map(|p| p.amplitudes.first().copied().unwrap_or(0.0))
+        .fold(0.0, f64::max);
+    let errs: Vec<f64> = r
+        .points
+        .iter()
+        .filter_map(|p| {
+            let a = *p.amplitudes.first()?;
+            frc_amplitude_at(rows, order, r.epsilon, 0, p.omega, a).map(|f| (f - a).abs() / scale)
+        })
+        .collect();
+    let n = errs.len();
+    ((n > 0).then(|| errs.into_iter().fold(0.0, f64::max)), n)
+}
+
+/// Draws the reference points into `frc.svg`.
+fn overlay(
+    frc: &mut FrcReport,
+    r: &SteadyReference,
+    outputs: &[&OutputMap],
+) -> Result<(), ValidateError> {
+    frc.curves.push(Curve {
+        label: format!("full system, eps = {} (steady state)", r.epsilon),
+        points: Vec::new(),
+        markers: r
+            .points
+            .iter()
+            .filter_map(|p| p.amplitudes.first().map(|&a| (p.omega, a)))
+            .collect(),
+        ..Curve::default()
+    });
+    frc.svg = frc_svg(&frc.curves, outputs)?;
+    Ok(())
+}

@@ -1,0 +1,248 @@
+//! `[validate]`, `[validate.steady_state]` and `[report]`: full-system
+//! references and the speed-against-error report.
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::{SceneError, SceneFile};
+
+/// `[validate]`: the full system against the reduced model.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ValidateSection {
+    /// Initial polar amplitude of each master pair of the transient started
+    /// on the SSM (no transient without it).
+    #[serde(default)]
+    pub rho0: Option<Spanned<Vec<f64>>>,
+    /// Initial phase of each master pair (default 0).
+    #[serde(default)]
+    pub theta0: Option<Spanned<Vec<f64>>>,
+    /// Final time of the transient.
+    #[serde(default)]
+    pub t_end: Option<Spanned<f64>>,
+    /// Samples of the transient.
+    #[serde(default = "default_samples")]
+    pub samples: Spanned<usize>,
+    /// Expansion order of the reduced model compared (default: `[ssm] order`).
+    #[serde(default)]
+    pub order: Option<Spanned<usize>>,
+    /// Outputs compared (default: `[outputs] coordinates`); the multipliers
+    /// are always added to `validation.csv`.
+    #[serde(default)]
+    pub outputs: Option<Spanned<Vec<String>>>,
+    /// Relative tolerance of the full-system integrator.
+    #[serde(default = "default_rtol")]
+    pub rtol: Spanned<f64>,
+    /// Absolute tolerance of the full-system integrator.
+    #[serde(default = "default_atol")]
+    pub atol: Spanned<f64>,
+    /// Steady-state forced responses of the full system.
+    #[serde(default)]
+    pub steady_state: Option<SteadyStateSection>,
+}
+
+/// `[validate.steady_state]`: integration from rest until criterion (47) holds.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SteadyStateSection {
+    /// Forcing amplitude.
+    pub epsilon: Spanned<f64>,
+    /// Forcing frequencies (or `omega_range` and `points`).
+    #[serde(default)]
+    pub omega: Option<Spanned<Vec<f64>>>,
+    /// `[Omega_min, Omega_max]`, sampled uniformly at `points` frequencies.
+    #[serde(default)]
+    pub omega_range: Option<Spanned<Vec<f64>>>,
+    /// Number of frequencies in `omega_range`.
+    #[serde(default = "default_points")]
+    pub points: Spanned<usize>,
+    /// Relative tolerance `delta` of criterion (47).
+    #[serde(default = "default_delta")]
+    pub delta: Spanned<f64>,
+    /// Forcing periods at most.
+    #[serde(default = "default_max_periods")]
+    pub max_periods: Spanned<usize>,
+    /// Output samples per period for the amplitudes.
+    #[serde(default = "default_period_samples")]
+    pub samples_per_period: Spanned<usize>,
+}
+
+impl SteadyStateSection {
+    /// The forcing frequencies.
+    pub fn omegas(&self) -> Vec<f64> {
+        if let Some(o) = &self.omega {
+            return o.get_ref().clone();
+        }
+        let r = self.omega_range.as_ref().map_or(&[][..], |r| r.get_ref());
+        let n = *self.points.get_ref();
+        if r.len() != 2 {
+            return Vec::new();
+        }
+        if n == 1 {
+            return vec![0.5 * (r[0] + r[1])];
+        }
+        (0..n)
+            .map(|i| r[0] + (r[1] - r[0]) * i as f64 / (n - 1) as f64)
+            .collect()
+    }
+}
+
+/// `[report]`: speed against error, one row per expansion order.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReportSection {
+    /// Expansion orders (default: the odd orders up to `[ssm] order`).
+    #[serde(default)]
+    pub orders: Option<Spanned<Vec<usize>>>,
+}
+
+fn default_samples() -> Spanned<usize> {
+    Spanned::new(0..0, 1001)
+}
+fn default_rtol() -> Spanned<f64> {
+    Spanned::new(0..0, 1e-8)
+}
+fn default_atol() -> Spanned<f64> {
+    Spanned::new(0..0, 1e-10)
+}
+fn default_points() -> Spanned<usize> {
+    Spanned::new(0..0, 21)
+}
+fn default_delta() -> Spanned<f64> {
+    Spanned::new(0..0, 1e-3)
+}
+fn default_max_periods() -> Spanned<usize> {
+    Spanned::new(0..0, 2000)
+}
+fn default_period_samples() -> Spanned<usize> {
+    Spanned::new(0..0, 128)
+}
+
+impl SceneFile {
+    pub(super) fn check_validate(&self) -> Result<(), SceneError> {
+        if let Some(r) = &self.scene.report {
+            if let Some(o) = &r.orders {
+                self.check_orders(o, "report.orders")?;
+            }
+        }
+        let Some(v) = &self.scene.validate else {
+            return Ok(());
+        };
+        let pairs = self.scene.ssm.master_pairs.get_ref().len();
+        match (&v.rho0, &v.t_end) {
+            (Some(r), Some(t)) => {
+                if r.get_ref().len() != pairs
+                    || r.get_ref().iter().any(|x| !(x.is_finite() && *x >= 0.0))
+                {
+                    return Err(self.invalid(
+                        r.span(),
+                        "validate.rho0",
+                        format!("give {pairs} non-negative amplitude(s), one per master pair"),
+                    ));
+                }
+                self.check_positive(t, "validate.t_end")?;
+            }
+            (Some(r), None) => {
+                return Err(self.invalid(
+                    r.span(),
+                    "validate.t_end",
+                    "a transient validation needs t_end with rho0".into(),
+                ))
+            }
+            (None, Some(t)) => {
+                return Err(self.invalid(
+                    t.span(),
+                    "validate.rho0",
+                    "a transient validation needs rho0 (the start W(p0) on the SSM) with t_end"
+                        .into(),
+                ))
+            }
+            (None, None) => {}
+        }
+        if let Some(th) = &v.theta0 {
+            if th.get_ref().len() != pairs || th.get_ref().iter().any(|t| !t.is_finite()) {
+                return Err(self.invalid(
+                    th.span(),
+                    "validate.theta0",
+                    format!("give {pairs} finite phase(s), one per master pair"),
+                ));
+            }
+        }
+        self.check_at_least(&v.samples, 2, "validate.samples")?;
+        if let Some(o) = &v.order {
+            self.check_orders(
+                &Spanned::new(o.span(), vec![*o.get_ref()]),
+                "validate.order",
+            )?;
+        }
+        for (tol, key) in [(&v.rtol, "validate.rtol"), (&v.atol, "validate.atol")] {
+            self.check_positive(tol, key)?;
+        }
+        if *v.rtol.get_ref() >= 1e-2 {
+            return Err(self.invalid(v.rtol.span(), "validate.rtol", "must be below 1e-2".into()));
+        }
+        if let Some(s) = &v.steady_state {
+            self.check_steady(s)?;
+        }
+        Ok(())
+    }
+
+    fn check_steady(&self, s: &SteadyStateSection) -> Result<(), SceneError> {
+        self.check_positive(&s.epsilon, "validate.steady_state.epsilon")?;
+        match (&s.omega, &s.omega_range) {
+            (Some(o), None) => {
+                if o.get_ref().is_empty()
+                    || o.get_ref().iter().any(|w| !(w.is_finite() && *w > 0.0))
+                {
+                    return Err(self.invalid(
+                        o.span(),
+                        "validate.steady_state.omega",
+                        "give one or more positive frequencies".into(),
+                    ));
+                }
+            }
+            (None, Some(r)) => {
+                let ok = r.get_ref().len() == 2
+                    && r.get_ref().iter().all(|w| w.is_finite() && *w > 0.0)
+                    && r.get_ref()[0] < r.get_ref()[1];
+                if !ok {
+                    return Err(self.invalid(
+                        r.span(),
+                        "validate.steady_state.omega_range",
+                        "give [Omega_min, Omega_max] with 0 < Omega_min < Omega_max".into(),
+                    ));
+                }
+                self.check_at_least(&s.points, 1, "validate.steady_state.points")?;
+            }
+            (Some(o), Some(_)) => {
+                return Err(self.invalid(
+                    o.span(),
+                    "validate.steady_state.omega",
+                    "give either omega or omega_range, not both".into(),
+                ))
+            }
+            (None, None) => {
+                return Err(self.invalid(
+                    s.epsilon.span(),
+                    "validate.steady_state",
+                    "give the frequencies: omega = [...] or omega_range = [min, max] with points"
+                        .into(),
+                ))
+            }
+        }
+        let d = *s.delta.get_ref();
+        if !(d.is_finite() && d > 0.0 && d < 1.0) {
+            return Err(self.invalid(
+                s.delta.span(),
+                "validate.steady_state.delta",
+                format!("must lie in (0, 1), found {d}"),
+            ));
+        }
+        self.check_at_least(&s.max_periods, 2, "validate.steady_state.max_periods")?;
+        self.check_at_least(
+            &s.samples_per_period,
+            4,
+            "validate.steady_state.samples_per_period",
+        )
+    }
+}
