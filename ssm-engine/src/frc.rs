@@ -407,6 +407,7 @@ pub fn one_pair_frc(pb: &OnePair, rho_max: f64, samples: usize, omega_range: (f6
                 rhos.into_iter().rev().collect()
             };
             let mut prev: Option<(f64, f64, f64)> = None;
+            let mut prev_omega: Option<(f64, f64)> = None;
             for &r in &ordered {
                 let Some((omega, theta, trace, det)) = pb.point(r, sign) else {
                     continue;
@@ -438,6 +439,28 @@ pub fn one_pair_frc(pb: &OnePair, rho_max: f64, samples: usize, omega_range: (f6
                         }
                     }
                 }
+                // a branch leaving or entering the range ends exactly on its edge
+                if let Some((pr, pw)) = prev_omega {
+                    if in_range(pw) != in_range(omega) {
+                        let edge = if pw.min(omega) < omega_range.0 {
+                            omega_range.0
+                        } else {
+                            omega_range.1
+                        };
+                        let g = |x: f64| pb.point(x, sign).map_or(f64::NAN, |p| p.0 - edge);
+                        let rb = bisect(&g, pr, r);
+                        if let Some(p) = pb.point(rb, sign) {
+                            points.push(FrcPoint {
+                                omega: edge,
+                                rho: rb,
+                                theta: p.1,
+                                stable: p.2 < 0.0 && p.3 > 0.0,
+                                branch,
+                            });
+                        }
+                    }
+                }
+                prev_omega = Some((r, omega));
                 prev = Some((r, trace, det));
                 if in_range(omega) {
                     points.push(FrcPoint {

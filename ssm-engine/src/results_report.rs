@@ -299,10 +299,17 @@ pub fn markdown(sys: &System, rows: &[ReportRow], full: &[(String, f64)]) -> Str
             full.iter().find(|(w, _)| w.starts_with("full transient")),
         ) {
             let rom = best.ssm_s + best.transient_s.unwrap_or(0.0);
+            let ratio = ft / rom.max(1e-12);
             s.push_str(&format!(
-                "\nO({}) (build + transient) is {:.0}x faster than the full transient.\n",
+                "\nO({}) (build + transient) takes {} against {} for the full transient: {}.\n",
                 best.order,
-                ft / rom.max(1e-12)
+                fmt_s(Some(rom)),
+                fmt_s(Some(*ft)),
+                if ratio >= 1.0 {
+                    format!("{ratio:.1}x faster")
+                } else {
+                    format!("{:.1}x slower (a small full model; the reduced model pays for its expansion)", 1.0 / ratio)
+                }
             ));
         }
     }

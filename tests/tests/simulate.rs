@@ -34,7 +34,12 @@ fn linear_constraint_convergence_orders_match_radau_theory() {
     guess[1] = 0.48; // violates x1 = x2: projected in the mass metric
     let c = consistent_initial(&p, 0.0, &guess).expect("consistent");
     let xp = (0.5 + 2.0 * 0.48) / 3.0;
-    assert!((c.z[0] - xp).abs() < 1e-14 && (c.z[1] - xp).abs() < 1e-14);
+    assert!(
+        (c.z[0] - xp).abs() < 1e-14 && (c.z[1] - xp).abs() < 1e-14,
+        "projected to {} {}",
+        c.z[0],
+        c.z[1]
+    );
     assert!((c.position_correction - (0.5 - xp)).abs() < 1e-14);
     // reference: the closed form from the projected point
     let (_, exact) = linear_constrained_oscillator(xp);
@@ -179,5 +184,187 @@ fn conservative_pendulum_keeps_its_energy_over_100_periods() {
         (r.z()[0] - phi0).abs() < 1e-6,
         "phase error {}",
         r.z()[0] - phi0
+    );
+}
+
+#[test]
+fn trajectory_started_on_the_o13_oscillator_ssm_stays_on_it() {
+    use num_complex::Complex64 as C64;
+    use ssm_engine::scene::Normalization;
+    use ssm_engine::ssm::analysis::invariance_error;
+    use ssm_engine::validate::{transient, TransientSettings};
+    use ssm_tests::{oscillator_with_spectrum, ssm_of};
+    // Fig. 4: rho0 = 0.35 (0.24 spherical), theta0 = 0.5, in the published
+    // normalization (eigenvector 2-norm 0.8306)
+    for (constraint, rho0) in [("none", 0.35), ("cubic", 0.35), ("spherical", 0.24)] {
+        let (sys, sp) = oscillator_with_spectrum(constraint);
+        let ssm = ssm_of(&sys, &sp, &[1], 13, Normalization::Scale(0.8306));
+        let outs: Vec<_> = ["x1", "x2", "x3"]
+            .iter()
+            .map(|n| sys.output(n).expect("output"))
+            .collect();
+        let q = C64::from_polar(rho0, 0.5);
+        let mut last: Option<(f64, f64)> = None;
+        for order in [3, 7, 13] {
+            let v = transient(
+                &ssm,
+                &sys,
+                &TransientSettings {
+                    order,
+                    p0: &[q, q.conj()],
+                    t_end: 100.0,
+                    samples: 1001,
+                    outputs: &outs,
+                    radau: RadauOptions::default(),
+                },
+            )
+            .expect("validation runs");
+            let inv = invariance_error(&ssm, &sys, order, rho0, 2, 60);
+            let dist = v.distance.iter().copied().fold(0.0, f64::max);
+            let err = (0..3).map(|k| v.relative_error(k)).fold(0.0, f64::max);
+            let alg = v.algebraic_residual.iter().copied().fold(0.0, f64::max);
+            eprintln!(
+                "{constraint} O({order}): invariance error {inv:.2e}, max distance to the SSM {dist:.2e}, ROM error {err:.2e}, algebraic residual {alg:.1e}, {} steps",
+                v.stats.accepted
+            );
+            // the full trajectory stays within the invariance error scale of
+            // the manifold it started on (eq. (41) is a mean over the circle,
+            // the distance a maximum over 100 time units)
+            assert!(
+                dist < 12.0 * inv,
+                "distance {dist} vs invariance error {inv}"
+            );
+            assert!(alg < 1e-8, "constraint residual {alg}");
+            if let Some((d0, e0)) = last {
+                assert!(dist < d0, "distance does not fall with the order");
+                assert!(err < e0, "ROM error does not fall with the order");
+            }
+            last = Some((dist, err));
+        }
+        assert!(last.expect("three orders").1 < 0.05);
+    }
+}
+
+#[test]
+fn chain_constraints_hold_over_100_periods_from_given_displacements() {
+    use ssm_engine::simulate::consistent::algebraic_residual;
+    let sys = system("pendulum", "chain", "");
+    let p = DaeProblem::new(&sys, 0.0, 0.0);
+    // given displacements: the whole chain moved sideways by 0.3 (consistent)
+    // and pendulum 10 swung by 0.4 rad about its centre, which breaks its two
+    // joints by about l/2 * 0.4 = 6e-3; the projection repairs them
+    let mut guess = vec![0.0; sys.n_states()];
+    for (i, s) in sys.states.iter().enumerate() {
+        if s.kind == ssm_api::StateKind::Displacement && s.name.as_str().starts_with('x') {
+            guess[i] = 0.3;
+        }
+    }
+    let phi10 = sys
+        .states
+        .iter()
+        .position(|s| s.name.as_str() == "phi10")
+        .expect("state phi10");
+    guess[phi10] = 0.4;
+    let c = consistent_initial(&p, 0.0, &guess).expect("projectable");
+    assert!(c.constraint_residual < 1e-13 && c.velocity_residual < 1e-13);
+    assert!(
+        c.position_correction > 1e-3,
+        "the guess violated the joints"
+    );
+    assert!(c.position_correction < 0.4, "the repair stays local");
+    let period = 2.0 * std::f64::consts::PI / 1.9939;
+    let t_end = 100.0 * period;
+    let t0 = std::time::Instant::now();
+    let mut r = Radau::new(&p, 0.0, &c.z, t_end, RadauOptions::default()).expect("starts");
+    let (mut first, mut last) = (0.0f64, 0.0f64);
+    while r.t() < t_end {
+        r.step(t_end).expect("step");
+        let res = algebraic_residual(&p, r.z()).0;
+        if r.t() < 10.0 * period {
+            first = first.max(res);
+        } else if r.t() > 90.0 * period {
+            last = last.max(res);
+        }
+    }
+    let secs = t0.elapsed().as_secs_f64();
+    eprintln!(
+        "chain, 100 periods: {} steps in {secs:.2} s ({:.0} steps/s); largest constraint residual: first 10 periods {first:.2e}, last 10 {last:.2e}",
+        r.stats.accepted,
+        r.stats.accepted as f64 / secs
+    );
+    // the constraints hold at the Newton tolerance of the stage equations
+    // (0.1 rtol^(2/3) = 4.6e-7 relative for rtol = 1e-8) and do not drift
+    assert!(first < 1e-7 && last < 1e-7);
+    assert!(
+        last < 10.0 * first.max(1e-12),
+        "drift: {first:.2e} -> {last:.2e}"
+    );
+}
+
+#[test]
+fn bad_inputs_give_errors_naming_time_and_cause() {
+    use ssm_api::{Constraints, MechanicalSystem, PolyVector, SparseMatrix};
+    use ssm_engine::simulate::SimError;
+    use ssm_engine::system::System;
+    use ssm_tests::oscillator_with_spectrum;
+    // 1. an initial point the constraints cannot be evaluated at
+    let (sys, _) = oscillator_with_spectrum("cubic");
+    let p = DaeProblem::new(&sys, 0.0, 0.0);
+    let mut guess = vec![0.0; sys.n_states()];
+    guess[0] = 1e120;
+    let e = consistent_initial(&p, 0.0, &guess).expect_err("beyond repair");
+    assert!(
+        matches!(e, SimError::Inconsistent { t, .. } if t == 0.0),
+        "{e}"
+    );
+    eprintln!("{e}");
+    guess[0] = f64::NAN;
+    let e = consistent_initial(&p, 0.0, &guess).expect_err("NaN");
+    assert!(e.to_string().contains("'x1'"), "{e}");
+    // 2. a solution that escapes to infinity in finite time: x'' + x - 5 x^3 = 0
+    let mut m = MechanicalSystem::new("escape", &["x"]);
+    m.mass = SparseMatrix::diagonal(&[1.0]);
+    m.stiffness = SparseMatrix::diagonal(&[1.0]);
+    m.internal_force.push(0, -5.0, &[(0, 3)]);
+    let sys = System::from_model("test", m.into_model().expect("valid")).expect("valid");
+    let p = DaeProblem::new(&sys, 0.0, 0.0);
+    let mut r = Radau::new(&p, 0.0, &[1.0, 0.0], 10.0, RadauOptions::default()).expect("starts");
+    let e = loop {
+        match r.step(10.0) {
+            Ok(()) if r.t() < 10.0 => {}
+            Ok(()) => panic!("the solution cannot reach t = 10"),
+            Err(e) => break e,
+        }
+    };
+    eprintln!("{e}");
+    match &e {
+        SimError::StepCollapse { t, .. } | SimError::NonFinite { t, .. } => {
+            assert!(*t > 0.1 && *t < 3.0, "blow-up time {t}")
+        }
+        other => panic!("unexpected error {other}"),
+    }
+    assert!(e.to_string().contains("t = "));
+    // 3. redundant constraints (x1 = x2 twice): G and the iteration matrix are singular
+    let mut m = MechanicalSystem::new("redundant", &["x1", "x2"]);
+    m.mass = SparseMatrix::diagonal(&[1.0, 2.0]);
+    m.stiffness = SparseMatrix::diagonal(&[3.0, 5.0]);
+    let mut g = PolyVector::zeros(2, 2);
+    for j in 0..2 {
+        g.push(j, 1.0, &[(0, 1)]);
+        g.push(j, -1.0, &[(1, 1)]);
+    }
+    m.constraints = Some(Constraints::polynomial(g));
+    let sys = System::from_model("test", m.into_model().expect("valid")).expect("valid");
+    let p = DaeProblem::new(&sys, 0.0, 0.0);
+    let z0 = [0.1, 0.1, 0.0, 0.0, 0.0, 0.0];
+    let e = consistent_initial(&p, 0.0, &z0).expect_err("redundant");
+    assert!(e.to_string().contains("redundant"), "{e}");
+    let e = Radau::new(&p, 0.0, &z0, 1.0, RadauOptions::default())
+        .and_then(|mut r| r.step(1.0))
+        .expect_err("singular iteration matrix");
+    eprintln!("{e}");
+    assert!(
+        matches!(e, SimError::SingularIteration { t, .. } if t == 0.0),
+        "{e}"
     );
 }

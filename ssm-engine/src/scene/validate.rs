@@ -26,8 +26,8 @@ pub struct ValidateSection {
     /// Expansion order of the reduced model compared (default: `[ssm] order`).
     #[serde(default)]
     pub order: Option<Spanned<usize>>,
-    /// Outputs compared (default: `[outputs] coordinates`); the multipliers
-    /// are always added to `validation.csv`.
+    /// Outputs compared (default: `[outputs] coordinates`); the first eight
+    /// multipliers are added to `validation.csv`.
     #[serde(default)]
     pub outputs: Option<Spanned<Vec<String>>>,
     /// Relative tolerance of the full-system integrator.

@@ -3,8 +3,8 @@
 //! For the mechanical layout `z = (x, x', mu, u)` (auxiliaries `u` of a recast
 //! last), a guess `(x0, v0)`, typically a point `W(p0)` of an SSM, is made
 //! consistent in three stages:
-//! 1. positions: Newton projection onto `g(x) = 0` with minimal correction in
-//!    the mass metric, `[[M, G^T], [G, 0]] (dx, l) = (0, -g(x))`;
+//! 1. positions: damped Newton projection onto `g(x) = 0` with minimal
+//!    correction in the mass metric, `[[M, G^T], [G, 0]] (dx, l) = (0, -g(x))`;
 //! 2. velocities: `[[M, G^T], [G, 0]] (dv, l) = (0, -G v)`, so `G(x) v = 0`;
 //! 3. multipliers from the acceleration-level constraint, eq. (90) with
 //!    `alpha = beta = 0`: `M a - J_mu mu = f_hat`, `G a = -(d^2/ds^2) g(x + s v)`,
@@ -121,6 +121,17 @@ pub fn consistent_initial(p: &DaeProblem, t0: f64, guess: &[f64]) -> Result<Cons
     // 1. positions
     let mut converged = false;
     let mut g = g_of(&x);
+    if let Some(j) = g.iter().position(|v| !v.is_finite()) {
+        return Err(SimError::Inconsistent {
+            t: t0,
+            detail: format!(
+                "constraint {} ('{}') is not finite at the given point: it violates the \
+                 constraints beyond repair",
+                j + 1,
+                p.state_name(2 * n + j)
+            ),
+        });
+    }
     for _ in 0..MAX_NEWTON {
         let scale = 1.0 + inf_norm(&x);
         if inf_norm(&g) <= 1e-13 * scale {
@@ -139,13 +150,25 @@ pub fn consistent_initial(p: &DaeProblem, t0: f64, guess: &[f64]) -> Result<Cons
                      (redundant constraints or a singular configuration)"
                     .into(),
             })?;
-        for i in 0..n {
-            x[i] += sol[i];
+        // damped Newton: halve the step until |g| falls (the linearization of
+        // sin/cos constraints overshoots on large corrections)
+        let g_norm = inf_norm(&g);
+        let mut alpha = 1.0;
+        let mut accepted = false;
+        for _ in 0..30 {
+            let trial: Vec<f64> = (0..n).map(|i| x[i] + alpha * sol[i]).collect();
+            let gt = g_of(&trial);
+            if gt.iter().all(|v| v.is_finite()) && inf_norm(&gt) < g_norm {
+                x = trial;
+                g = gt;
+                accepted = true;
+                break;
+            }
+            alpha *= 0.5;
         }
-        if inf_norm(&x) > 1e6 * (1.0 + inf_norm(&x0)) {
+        if !accepted {
             break;
         }
-        g = g_of(&x);
     }
     if !converged {
         let (worst, j) = g
@@ -175,7 +198,9 @@ pub fn consistent_initial(p: &DaeProblem, t0: f64, guess: &[f64]) -> Result<Cons
         .collect();
     let sol = saddle_solve(&mech.mass, &gm, None, &rhs).ok_or_else(|| SimError::Inconsistent {
         t: t0,
-        detail: "the constraint Jacobian G(x) is rank deficient at the projected position".into(),
+        detail: "the constraint Jacobian G(x) is rank deficient at the projected position \
+                 (redundant constraints or a singular configuration)"
+            .into(),
     })?;
     let v: Vec<f64> = (0..n).map(|i| v0[i] + sol[i]).collect();
     let velocity_residual = inf_norm(&mat_vec(&gm, &v));

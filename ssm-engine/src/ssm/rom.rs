@@ -114,9 +114,40 @@ pub fn integrate(
     samples: usize,
     rtol: f64,
 ) -> Result<Trajectory, RomError> {
+    // R has few terms (normal-form style): evaluate them directly instead of
+    // forming every monomial of the expansion at each stage
+    let terms: Vec<(usize, C64, Vec<(usize, i32)>)> = ssm
+        .r
+        .iter()
+        .filter(|t| ssm.set.order(t.index) <= order && t.coeff != C64::new(0.0, 0.0))
+        .map(|t| {
+            let e = ssm.set.exponents(t.index);
+            let factors = e
+                .iter()
+                .enumerate()
+                .filter(|(_, &k)| k > 0)
+                .map(|(v, &k)| (v, i32::from(k)))
+                .collect();
+            (t.coord, t.coeff, factors)
+        })
+        .collect();
+    let dim = p0.len();
+    let top = order + 1;
     let f = |p: &[C64]| -> Vec<C64> {
-        let mono = ssm.set.monomials(p, order);
-        ssm.r_at(&mono, order)
+        // powers p_v^k, k <= order, shared by all terms
+        let mut pow = vec![C64::new(1.0, 0.0); dim * top];
+        for v in 0..dim {
+            for k in 1..top {
+                pow[v * top + k] = pow[v * top + k - 1] * p[v];
+            }
+        }
+        let mut out = vec![C64::new(0.0, 0.0); dim];
+        for (coord, coeff, factors) in &terms {
+            out[*coord] += factors
+                .iter()
+                .fold(*coeff, |acc, &(v, k)| acc * pow[v * top + k as usize]);
+        }
+        out
     };
     if let Dynamics::Map { period } = ssm.dynamics {
         let n = (t_end / period).floor() as usize;
@@ -140,7 +171,6 @@ pub fn integrate(
         });
     }
     let samples = samples.max(2);
-    let dim = p0.len();
     let out_t: Vec<f64> = (0..samples)
         .map(|i| t_end * i as f64 / (samples - 1) as f64)
         .collect();
