@@ -64,6 +64,43 @@ pub fn system(crate_name: &str, model: &str, params: &str) -> System {
     System::from_model(plugin.name(), m).expect("model is valid")
 }
 
+/// A fresh scratch directory for test outputs.
+pub fn tmp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ssm-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// Runs the zoo scene `scene` through the binary (with `args` before it, e.g.
+/// `["report"]`); returns its summary and output directory.
+pub fn run_zoo_with(args: &[&str], scene: &str) -> (serde_json::Value, PathBuf) {
+    let out = tmp_dir(scene);
+    let o = std::process::Command::new(engine_binary())
+        .args(args)
+        .arg(repo_root().join("zoo").join(scene))
+        .arg("--out")
+        .arg(&out)
+        .env("CI", "1")
+        .output()
+        .expect("ssm-engine runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("summary"))
+        .expect("summary is JSON");
+    (s, out)
+}
+
+/// Runs a zoo scene through the binary; returns its summary and output directory.
+pub fn run_zoo_in(scene: &str) -> (serde_json::Value, PathBuf) {
+    run_zoo_with(&[], scene)
+}
+
+/// Runs a zoo scene through the binary and returns its summary.
+pub fn run_zoo(scene: &str) -> serde_json::Value {
+    let (s, out) = run_zoo_in(scene);
+    let _ = std::fs::remove_dir_all(&out);
+    s
+}
+
 /// Published eigenvalues of the spatial oscillator, Li, Jain & Haller (2023):
 /// eq. (26) (unconstrained, three pairs) and eq. (27) (cubic or spherical
 /// constraint, two finite pairs). Printed to 4-5 significant digits; only the

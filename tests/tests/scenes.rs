@@ -1,13 +1,13 @@
 //! Scenes end to end: the bundled zoo scenes through the real binary, and every
 //! kind of bad input with its error naming the place.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use ssm_engine::job::{self, JobError, Quiet};
 use ssm_engine::plugin::Registry;
 use ssm_engine::scene::{SceneError, SceneFile};
-use ssm_tests::{engine_binary, plugin_path, repo_root};
+use ssm_tests::{engine_binary, plugin_path, repo_root, run_zoo, run_zoo_in, tmp_dir};
 
 fn registry() -> Registry {
     Registry::discover(&[
@@ -102,12 +102,6 @@ fn bad_model_parameter_names_its_line() {
 fn missing_model_section_is_a_parse_error() {
     let (_, msg) = scene_error("[ssm]\norder = 3\n");
     assert!(msg.contains("model"), "{msg}");
-}
-
-fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ssm-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
 }
 
 /// The README's first command, on the three bundled oscillator scenes: the
@@ -297,28 +291,6 @@ fn transient_needs_one_amplitude_per_pair() {
     let (line, msg) = scene_error(&text);
     assert_eq!(line, 11);
     assert!(msg.contains("outputs.transient.rho0"), "{msg}");
-}
-
-/// Runs a zoo scene through the binary; returns its summary and output directory.
-fn run_zoo_in(scene: &str) -> (serde_json::Value, PathBuf) {
-    let out = tmp_dir(scene);
-    let o = Command::new(engine_binary())
-        .arg(repo_root().join("zoo").join(scene))
-        .arg("--out")
-        .arg(&out)
-        .env("CI", "1")
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
-    (s, out)
-}
-
-/// Runs a zoo scene through the binary and returns its summary.
-fn run_zoo(scene: &str) -> serde_json::Value {
-    let (s, out) = run_zoo_in(scene);
-    let _ = std::fs::remove_dir_all(&out);
-    s
 }
 
 /// The pendulum zoo scenes report the recast (auxiliaries u1 = sin, u2 = 1 - cos
