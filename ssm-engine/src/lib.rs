@@ -24,6 +24,9 @@
 //!   steady-state references in parallel;
 //! - [`results`]: SSM entries of the summary, backbone and transient files;
 //! - [`results_frc`]: `frc.csv`, `frc.svg` and the summary's `frc`;
+//! - [`results_validate`]: `validation.csv/svg`, `steady_state.csv` and the
+//!   summary's `validation`;
+//! - [`results_report`]: the speed-against-error report (`report.csv/md/svg`);
 //! - [`plot`]: SVG plots;
 //! - [`report`]: `summary.json` and CSV tables, written atomically;
 //! - [`job`]: running a scene end to end.

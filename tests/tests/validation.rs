@@ -279,3 +279,50 @@ fn bad_validate_sections_name_line_and_key() {
     assert_eq!(line, 11);
     assert!(msg.contains("order 9"), "{msg}");
 }
+
+/// Fig. 14: the full 405-state chain from W(p0), rho0 = 0.8, theta0 = 3 (mass
+/// normalization) stays on the O(13) SSM and with the reduced model.
+#[test]
+fn chain_transient_stays_on_the_o13_ssm() {
+    let (s, out) = run_zoo_in("pendulum_chain_fig14.toml");
+    let v = &s["validation"]["transient"];
+    let err = v["max_relative_error"].as_f64().unwrap();
+    let dist = v["max_manifold_distance"].as_f64().unwrap();
+    let alg = v["max_algebraic_residual"].as_f64().unwrap();
+    eprintln!(
+        "Fig. 14: output error {err:.2e}, distance to the SSM {dist:.2e}, constraint residual {alg:.1e}, {} steps at {:.0} steps/s",
+        v["full_system"]["steps"],
+        v["full_system"]["steps_per_s"].as_f64().unwrap()
+    );
+    // 1e-3 of the amplitude: 300 times the O(13) invariance error at rho0
+    // (3.2e-6, in summary.json), the scale of a 60 s drift along the manifold
+    assert!(err < 1e-3, "x1/phi_n error {err}");
+    assert!(dist < 1e-2, "distance to the SSM {dist}");
+    assert!(alg < 1e-7, "constraint residual {alg}");
+    let report = read_csv(&out.join("report.csv"));
+    let e: Vec<f64> = report
+        .iter()
+        .filter(|r| r["kind"] == "rom")
+        .map(|r| num(r, "transient_error"))
+        .collect();
+    assert!(
+        e.windows(2).all(|w| w[1] < w[0]),
+        "error falls with the order: {e:?}"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// Every bundled scene parses and passes the scene checks.
+#[test]
+fn every_zoo_scene_parses() {
+    let dir = ssm_tests::repo_root().join("zoo");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            SceneFile::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            n += 1;
+        }
+    }
+    assert!(n >= 15, "{n} scenes");
+}

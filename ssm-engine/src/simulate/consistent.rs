@@ -220,10 +220,10 @@ pub fn consistent_initial(p: &DaeProblem, t0: f64, guess: &[f64]) -> Result<Cons
     let mut j_mu: Vec<(usize, usize, f64)> = Vec::new();
     for c in 0..nc {
         let col = 2 * n + c;
-        for k in pat.col_ptr()[col]..pat.col_ptr()[col + 1] {
-            let r = pat.row_idx()[k];
-            if r < n && jvals[k] != 0.0 {
-                j_mu.push((r, c, -jvals[k]));
+        let range = pat.col_ptr()[col]..pat.col_ptr()[col + 1];
+        for (&r, &v) in pat.row_idx()[range.clone()].iter().zip(&jvals[range]) {
+            if r < n && v != 0.0 {
+                j_mu.push((r, c, -v));
             }
         }
     }
@@ -297,10 +297,10 @@ fn constraint_jacobian(
         p.jacobian(0.0, &z, &mut vals);
         let pat = p.pattern().as_ref();
         for col in 0..n {
-            for k in pat.col_ptr()[col]..pat.col_ptr()[col + 1] {
-                let r = pat.row_idx()[k];
-                if (2 * n..2 * n + nc).contains(&r) && vals[k] != 0.0 {
-                    rows[r - 2 * n].push((col, vals[k]));
+            let range = pat.col_ptr()[col]..pat.col_ptr()[col + 1];
+            for (&r, &v) in pat.row_idx()[range.clone()].iter().zip(&vals[range]) {
+                if (2 * n..2 * n + nc).contains(&r) && v != 0.0 {
+                    rows[r - 2 * n].push((col, v));
                 }
             }
         }

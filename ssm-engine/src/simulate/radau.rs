@@ -463,14 +463,20 @@ impl<'p, 'a> Radau<'p, 'a> {
         if !self.first {
             let c3q = h / self.h_old;
             let (c1q, c2q) = (C1 * c3q, C2 * c3q);
-            for i in 0..n {
+            let [z1, z2, z3] = &mut z;
+            for (i, ((a, b), c)) in z1
+                .iter_mut()
+                .zip(z2.iter_mut())
+                .zip(z3.iter_mut())
+                .enumerate()
+            {
                 let ext = |cq: f64| {
                     cq * (self.cont[0][i]
                         + (cq - C2M1) * (self.cont[1][i] + (cq - C1M1) * self.cont[2][i]))
                 };
-                z[0][i] = ext(c1q);
-                z[1][i] = ext(c2q);
-                z[2][i] = ext(c3q);
+                *a = ext(c1q);
+                *b = ext(c2q);
+                *c = ext(c3q);
             }
         }
         let mut w = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
@@ -624,8 +630,8 @@ impl Radau<'_, '_> {
             self.err_acc = err_norm.max(1e-2);
             self.first = false;
             self.stats.accepted += 1;
-            for i in 0..n {
-                let (z1, z2, z3) = (z[0][i], z[1][i], z[2][i]);
+            let [za, zb, zc] = &z;
+            for (i, ((&z1, &z2), &z3)) in za.iter().zip(zb).zip(zc).enumerate() {
                 self.y[i] += z3;
                 self.cont[0][i] = (z2 - z3) / C2M1;
                 let ak = (z1 - z2) / C1MC2;
@@ -692,4 +698,66 @@ fn rms(v: &[f64], scal: &[f64]) -> f64 {
 enum Newton {
     Converged([Vec<f64>; 3]),
     Diverged { factor: f64 },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Radau IIA coefficients (Hairer & Wanner II, Table IV.5.6).
+    fn radau_matrix() -> [[f64; 3]; 3] {
+        [
+            [
+                (88.0 - 7.0 * SQ6) / 360.0,
+                (296.0 - 169.0 * SQ6) / 1800.0,
+                (-2.0 + 3.0 * SQ6) / 225.0,
+            ],
+            [
+                (296.0 + 169.0 * SQ6) / 1800.0,
+                (88.0 + 7.0 * SQ6) / 360.0,
+                (-2.0 - 3.0 * SQ6) / 225.0,
+            ],
+            [(16.0 - SQ6) / 36.0, (16.0 + SQ6) / 36.0, 1.0 / 9.0],
+        ]
+    }
+
+    fn mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+        let mut c = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+            }
+        }
+        c
+    }
+
+    /// `T^{-1} A_R^{-1} T = diag(gamma, [[alpha, -beta], [beta, alpha]])`,
+    /// checked as `A_R (T Lambda T^{-1}) = I`.
+    #[test]
+    fn transformation_diagonalizes_the_inverse_radau_matrix() {
+        let (g, a, b) = radau_eigenvalues();
+        let lambda = [[g, 0.0, 0.0], [0.0, a, -b], [0.0, b, a]];
+        let prod = mul(&radau_matrix(), &mul(&mul(&T, &lambda), &TI));
+        let id = mul(&T, &TI);
+        for i in 0..3 {
+            for j in 0..3 {
+                let e = if i == j { 1.0 } else { 0.0 };
+                assert!(
+                    (prod[i][j] - e).abs() < 1e-14,
+                    "A T L T^-1 [{i}][{j}] = {}",
+                    prod[i][j]
+                );
+                assert!(
+                    (id[i][j] - e).abs() < 1e-15,
+                    "T T^-1 [{i}][{j}] = {}",
+                    id[i][j]
+                );
+            }
+        }
+        // the nodes are the last row sums (stiff accuracy: c_3 = 1, b = last row)
+        let ar = radau_matrix();
+        for (row, c) in ar.iter().zip([C1, C2, 1.0]) {
+            assert!((row.iter().sum::<f64>() - c).abs() < 1e-15);
+        }
+    }
 }

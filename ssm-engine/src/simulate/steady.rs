@@ -83,7 +83,11 @@ pub fn steady_state(
             p.omega
         )));
     }
-    if !(opts.delta > 0.0) || opts.max_periods == 0 || opts.samples_per_period < 4 {
+    if opts.delta.is_nan()
+        || opts.delta <= 0.0
+        || opts.max_periods == 0
+        || opts.samples_per_period < 4
+    {
         return Err(SimError::Settings(format!(
             "steady state needs delta > 0, max_periods > 0 and at least 4 samples per period \
              (delta = {}, max_periods = {}, samples = {})",

@@ -102,6 +102,9 @@ const D: [f64; 7] = [
     69997945.0 / 29380423.0,
 ];
 
+/// One term `coeff * prod p_v^k` of coordinate `coord` of the reduced dynamics.
+type RomTerm = (usize, C64, Vec<(usize, i32)>);
+
 /// Integrates the reduced dynamics of `ssm` (truncated at `order`) from `p0`
 /// over `[0, t_end]`, reporting `samples` equally spaced points (including
 /// both ends). Maps are iterated: `t_end` is then a time, and the samples are
@@ -116,7 +119,7 @@ pub fn integrate(
 ) -> Result<Trajectory, RomError> {
     // R has few terms (normal-form style): evaluate them directly instead of
     // forming every monomial of the expansion at each stage
-    let terms: Vec<(usize, C64, Vec<(usize, i32)>)> = ssm
+    let terms: Vec<RomTerm> = ssm
         .r
         .iter()
         .filter(|t| ssm.set.order(t.index) <= order && t.coeff != C64::new(0.0, 0.0))
