@@ -320,6 +320,33 @@ pub fn run(
     let mut validation = None;
     if let Some(vsec) = &sc.validate {
         progress.stage("full-system validation");
+        if let ssm_api::TimeKind::Map { .. } = system.time {
+            let at = scene.text.find("[validate").unwrap_or(0);
+            return Err(scene
+                .invalid(
+                    at..at,
+                    "validate",
+                    format!(
+                        "model '{}' is a map; the full-system integrator needs a flow",
+                        system.name
+                    ),
+                )
+                .into());
+        }
+        if let Some(ss) = &vsec.steady_state {
+            if system.forcing.is_empty() {
+                return Err(scene
+                    .invalid(
+                        ss.epsilon.span(),
+                        "validate.steady_state",
+                        format!(
+                            "model '{}' has no forcing Fext to drive a steady state",
+                            system.name
+                        ),
+                    )
+                    .into());
+            }
+        }
         let compared = match &vsec.outputs {
             Some(names) => {
                 let mut v = Vec::new();
