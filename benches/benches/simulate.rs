@@ -57,7 +57,7 @@ fn simulate(c: &mut Criterion) {
     let outputs = [sys.output("phi_n").unwrap()];
     let omegas: Vec<f64> = (0..21).map(|i| 1.8 + 0.02 * i as f64).collect();
     let opts = SteadyOptions::default();
-    let reference = steady_state_reference(&sys, 0.6, &omegas, &outputs, &opts).unwrap();
+    let reference = steady_state_reference(&sys, 0.6, &omegas, &outputs, &opts, None).unwrap();
     let steps: usize = reference.iter().map(|r| r.stats.accepted).sum();
     let periods: usize = reference.iter().map(|r| r.periods).sum();
     println!(
@@ -68,7 +68,9 @@ fn simulate(c: &mut Criterion) {
             .fold(0.0, f64::max)
     );
     g.bench_function("chain n = 41, Fig. 15 reference, 21 steady states", |b| {
-        b.iter(|| black_box(steady_state_reference(&sys, 0.6, &omegas, &outputs, &opts).unwrap()))
+        b.iter(|| {
+            black_box(steady_state_reference(&sys, 0.6, &omegas, &outputs, &opts, None).unwrap())
+        })
     });
     g.finish();
 }

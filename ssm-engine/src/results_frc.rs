@@ -86,6 +86,9 @@ pub struct FrcRow {
     pub stable: bool,
     /// Polar amplitude `|p|` of the fixed point (all pairs).
     pub rho: f64,
+    /// The fixed point `q_j` of each pair in the rotating frame, `p_j(t) =
+    /// q_j e^{i r_j Omega t}`: the reduced coordinates at `t = 0`.
+    pub q: Vec<C64>,
     /// Largest `|output|` over the response period, per output.
     pub linf: Vec<f64>,
 }
@@ -282,6 +285,7 @@ pub fn frc(
                 branch: p.branch,
                 stable: p.stable,
                 rho: p.rho,
+                q: vec![C64::from_polar(p.rho, p.theta)],
                 linf: linf.clone(),
             });
         }

@@ -215,6 +215,7 @@ pub fn frc_multi(
                     branch: bi + 1,
                     stable: p.stable,
                     rho: p.q.iter().map(|q| q.norm_sqr()).sum::<f64>().sqrt(),
+                    q: p.q.clone(),
                     linf: linf.clone(),
                 });
                 count += 1;

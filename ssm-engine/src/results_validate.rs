@@ -9,7 +9,7 @@ use ssm_api::StateKind;
 
 use crate::plot::{line_plot, Curve, Scale};
 use crate::results_frc::{frc_svg, FrcReport, FrcRow};
-use crate::scene::ValidateSection;
+use crate::scene::{SteadyStart, ValidateSection};
 use crate::simulate::{RadauOptions, SteadyOptions, SteadyState};
 use crate::ssm::SsmExpansion;
 use crate::system::{OutputMap, System};
@@ -140,8 +140,19 @@ pub fn validation(
             samples_per_period: *ss.samples_per_period.get_ref(),
             radau: opts,
         };
+        let starts = match (ss.start(), frc.as_deref()) {
+            (SteadyStart::Ssm, Some(f)) => Some(ssm_starts(ssm, &f.rows, eps, &omegas)),
+            _ => None,
+        };
         let t0 = Instant::now();
-        let points = validate::steady_state_reference(sys, eps, &omegas, coordinates, &sopts)?;
+        let points = validate::steady_state_reference(
+            sys,
+            eps,
+            &omegas,
+            coordinates,
+            &sopts,
+            starts.as_deref(),
+        )?;
         let reference = SteadyReference {
             epsilon: eps,
             points,
@@ -150,6 +161,14 @@ pub fn validation(
         };
         files.push(("steady_state.csv".to_owned(), steady_csv(&reference)));
         let mut js = steady_json(&reference, *ss.delta.get_ref());
+        js["start"] = match &starts {
+            Some(st) => st
+                .iter()
+                .map(|z| if z.is_some() { "ssm" } else { "rest" })
+                .collect::<Vec<_>>()
+                .into(),
+            None => "rest".into(),
+        };
         if let Some(frc) = frc {
             js["frc_error"] = frc_errors(&frc.rows, &reference).into();
             overlay(frc, &reference, coordinates)?;
@@ -163,6 +182,57 @@ pub fn validation(
         transient,
         steady,
     })
+}
+
+/// Starting states from the FRC: at each `omega`, the point `W(p0)` of the
+/// largest stable response (first output) of the highest-order curve at
+/// `epsilon`, `p0` the rotating-frame fixed point interpolated along the
+/// branch; `None` where no stable branch crosses `omega`.
+fn ssm_starts(
+    ssm: &SsmExpansion,
+    rows: &[FrcRow],
+    epsilon: f64,
+    omegas: &[f64],
+) -> Vec<Option<Vec<f64>>> {
+    let same_eps = |r: &FrcRow| (r.epsilon - epsilon).abs() <= 1e-12 * epsilon;
+    let Some(order) = rows.iter().filter(|r| same_eps(r)).map(|r| r.order).max() else {
+        return vec![None; omegas.len()];
+    };
+    let curve: Vec<&FrcRow> = rows
+        .iter()
+        .filter(|r| same_eps(r) && r.order == order)
+        .collect();
+    omegas
+        .iter()
+        .map(|&w| {
+            let best = curve
+                .windows(2)
+                .filter(|c| c[0].branch == c[1].branch && c[0].stable && c[1].stable)
+                .filter(|c| (c[0].omega - w) * (c[1].omega - w) <= 0.0 && c[0].omega != c[1].omega)
+                .map(|c| {
+                    let s = (w - c[0].omega) / (c[1].omega - c[0].omega);
+                    let amp = c[0]
+                        .linf
+                        .first()
+                        .map_or(c[0].rho, |a| a + s * (c[1].linf[0] - a));
+                    let q: Vec<C64> = c[0]
+                        .q
+                        .iter()
+                        .zip(&c[1].q)
+                        .map(|(a, b)| a + (b - a) * s)
+                        .collect();
+                    (amp, q)
+                })
+                .max_by(|a, b| a.0.total_cmp(&b.0))?;
+            let p0: Vec<C64> = best.1.iter().flat_map(|q| [*q, q.conj()]).collect();
+            Some(
+                ssm.w_at(&ssm.set.monomials(&p0, order), order)
+                    .iter()
+                    .map(|c| c.re)
+                    .collect(),
+            )
+        })
+        .collect()
 }
 
 /// `t,<out>_full,<out>_rom,...,rel_error,manifold_distance,algebraic_residual`.

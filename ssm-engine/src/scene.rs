@@ -44,7 +44,7 @@ use toml::Spanned;
 
 mod validate;
 
-pub use validate::{ReportSection, SteadyStateSection, ValidateSection};
+pub use validate::{ReportSection, SteadyStart, SteadyStateSection, ValidateSection};
 
 /// A scene that cannot be used, with the place and the problem.
 #[derive(Debug, thiserror::Error)]

@@ -322,20 +322,24 @@ pub fn transient(
 }
 
 /// Steady-state amplitudes of `outputs` at each frequency of `omegas`,
-/// forcing `epsilon`, by integration from rest until criterion (47) holds;
-/// frequencies run in parallel.
+/// forcing `epsilon`, by integration until criterion (47) holds, from rest or
+/// from `starts[i]` (made consistent) where given; frequencies run in parallel.
 pub fn steady_state_reference(
     sys: &System,
     epsilon: f64,
     omegas: &[f64],
     outputs: &[&OutputMap],
     opts: &SteadyOptions,
+    starts: Option<&[Option<Vec<f64>>]>,
 ) -> Result<Vec<SteadyState>, ValidateError> {
     omegas
         .par_iter()
-        .map(|&omega| {
+        .enumerate()
+        .map(|(i, &omega)| {
             let problem = DaeProblem::new(sys, epsilon, omega);
-            let z0 = vec![0.0; sys.n_states()];
+            let z0 = starts
+                .and_then(|s| s.get(i).cloned().flatten())
+                .unwrap_or_else(|| vec![0.0; sys.n_states()]);
             let start = consistent_initial(&problem, 0.0, &z0)
                 .map_err(|source| ValidateError::SteadyPoint { omega, source })?;
             steady_state(&problem, &start.z, outputs, opts)

@@ -326,3 +326,58 @@ fn every_zoo_scene_parses() {
     }
     assert!(n >= 15, "{n} scenes");
 }
+
+/// Bistable Duffing response (`x'' + 0.02 x' + x + x^3 = 0.01 cos(Omega t)`,
+/// O(7) FRC): integrated from rest the full system settles on the lower
+/// branch; started from the FRC's largest stable response (`start = "ssm"`)
+/// it settles on the upper one. Both agree with the FRC branch they land on
+/// (2 %: the leading-order periodic SSM at eps = 0.01, cf. `frc.rs`).
+#[test]
+fn steady_state_from_the_ssm_prediction_reaches_the_upper_branch() {
+    let run = |start: &str| {
+        let text = format!(
+            "[model]\nplugin = \"duffing\"\n[model.params]\nzeta = 0.01\n[ssm]\norder = 7\n\
+             [outputs]\ncoordinates = [\"x\"]\n[forcing]\nepsilon = [0.01]\nomega_range = [0.95, 1.15]\n\
+             [validate.steady_state]\nepsilon = 0.01\nomega = [1.06]\nstart = \"{start}\"\ndelta = 1e-5\n"
+        );
+        let scene = SceneFile::parse(Path::new("duffing.toml"), text).unwrap();
+        let mut reg = Registry::discover(&[plugin_path("duffing")]).unwrap();
+        let r = job::run(&scene, &mut reg, &Quiet).unwrap();
+        let csv = String::from_utf8(r.outputs.get("steady_state.csv").unwrap().to_vec()).unwrap();
+        let frc = String::from_utf8(r.outputs.get("frc.csv").unwrap().to_vec()).unwrap();
+        let amp: f64 = csv
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .nth(2)
+            .unwrap()
+            .parse()
+            .unwrap();
+        (amp, frc)
+    };
+    let (lower, frc) = run("rest");
+    let (upper, _) = run("ssm");
+    let dir = ssm_tests::tmp_dir("duffing-frc");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("frc.csv"), &frc).unwrap();
+    let rows = read_csv(&dir.join("frc.csv"));
+    let stable: Vec<_> = rows
+        .iter()
+        .filter(|r| r["stable"] == "1")
+        .cloned()
+        .collect();
+    let frc_lower = frc_at(&stable, "7", "x_linf", 1.06, 0.0).unwrap();
+    let frc_upper = frc_at(&stable, "7", "x_linf", 1.06, 1.0).unwrap();
+    eprintln!("Omega = 1.06: from rest {lower:.4} (FRC {frc_lower:.4}), from the SSM {upper:.4} (FRC {frc_upper:.4})");
+    assert!(frc_upper > 4.0 * frc_lower, "the FRC is bistable at 1.06");
+    assert!(
+        (lower - frc_lower).abs() < 0.02 * frc_upper,
+        "{lower} vs {frc_lower}"
+    );
+    assert!(
+        (upper - frc_upper).abs() < 0.02 * frc_upper,
+        "{upper} vs {frc_upper}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -65,9 +65,32 @@ pub struct SteadyStateSection {
     /// Output samples per period for the amplitudes.
     #[serde(default = "default_period_samples")]
     pub samples_per_period: Spanned<usize>,
+    /// Where each integration starts: `"rest"` (the unforced equilibrium,
+    /// default) or `"ssm"` (the point `W(p0)` of the largest stable response
+    /// the FRC predicts at that frequency, which reaches upper branches where
+    /// the response is bistable).
+    #[serde(default)]
+    pub start: Option<Spanned<String>>,
+}
+
+/// Where steady-state integrations start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SteadyStart {
+    /// The unforced equilibrium.
+    Rest,
+    /// The largest stable response of the FRC.
+    Ssm,
 }
 
 impl SteadyStateSection {
+    /// Where the integrations start.
+    pub fn start(&self) -> SteadyStart {
+        match self.start.as_ref().map(|s| s.get_ref().as_str()) {
+            Some("ssm") => SteadyStart::Ssm,
+            _ => SteadyStart::Rest,
+        }
+    }
+
     /// The forcing frequencies.
     pub fn omegas(&self) -> Vec<f64> {
         if let Some(o) = &self.omega {
@@ -228,6 +251,26 @@ impl SceneFile {
                     "give the frequencies: omega = [...] or omega_range = [min, max] with points"
                         .into(),
                 ))
+            }
+        }
+        if let Some(st) = &s.start {
+            match st.get_ref().as_str() {
+                "rest" => {}
+                "ssm" if self.scene.forcing.is_some() => {}
+                "ssm" => {
+                    return Err(self.invalid(
+                        st.span(),
+                        "validate.steady_state.start",
+                        "start = \"ssm\" starts from the FRC's prediction: add [forcing]".into(),
+                    ))
+                }
+                other => {
+                    return Err(self.invalid(
+                        st.span(),
+                        "validate.steady_state.start",
+                        format!("unknown start \"{other}\"; expected \"rest\" or \"ssm\""),
+                    ))
+                }
             }
         }
         let d = *s.delta.get_ref();
