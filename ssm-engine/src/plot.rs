@@ -60,6 +60,20 @@ fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// A tick label: short decimals for moderate values, scientific otherwise
+/// (log axes produce ticks such as 0.30000000000000004).
+fn tick(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 {
+        "0".into()
+    } else if (1e-3..1e5).contains(&a) {
+        let s = format!("{v:.6}");
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
 /// Draws `curves` into an SVG document (800 x 560) with axis names and a legend.
 pub fn line_plot(
     title: &str,
@@ -104,6 +118,8 @@ pub fn line_plot(
                     .configure_mesh()
                     .x_desc(x_label)
                     .y_desc(y_label)
+                    .x_label_formatter(&|v| tick(*v))
+                    .y_label_formatter(&|v| tick(*v))
                     .draw()
                     .map_err(|e| fail(&e))?;
                 for (i, c) in curves.iter().enumerate() {
@@ -125,7 +141,7 @@ pub fn line_plot(
                             c.markers
                                 .iter()
                                 .filter(keep)
-                                .map(|&p| Circle::new(p, 5, BLACK.stroke_width(2))),
+                                .map(|&p| Circle::new(p, 5, color.stroke_width(3))),
                         )
                         .map_err(|e| fail(&e))?;
                 }
