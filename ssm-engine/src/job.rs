@@ -363,12 +363,34 @@ pub fn run(
             }
             None => out_maps.clone(),
         };
+        for (table, key, kind) in [
+            (&vsec.x0, "validate.x0", ssm_api::StateKind::Displacement),
+            (&vsec.v0, "validate.v0", ssm_api::StateKind::Velocity),
+        ] {
+            let Some(t) = table else { continue };
+            for name in t.get_ref().keys() {
+                if !system
+                    .states
+                    .iter()
+                    .any(|s| s.name.as_str() == name && s.kind == kind)
+                {
+                    return Err(scene
+                        .invalid(
+                            t.span(),
+                            key,
+                            format!("model '{}' has no {kind:?} state '{name}'", system.name),
+                        )
+                        .into());
+                }
+            }
+        }
         let vp = results_validate::validation(
             &expansion,
             &system,
             vsec,
             &compared,
             &out_maps,
+            &masters,
             frc_report.as_mut(),
         )?;
         for (name, contents) in &vp.files {
@@ -397,22 +419,10 @@ pub fn run(
             },
             |o| o.get_ref().clone(),
         );
-        let p0 = sc.validate.as_ref().and_then(|v| {
-            let rho0 = v.rho0.as_ref()?.get_ref();
-            let theta0 = v
-                .theta0
-                .as_ref()
-                .map_or_else(|| vec![0.0; rho0.len()], |t| t.get_ref().clone());
-            Some(
-                rho0.iter()
-                    .zip(&theta0)
-                    .flat_map(|(&r, &t)| {
-                        let q = crate::C64::from_polar(r, t);
-                        [q, q.conj()]
-                    })
-                    .collect::<Vec<_>>(),
-            )
-        });
+        let p0 = validation
+            .as_ref()
+            .and_then(|v| v.transient.as_ref())
+            .map(|t| t.p0.clone());
         let compared: Vec<&OutputMap> = match sc.validate.as_ref().and_then(|v| v.outputs.as_ref())
         {
             Some(names) => names

@@ -53,6 +53,9 @@ SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
   theta0 = [0.5]                  # t_end, samples = 1001, order = [ssm] order,
   t_end = 100.0                   # outputs = [outputs] coordinates (multipliers are added),
                                   # rtol = 1e-8, atol = 1e-10
+  # x0 = { x1 = 0.1 }             # instead of rho0: given displacements (kept where the
+  # v0 = { x1_dot = 0.0 }         # constraints allow) and velocities; the reduced model
+                                  # starts from the nearest point of the SSM
   [validate.steady_state]         # periodic response by integration from rest, criterion (47)
   epsilon = 0.6                   # omega = [...] or omega_range = [min, max] with points = 21
   omega_range = [1.8, 2.2]        # delta = 1e-3, max_periods = 2000, samples_per_period = 128
@@ -198,7 +201,16 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            // the chain of causes, each once (typed errors already quote their source)
+            let mut msg = e.to_string();
+            for cause in e.chain().skip(1) {
+                let c = cause.to_string();
+                if !msg.contains(&c) {
+                    msg.push_str(": ");
+                    msg.push_str(&c);
+                }
+            }
+            eprintln!("error: {msg}");
             ExitCode::FAILURE
         }
     }

@@ -10,7 +10,10 @@ use ssm_api::StateKind;
 use crate::plot::{line_plot, Curve, Scale};
 use crate::results_frc::{frc_svg, FrcReport, FrcRow};
 use crate::scene::{SteadyStart, ValidateSection};
-use crate::simulate::{RadauOptions, SteadyOptions, SteadyState};
+use crate::simulate::{
+    consistent_initial_keeping, DaeProblem, RadauOptions, SteadyOptions, SteadyState,
+};
+use crate::spectrum::MasterMode;
 use crate::ssm::SsmExpansion;
 use crate::system::{OutputMap, System};
 use crate::validate::{self, TransientValidation, ValidateError};
@@ -68,6 +71,7 @@ pub fn validation(
     sec: &ValidateSection,
     compared: &[&OutputMap],
     coordinates: &[&OutputMap],
+    masters: &[MasterMode],
     frc: Option<&mut FrcReport>,
 ) -> Result<ValidationProducts, ValidateError> {
     let mut files = Vec::new();
@@ -78,21 +82,51 @@ pub fn validation(
         ..RadauOptions::default()
     };
     let mut transient = None;
-    if let (Some(rho0), Some(t_end)) = (&sec.rho0, &sec.t_end) {
+    if let Some(t_end) = &sec.t_end {
         let order = sec.order.as_ref().map_or(ssm.order, |o| *o.get_ref());
-        let theta0 = sec
-            .theta0
-            .as_ref()
-            .map_or_else(|| vec![0.0; rho0.get_ref().len()], |t| t.get_ref().clone());
-        let p0: Vec<C64> = rho0
-            .get_ref()
-            .iter()
-            .zip(&theta0)
-            .flat_map(|(&r, &t)| {
-                let q = C64::from_polar(r, t);
-                [q, q.conj()]
-            })
-            .collect();
+        let (p0, full_start, start) = match &sec.rho0 {
+            Some(rho0) => {
+                let theta0 = sec
+                    .theta0
+                    .as_ref()
+                    .map_or_else(|| vec![0.0; rho0.get_ref().len()], |t| t.get_ref().clone());
+                let p0: Vec<C64> = rho0
+                    .get_ref()
+                    .iter()
+                    .zip(&theta0)
+                    .flat_map(|(&r, &t)| {
+                        let q = C64::from_polar(r, t);
+                        [q, q.conj()]
+                    })
+                    .collect();
+                let start = json!({"kind": "ssm", "rho0": rho0.get_ref(), "theta0": theta0});
+                (p0, None, start)
+            }
+            None => {
+                let mut z = vec![0.0; sys.n_states()];
+                let mut keep = Vec::new();
+                for (name, value) in sec.given_start() {
+                    if let Some(i) = sys.states.iter().position(|s| s.name.as_str() == name) {
+                        z[i] = value;
+                        if sys.states[i].kind == ssm_api::StateKind::Displacement {
+                            keep.push(i);
+                        }
+                    }
+                }
+                let problem = DaeProblem::new(sys, 0.0, 0.0);
+                let c = consistent_initial_keeping(&problem, 0.0, &z, &keep)?;
+                let (p0, distance) = validate::nearest_on_ssm(ssm, sys, order, masters, &c.z);
+                let start = json!({
+                    "kind": "given",
+                    "values": sec.given_start().into_iter().map(|(k, v)| (k, json!(v))).collect::<serde_json::Map<_, _>>(),
+                    "distance_to_ssm": distance,
+                    "rho0": p0.iter().step_by(2).map(|q| q.norm()).collect::<Vec<_>>(),
+                    "theta0": p0.iter().step_by(2).map(|q| q.arg()).collect::<Vec<_>>(),
+                });
+                // the raw values go to the full system, whose projection is reported
+                (p0, Some((z, keep)), start)
+            }
+        };
         let mut outs: Vec<&OutputMap> = compared.to_vec();
         let multipliers = multiplier_outputs(sys);
         // a few multipliers are added (Appendix G.1); large models list the ones they want
@@ -111,6 +145,9 @@ pub fn validation(
                 samples: *sec.samples.get_ref(),
                 outputs: &outs,
                 radau: opts,
+                full_start: full_start
+                    .as_ref()
+                    .map(|(z, k)| (z.as_slice(), k.as_slice())),
             },
         )?;
         files.push(("validation.csv".to_owned(), transient_csv(&tv, &outs)));
@@ -120,13 +157,7 @@ pub fn validation(
         ));
         summary.insert(
             "transient".into(),
-            transient_json(
-                &tv,
-                &outs,
-                compared.len(),
-                order,
-                (rho0.get_ref(), &theta0, *t_end.get_ref()),
-            ),
+            transient_json(&tv, &outs, compared.len(), order, start, *t_end.get_ref()),
         );
         transient = Some(tv);
     }
@@ -295,7 +326,8 @@ fn transient_json(
     outs: &[&OutputMap],
     n_compared: usize,
     order: usize,
-    (rho0, theta0, t_end): (&[f64], &[f64], f64),
+    start: Value,
+    t_end: f64,
 ) -> Value {
     let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
     let errs: Vec<f64> = (0..outs.len()).map(|k| tv.relative_error(k)).collect();
@@ -306,8 +338,7 @@ fn transient_json(
     };
     json!({
         "order": order,
-        "rho0": rho0,
-        "theta0": theta0,
+        "start": start,
         "t_end": t_end,
         "samples": tv.times.len(),
         "initial_projection": {

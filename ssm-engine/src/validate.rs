@@ -14,8 +14,8 @@ use rayon::prelude::*;
 use ssm_api::StateKind;
 
 use crate::simulate::{
-    consistent_initial, steady_state, Consistent, DaeProblem, Radau, RadauOptions, RadauStats,
-    SimError, SteadyOptions, SteadyState,
+    consistent_initial, consistent_initial_keeping, steady_state, Consistent, DaeProblem, Radau,
+    RadauOptions, RadauStats, SimError, SteadyOptions, SteadyState,
 };
 use crate::ssm::rom::{integrate, RomError};
 use crate::ssm::SsmExpansion;
@@ -47,6 +47,8 @@ pub enum ValidateError {
 /// Full against reduced trajectory from the same point `W(p0)`.
 #[derive(Debug, Clone)]
 pub struct TransientValidation {
+    /// Initial reduced coordinates of the reduced model.
+    pub p0: Vec<C64>,
     /// Sample times.
     pub times: Vec<f64>,
     /// Full-system outputs, `full[k][j]` for output `k` at time `j`.
@@ -220,6 +222,10 @@ pub struct TransientSettings<'a> {
     pub outputs: &'a [&'a OutputMap],
     /// Full-system integrator settings.
     pub radau: RadauOptions,
+    /// The full system's initial state, when it is not `W(p0)` (given
+    /// displacements and velocities; made consistent here, keeping the
+    /// displacements listed in the second entry where the constraints allow).
+    pub full_start: Option<(&'a [f64], &'a [usize])>,
 }
 
 /// Integrates the full system and the reduced model (truncated at `order`)
@@ -237,6 +243,7 @@ pub fn transient(
         samples,
         outputs,
         radau: opts,
+        full_start,
     } = *set;
     let t_rom = Instant::now();
     let rom_tr = integrate(ssm, order, p0, t_end, samples, 1e-10)?;
@@ -263,12 +270,17 @@ pub fn transient(
 
     let t_full = Instant::now();
     let problem = DaeProblem::new(sys, 0.0, 0.0);
-    let w0: Vec<f64> = ssm
-        .w_at(&ssm.set.monomials(p0, order), order)
-        .iter()
-        .map(|c| c.re)
-        .collect();
-    let initial = consistent_initial(&problem, 0.0, &w0)?;
+    let (w0, keep): (Vec<f64>, &[usize]) = match full_start {
+        Some((z, keep)) => (z.to_vec(), keep),
+        None => (
+            ssm.w_at(&ssm.set.monomials(p0, order), order)
+                .iter()
+                .map(|c| c.re)
+                .collect(),
+            &[],
+        ),
+    };
+    let initial = consistent_initial_keeping(&problem, 0.0, &w0, keep)?;
     let mut radau = Radau::new(&problem, 0.0, &initial.z, t_end, opts)?;
     let times = rom_tr.times.clone();
     let mut states: Vec<Vec<f64>> = Vec::with_capacity(times.len());
@@ -309,6 +321,7 @@ pub fn transient(
         .map(|z| crate::simulate::consistent::algebraic_residual(&problem, z).0)
         .collect();
     Ok(TransientValidation {
+        p0: p0.to_vec(),
         times,
         full,
         rom,
@@ -319,6 +332,31 @@ pub fn transient(
         full_s,
         rom_s,
     })
+}
+
+/// The reduced coordinates of the SSM point nearest the consistent state `z`
+/// (physical states): the linear modal projection `p_j = u_j^* B z` refined by
+/// [`manifold_distance`]; returns `p0` and the distance relative to `|z|`.
+pub fn nearest_on_ssm(
+    ssm: &SsmExpansion,
+    sys: &System,
+    order: usize,
+    masters: &[crate::spectrum::MasterMode],
+    z: &[f64],
+) -> (Vec<C64>, f64) {
+    let zc: Vec<C64> = z.iter().map(|&v| C64::new(v, 0.0)).collect();
+    let bz = crate::spectrum::modes::spmv(sys.b.as_ref(), &zc);
+    let guess: Vec<C64> = masters
+        .iter()
+        .flat_map(|m| {
+            let q: C64 = m.left.iter().zip(&bz).map(|(u, b)| u.conj() * b).sum();
+            [q, q.conj()]
+        })
+        .collect();
+    let phys = physical_states(sys);
+    let (d, p) = manifold_distance(ssm, order, &phys, z, &guess);
+    let norm = phys.iter().map(|&i| z[i] * z[i]).sum::<f64>().sqrt();
+    (p, d / norm.max(f64::MIN_POSITIVE))
 }
 
 /// Steady-state amplitudes of `outputs` at each frequency of `omegas`,

@@ -381,3 +381,46 @@ fn steady_state_from_the_ssm_prediction_reaches_the_upper_branch() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A start from given displacements (`x0 = { x1 = 0.1 }`, cubic oscillator):
+/// x1 is kept, x3 = x1^3 follows from the constraint, the reduced model starts
+/// from the nearest point of the SSM (2.5 % away: the fast mode x2 starts at
+/// rest instead of on the manifold) and predicts x1 to 1 %.
+#[test]
+fn transient_from_given_displacements() {
+    let text = format!("{BASE}[validate]\nx0 = {{ x1 = 0.1 }}\nt_end = 50.0\n").replace(
+        "order = 5",
+        "order = 13\nnormalization = { scale = 0.8306 }",
+    );
+    let scene = SceneFile::parse(Path::new("given.toml"), text).unwrap();
+    let mut reg = Registry::discover(&[plugin_path("spatial-oscillator")]).unwrap();
+    let r = job::run(&scene, &mut reg, &Quiet).unwrap();
+    let s: serde_json::Value =
+        serde_json::from_slice(r.outputs.get("summary.json").unwrap()).unwrap();
+    let v = &s["validation"]["transient"];
+    assert_eq!(v["start"]["kind"], "given");
+    let dist = v["start"]["distance_to_ssm"].as_f64().unwrap();
+    assert!(dist > 1e-3 && dist < 0.05, "distance {dist}");
+    let dir = ssm_tests::tmp_dir("given");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("v.csv"), r.outputs.get("validation.csv").unwrap()).unwrap();
+    let rows = read_csv(&dir.join("v.csv"));
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!((num(&rows[0], "x1_full") - 0.1).abs() < 1e-8, "x1 kept");
+    // the constraint x3 = x1^3 holds at the start (and throughout)
+    assert!(rows.iter().all(|r| num(r, "algebraic_residual") < 1e-8));
+    let e1 = v["outputs"][0]["relative_error"].as_f64().unwrap();
+    assert!(e1 < 0.01, "x1 error {e1}");
+    // a state that does not exist is named
+    let bad = format!("{BASE}[validate]\nx0 = {{ x9 = 0.1 }}\nt_end = 1.0\n");
+    let scene = SceneFile::parse(Path::new("bad.toml"), bad).unwrap();
+    match job::run(&scene, &mut reg, &Quiet) {
+        Err(JobError::Scene(SceneError::Invalid {
+            line, key, message, ..
+        })) => {
+            assert_eq!((line, key.as_str()), (11, "validate.x0"));
+            assert!(message.contains("'x9'"), "{message}");
+        }
+        other => panic!("expected a scene error, got {:?}", other.err()),
+    }
+}

@@ -17,6 +17,14 @@ pub struct ValidateSection {
     /// Initial phase of each master pair (default 0).
     #[serde(default)]
     pub theta0: Option<Spanned<Vec<f64>>>,
+    /// Instead of `rho0`: given displacements `{ name = value }` (the others
+    /// zero), projected onto the constraints; the reduced model starts from
+    /// the nearest point of the SSM.
+    #[serde(default)]
+    pub x0: Option<Spanned<toml::Table>>,
+    /// Given velocities `{ name_dot = value }`, with `x0`.
+    #[serde(default)]
+    pub v0: Option<Spanned<toml::Table>>,
     /// Final time of the transient.
     #[serde(default)]
     pub t_end: Option<Spanned<f64>>,
@@ -80,6 +88,26 @@ pub enum SteadyStart {
     Rest,
     /// The largest stable response of the FRC.
     Ssm,
+}
+
+impl ValidateSection {
+    /// Given initial values `(state name, value)` of `x0` and `v0`.
+    pub fn given_start(&self) -> Vec<(String, f64)> {
+        [&self.x0, &self.v0]
+            .into_iter()
+            .flatten()
+            .flat_map(|t| {
+                t.get_ref().iter().map(|(k, v)| {
+                    (
+                        k.clone(),
+                        v.as_float()
+                            .or(v.as_integer().map(|i| i as f64))
+                            .unwrap_or(f64::NAN),
+                    )
+                })
+            })
+            .collect()
+    }
 }
 
 impl SteadyStateSection {
@@ -152,31 +180,57 @@ impl SceneFile {
             return Ok(());
         };
         let pairs = self.scene.ssm.master_pairs.get_ref().len();
-        match (&v.rho0, &v.t_end) {
-            (Some(r), Some(t)) => {
-                if r.get_ref().len() != pairs
-                    || r.get_ref().iter().any(|x| !(x.is_finite() && *x >= 0.0))
-                {
+        let given = v.x0.as_ref().or(v.v0.as_ref());
+        if let (Some(r), Some(_)) = (&v.rho0, given) {
+            return Err(self.invalid(
+                r.span(),
+                "validate.rho0",
+                "give either rho0 (a start on the SSM) or x0/v0 (given displacements and velocities), not both".into(),
+            ));
+        }
+        for (table, key) in [(&v.x0, "validate.x0"), (&v.v0, "validate.v0")] {
+            if let Some(t) = table {
+                if let Some((name, _)) = t.get_ref().iter().find(|(_, val)| {
+                    !val.as_float()
+                        .or(val.as_integer().map(|i| i as f64))
+                        .is_some_and(f64::is_finite)
+                }) {
                     return Err(self.invalid(
-                        r.span(),
-                        "validate.rho0",
-                        format!("give {pairs} non-negative amplitude(s), one per master pair"),
+                        t.span(),
+                        key,
+                        format!("'{name}' must be a finite number"),
                     ));
                 }
+            }
+        }
+        match (v.rho0.as_ref().map(|r| r.span()).or(given.map(|g| g.span())), &v.t_end) {
+            (Some(span), Some(t)) => {
+                if let Some(r) = &v.rho0 {
+                    if r.get_ref().len() != pairs
+                        || r.get_ref().iter().any(|x| !(x.is_finite() && *x >= 0.0))
+                    {
+                        return Err(self.invalid(
+                            r.span(),
+                            "validate.rho0",
+                            format!("give {pairs} non-negative amplitude(s), one per master pair"),
+                        ));
+                    }
+                }
+                let _ = span;
                 self.check_positive(t, "validate.t_end")?;
             }
-            (Some(r), None) => {
+            (Some(span), None) => {
                 return Err(self.invalid(
-                    r.span(),
+                    span,
                     "validate.t_end",
-                    "a transient validation needs t_end with rho0".into(),
+                    "a transient validation needs t_end with rho0 or x0/v0".into(),
                 ))
             }
             (None, Some(t)) => {
                 return Err(self.invalid(
                     t.span(),
                     "validate.rho0",
-                    "a transient validation needs rho0 (the start W(p0) on the SSM) with t_end"
+                    "a transient validation needs rho0 (the start W(p0) on the SSM) or x0/v0 with t_end"
                         .into(),
                 ))
             }

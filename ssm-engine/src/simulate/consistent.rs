@@ -4,7 +4,7 @@
 //! last), a guess `(x0, v0)`, typically a point `W(p0)` of an SSM, is made
 //! consistent in three stages:
 //! 1. positions: damped Newton projection onto `g(x) = 0` with minimal
-//!    correction in the mass metric, `[[M, G^T], [G, 0]] (dx, l) = (0, -g(x))`;
+//!    Euclidean correction, `[[I, G^T], [G, 0]] (dx, l) = (0, -g(x))`;
 //! 2. velocities: `[[M, G^T], [G, 0]] (dv, l) = (0, -G v)`, so `G(x) v = 0`;
 //! 3. multipliers from the acceleration-level constraint, eq. (90) with
 //!    `alpha = beta = 0`: `M a - J_mu mu = f_hat`, `G a = -(d^2/ds^2) g(x + s v)`,
@@ -50,6 +50,19 @@ const MAX_NEWTON: usize = 25;
 /// model with algebraic equations but no mechanical structure must be given
 /// consistent values (checked).
 pub fn consistent_initial(p: &DaeProblem, t0: f64, guess: &[f64]) -> Result<Consistent, SimError> {
+    consistent_initial_keeping(p, t0, guess, &[])
+}
+
+/// [`consistent_initial`] with the displacements `keep` (state indices)
+/// held at their given values where the constraints allow: they weigh `1e6`
+/// in the position metric, so the other coordinates take up the correction
+/// (a displaced slider moves its pendulums along).
+pub fn consistent_initial_keeping(
+    p: &DaeProblem,
+    t0: f64,
+    guess: &[f64],
+    keep: &[usize],
+) -> Result<Consistent, SimError> {
     let sys = p.sys;
     let big_n = p.n();
     if guess.len() != big_n {
@@ -118,6 +131,17 @@ pub fn consistent_initial(p: &DaeProblem, t0: f64, guess: &[f64]) -> Result<Cons
     };
     let x0 = guess[..n].to_vec();
     let mut x = x0.clone();
+    // positions move as little as possible in the model's own coordinates
+    // (Euclidean): the mass metric would put the correction into light
+    // rotational coordinates, beyond where sin/cos linearize
+    let identity = SparseColMat::<usize, f64>::try_new_from_triplets(
+        n,
+        n,
+        &(0..n)
+            .map(|i| Triplet::new(i, i, if keep.contains(&i) { 1e6 } else { 1.0 }))
+            .collect::<Vec<_>>(),
+    )
+    .expect("diagonal pattern");
     // 1. positions
     let mut converged = false;
     let mut g = g_of(&x);
@@ -144,7 +168,7 @@ pub fn consistent_initial(p: &DaeProblem, t0: f64, guess: &[f64]) -> Result<Cons
             .chain(g.iter().map(|v| -v))
             .collect();
         let sol =
-            saddle_solve(&mech.mass, &gm, None, &rhs).ok_or_else(|| SimError::Inconsistent {
+            saddle_solve(&identity, &gm, None, &rhs).ok_or_else(|| SimError::Inconsistent {
                 t: t0,
                 detail: "the constraint Jacobian G(x) is rank deficient at the initial position \
                      (redundant constraints or a singular configuration)"

@@ -55,7 +55,7 @@ pub mod problem;
 pub mod radau;
 pub mod steady;
 
-pub use consistent::{consistent_initial, Consistent};
+pub use consistent::{consistent_initial, consistent_initial_keeping, Consistent};
 pub use problem::DaeProblem;
 pub use radau::{Radau, RadauOptions, RadauStats};
 pub use steady::{steady_state, SteadyOptions, SteadyState};
