@@ -60,6 +60,7 @@ SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
   epsilon = 0.6                   # omega = [...] or omega_range = [min, max] with points = 21
   omega_range = [1.8, 2.2]        # delta = 1e-3, max_periods = 2000, samples_per_period = 128
   # start = \"ssm\"               # from the FRC's largest stable response instead of rest
+  # max_period_multiple = 2       # also accept responses of period 2T (subharmonics)
 
   [report]                        # speed against error, one row per order
   orders = [3, 5, 7]              # default: the odd orders up to [ssm] order

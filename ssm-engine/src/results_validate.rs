@@ -169,6 +169,7 @@ pub fn validation(
             delta: *ss.delta.get_ref(),
             max_periods: *ss.max_periods.get_ref(),
             samples_per_period: *ss.samples_per_period.get_ref(),
+            max_multiple: *ss.max_period_multiple.get_ref(),
             radau: opts,
         };
         let starts = match (ss.start(), frc.as_deref()) {
@@ -365,21 +366,21 @@ fn transient_json(
     })
 }
 
-/// `epsilon,omega,<out>_linf...,periods,change,steps`.
+/// `epsilon,omega,<out>_linf...,periods,period_multiple,change,steps`.
 fn steady_csv(r: &SteadyReference) -> String {
     let mut csv = String::from("epsilon,omega");
     for o in &r.outputs {
         csv.push_str(&format!(",{o}_linf"));
     }
-    csv.push_str(",periods,change,steps\n");
+    csv.push_str(",periods,period_multiple,change,steps\n");
     for p in &r.points {
         csv.push_str(&format!("{:e},{:.10e}", r.epsilon, p.omega));
         for a in &p.amplitudes {
             csv.push_str(&format!(",{a:.10e}"));
         }
         csv.push_str(&format!(
-            ",{},{:.3e},{}\n",
-            p.periods, p.change, p.stats.accepted
+            ",{},{},{:.3e},{}\n",
+            p.periods, p.multiple, p.change, p.stats.accepted
         ));
     }
     csv
@@ -396,6 +397,7 @@ fn steady_json(r: &SteadyReference, delta: f64) -> Value {
         "responses": r.points.iter().map(|p| json!({
             "omega": p.omega,
             "periods": p.periods,
+            "period_multiple": p.multiple,
             "change": p.change,
             "steps": p.stats.accepted,
             "amplitudes": r.outputs.iter().zip(&p.amplitudes)

@@ -304,8 +304,25 @@ pub fn map_spectrum(sys: &System) -> Spectrum {
 /// quadratic terms `x1^2` (in the second equation) and `x1 x2` (in the first)
 /// and with cubic self-stiffening.
 pub fn one_to_two_resonant(zeta: f64) -> System {
-    use ssm_api::{MechanicalSystem, PolyVector, SparseMatrix};
+    one_to_two_forced(zeta, 0.0)
+}
+
+/// [`one_to_two_resonant`] with the load `f cos(Omega t)` on `x2` (scaled by
+/// the forcing amplitude `eps`): near `Omega = 2` the coupling `x1 x2` pumps
+/// `x1` parametrically (a Mathieu tongue for `0.5 |x2| > 4 zeta`), so the
+/// response can be of period `2T` (a frequency divider).
+pub fn one_to_two_forced(zeta: f64, f: f64) -> System {
+    use ssm_api::{Harmonic, MechanicalSystem, PolyVector, SparseMatrix};
     let mut m = MechanicalSystem::new("one-to-two", &["x1", "x2"]);
+    if f != 0.0 {
+        let mut cos = PolyVector::zeros(2, 4);
+        cos.push(1, f, &[]);
+        m.forcing = vec![Harmonic {
+            multiple: 1.0,
+            cos,
+            sin: PolyVector::zeros(2, 4),
+        }];
+    }
     let (w1, w2) = (1.0f64, 2.0f64);
     m.mass = SparseMatrix::diagonal(&[1.0, 1.0]);
     m.damping = SparseMatrix::diagonal(&[2.0 * zeta * w1, 2.0 * zeta * w2]);

@@ -369,3 +369,66 @@ fn bad_inputs_give_errors_naming_time_and_cause() {
         "{e}"
     );
 }
+
+/// A frequency divider: `x1'' + 0.04 x1' + x1 + 0.5 x1 x2 + ... = 0`,
+/// `x2'' + 0.08 x2' + 4 x2 + ... = 0.04 cos(Omega t)` ([`one_to_two_forced`]).
+/// At `Omega = 2` the forced `x2` (amplitude about 0.25) exceeds the Mathieu
+/// threshold `0.5 |x2| > 4 zeta = 0.08` for `x1`, whose response grows from a
+/// small perturbation and locks at `Omega / 2`: a period-2T steady state, which
+/// criterion (47) at period T never accepts. At `Omega = 1.6`, outside the
+/// tongue, `x1` decays and the response has period T.
+#[test]
+fn period_doubled_steady_state_is_found_with_period_multiples() {
+    use ssm_engine::simulate::{steady_state, SimError, SteadyOptions};
+    use ssm_tests::one_to_two_forced;
+    let sys = one_to_two_forced(0.02, 1.0);
+    let outs = [sys.output("x1").unwrap(), sys.output("x2").unwrap()];
+    let mut z0 = vec![0.0; sys.n_states()];
+    z0[0] = 1e-3;
+    let opts = |k: usize| SteadyOptions {
+        delta: 1e-6,
+        max_periods: 3000,
+        max_multiple: k,
+        ..SteadyOptions::default()
+    };
+    let p = DaeProblem::new(&sys, 0.04, 2.0);
+    let s2 = steady_state(&p, &z0, &outs, &opts(2)).expect("period-2T response");
+    eprintln!(
+        "Omega = 2: period {} T after {} periods, |x1| = {:.4}, |x2| = {:.4}",
+        s2.multiple, s2.periods, s2.amplitudes[0], s2.amplitudes[1]
+    );
+    assert_eq!(s2.multiple, 2);
+    assert!(
+        s2.amplitudes[0] > 0.05,
+        "x1 is pumped: {}",
+        s2.amplitudes[0]
+    );
+    // the same run with period T only cannot converge
+    let e = steady_state(
+        &p,
+        &z0,
+        &outs,
+        &SteadyOptions {
+            max_periods: s2.periods + 50,
+            ..opts(1)
+        },
+    )
+    .expect_err("not T-periodic");
+    assert!(matches!(e, SimError::NotPeriodic { .. }), "{e}");
+    assert!(e.to_string().contains("subharmonic"), "{e}");
+    let p = DaeProblem::new(&sys, 0.04, 1.6);
+    let s1 = steady_state(&p, &z0, &outs, &opts(2)).expect("period-T response");
+    eprintln!(
+        "Omega = 1.6: period {} T, |x1| = {:.2e}, |x2| = {:.4}",
+        s1.multiple, s1.amplitudes[0], s1.amplitudes[1]
+    );
+    assert_eq!(s1.multiple, 1);
+    assert!(s1.amplitudes[0] < 1e-6);
+    // x2 on the linear response 0.04 / |4 - Omega^2 + 0.08 i Omega|, up to the cubic term
+    let linear = 0.04 / ((4.0f64 - 2.56).powi(2) + (0.08f64 * 1.6).powi(2)).sqrt();
+    assert!(
+        (s1.amplitudes[1] - linear).abs() < 0.01 * linear,
+        "{} vs {linear}",
+        s1.amplitudes[1]
+    );
+}

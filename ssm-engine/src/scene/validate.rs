@@ -73,6 +73,10 @@ pub struct SteadyStateSection {
     /// Output samples per period for the amplitudes.
     #[serde(default = "default_period_samples")]
     pub samples_per_period: Spanned<usize>,
+    /// Largest multiple of the forcing period accepted as the response period
+    /// (1: criterion (47) as published; 2 or more for subharmonic responses).
+    #[serde(default = "default_multiple")]
+    pub max_period_multiple: Spanned<usize>,
     /// Where each integration starts: `"rest"` (the unforced equilibrium,
     /// default) or `"ssm"` (the point `W(p0)` of the largest stable response
     /// the FRC predicts at that frequency, which reaches upper branches where
@@ -164,6 +168,9 @@ fn default_delta() -> Spanned<f64> {
 }
 fn default_max_periods() -> Spanned<usize> {
     Spanned::new(0..0, 2000)
+}
+fn default_multiple() -> Spanned<usize> {
+    Spanned::new(0..0, 1)
 }
 fn default_period_samples() -> Spanned<usize> {
     Spanned::new(0..0, 128)
@@ -336,6 +343,18 @@ impl SceneFile {
             ));
         }
         self.check_at_least(&s.max_periods, 2, "validate.steady_state.max_periods")?;
+        self.check_at_least(
+            &s.max_period_multiple,
+            1,
+            "validate.steady_state.max_period_multiple",
+        )?;
+        if *s.max_period_multiple.get_ref() > 8 {
+            return Err(self.invalid(
+                s.max_period_multiple.span(),
+                "validate.steady_state.max_period_multiple",
+                "must be at most 8".into(),
+            ));
+        }
         self.check_at_least(
             &s.samples_per_period,
             4,

@@ -112,7 +112,7 @@ pub enum SimError {
         detail: String,
     },
     /// The steady state was not reached.
-    #[error("steady state at Omega = {omega}: not periodic after {periods} forcing periods (t = {t:.3}); last relative change {change:.3e} > delta = {delta:.1e} (criterion (47)); raise max_periods")]
+    #[error("steady state at Omega = {omega}: not periodic after {periods} forcing periods (t = {t:.3}); last relative change over one period {change:.3e} > delta = {delta:.1e} (criterion (47), periods up to {max_multiple} T tried); raise max_periods, or max_period_multiple if the response may be subharmonic")]
     NotPeriodic {
         /// Forcing frequency.
         omega: f64,
@@ -124,6 +124,8 @@ pub enum SimError {
         change: f64,
         /// Threshold.
         delta: f64,
+        /// Largest period multiple tried.
+        max_multiple: usize,
     },
     /// Settings that cannot be used.
     #[error("simulation settings: {0}")]

@@ -4,13 +4,17 @@
 //! After every period `T = 2 pi / Omega` the criterion (47),
 //! `|z(iT) - z((i-1)T)| / |z((i-1)T)| < delta`, is checked on the physical
 //! states (displacements and velocities; multipliers and auxiliaries are
-//! functions of them). The integrator lands exactly on every `iT`. The
+//! functions of them); with `max_multiple = k > 1` also against `z((i-m)T)`,
+//! `m <= k`, the smallest repeating `m` being the period of a subharmonic
+//! response. The integrator lands exactly on every `iT`. The
 //! amplitude of each output is its largest magnitude over the last period,
 //! from the dense output at `samples_per_period` equally spaced times plus the
 //! step ends.
 //!
 //! # References
 //! M. Li, S. Jain, G. Haller, Nonlinear Dyn. 111 (2023), Sect. 5.2.3, eq. (47).
+
+use std::collections::VecDeque;
 
 use ssm_api::StateKind;
 
@@ -26,6 +30,10 @@ pub struct SteadyOptions {
     pub max_periods: usize,
     /// Output samples per period for the amplitudes.
     pub samples_per_period: usize,
+    /// Largest multiple `k` of the forcing period accepted as the response's
+    /// period (1: criterion (47) as published; 2 and more find subharmonic
+    /// responses, such as a frequency divider's).
+    pub max_multiple: usize,
     /// Integrator settings.
     pub radau: RadauOptions,
 }
@@ -36,6 +44,7 @@ impl Default for SteadyOptions {
             delta: 1e-3,
             max_periods: 2000,
             samples_per_period: 128,
+            max_multiple: 1,
             radau: RadauOptions::default(),
         }
     }
@@ -48,9 +57,12 @@ pub struct SteadyState {
     pub omega: f64,
     /// Periods integrated.
     pub periods: usize,
-    /// Final value of criterion (47).
+    /// The response's period in forcing periods (1, or more for a
+    /// subharmonic response).
+    pub multiple: usize,
+    /// Final value of criterion (47) (against the state `multiple` periods back).
     pub change: f64,
-    /// Largest `|output|` over the last period, per output.
+    /// Largest `|output|` over the last response period, per output.
     pub amplitudes: Vec<f64>,
     /// The state at the end of the last period.
     pub z_end: Vec<f64>,
@@ -106,9 +118,12 @@ pub fn steady_state(
             ..opts.radau
         },
     )?;
-    let mut prev: Vec<f64> = phys.iter().map(|&i| z0[i]).collect();
+    // period-end states and per-period amplitudes of the last `max_multiple` periods
+    let mut ends: VecDeque<Vec<f64>> = VecDeque::from([phys.iter().map(|&i| z0[i]).collect()]);
+    let mut period_amps: VecDeque<Vec<f64>> = VecDeque::new();
     let mut zt = vec![0.0; p.n()];
     let mut change = f64::INFINITY;
+    let mut first_pass: Option<usize> = None;
     for i in 1..=opts.max_periods {
         let t_end = period * i as f64;
         let t_start = t_end - period;
@@ -129,26 +144,69 @@ pub fn steady_state(
             record(&mut amps, outputs, radau.z());
         }
         let now: Vec<f64> = phys.iter().map(|&j| radau.z()[j]).collect();
-        let diff = now
-            .iter()
-            .zip(&prev)
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum::<f64>()
-            .sqrt();
-        let base = prev.iter().map(|a| a * a).sum::<f64>().sqrt();
-        prev = now;
-        if base > 0.0 {
-            change = diff / base;
-            if change < opts.delta {
+        period_amps.push_back(amps);
+        if period_amps.len() > opts.max_multiple {
+            period_amps.pop_front();
+        }
+        // criterion (47) against the state one, two, ... periods back: the
+        // smallest multiple that repeats is the response's period. A longer
+        // period is accepted only after it has held for 2 max_multiple more
+        // periods without period T repeating: a decaying free oscillation can
+        // repeat better over 2T than over T before both fall below delta.
+        let mut pass: Option<(usize, f64)> = None;
+        for m in 1..=opts.max_multiple.min(ends.len()) {
+            let back = &ends[ends.len() - m];
+            let diff = now
+                .iter()
+                .zip(back)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt();
+            let base = back.iter().map(|a| a * a).sum::<f64>().sqrt();
+            if base == 0.0 {
+                continue;
+            }
+            let c = diff / base;
+            if m == 1 {
+                change = c;
+            }
+            if c < opts.delta && period_amps.len() >= m {
+                pass = Some((m, c));
+                break;
+            }
+        }
+        match pass {
+            Some((m, c))
+                if m == 1 || first_pass.is_some_and(|f| i >= f + 2 * opts.max_multiple) =>
+            {
+                let amplitudes = (0..outputs.len())
+                    .map(|o| {
+                        period_amps
+                            .iter()
+                            .rev()
+                            .take(m)
+                            .map(|a| a[o])
+                            .fold(0.0, f64::max)
+                    })
+                    .collect();
                 return Ok(SteadyState {
                     omega: p.omega,
                     periods: i,
-                    change,
-                    amplitudes: amps,
+                    multiple: m,
+                    change: c,
+                    amplitudes,
                     z_end: radau.z().to_vec(),
                     stats: radau.stats,
                 });
             }
+            Some(_) => {
+                first_pass.get_or_insert(i);
+            }
+            None => first_pass = None,
+        }
+        ends.push_back(now);
+        if ends.len() > opts.max_multiple {
+            ends.pop_front();
         }
     }
     Err(SimError::NotPeriodic {
@@ -157,6 +215,7 @@ pub fn steady_state(
         t: radau.t(),
         change,
         delta: opts.delta,
+        max_multiple: opts.max_multiple,
     })
 }
 
