@@ -441,6 +441,7 @@ pub fn run(
             forcing: sc.forcing.as_ref(),
             validation: validation.as_ref(),
             p0,
+            rtol: sc.validate.as_ref().map_or(1e-8, |v| *v.rtol.get_ref()),
         };
         let rows = results_report::rows(&system, &inputs)?;
         let full = results_report::full_costs(validation.as_ref());

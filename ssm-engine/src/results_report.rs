@@ -93,6 +93,8 @@ pub struct ReportInputs<'a> {
     pub validation: Option<&'a ValidationProducts>,
     /// Initial reduced coordinates of the validation transient.
     pub p0: Option<Vec<C64>>,
+    /// Relative tolerance of the reduced transients (the full system's).
+    pub rtol: f64,
 }
 
 /// Computes the rows of the report.
@@ -143,7 +145,7 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
         if let (Some(tv), Some(p0)) = (transient, &inp.p0) {
             let t = Instant::now();
             let t_end = *tv.times.last().unwrap_or(&0.0);
-            let tr = integrate(&ssm, order, p0, t_end, tv.times.len(), 1e-10)
+            let tr = integrate(&ssm, order, p0, t_end, tv.times.len(), inp.rtol)
                 .map_err(|source| ReportError::Transient { order, source })?;
             let end = ssm.set.of_order(order).end;
             let mut err = 0.0f64;
