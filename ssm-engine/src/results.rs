@@ -159,6 +159,18 @@ pub fn backbone(
     Ok((csv, svg))
 }
 
+/// The reduced coordinates `p = (q_1, conj q_1, q_2, ...)` with
+/// `q_j = rho_j e^{i theta_j}`.
+pub fn polar_point(rho: &[f64], theta: &[f64]) -> Vec<C64> {
+    rho.iter()
+        .zip(theta)
+        .flat_map(|(&r, &t)| {
+            let q = C64::from_polar(r, t);
+            [q, q.conj()]
+        })
+        .collect()
+}
+
 /// `rom_trajectory.csv`: `t,<output>...,rho_1,theta_1,...` of the reduced
 /// model integrated from `(rho0, theta0)` and lifted by `W`.
 pub fn transient(
@@ -172,16 +184,7 @@ pub fn transient(
         .theta0
         .as_ref()
         .map_or_else(|| vec![0.0; m], |t| t.get_ref().clone());
-    let p0: Vec<C64> = sec
-        .rho0
-        .get_ref()
-        .iter()
-        .zip(&theta0)
-        .flat_map(|(&r, &t)| {
-            let q = C64::from_polar(r, t);
-            [q, q.conj()]
-        })
-        .collect();
+    let p0 = polar_point(sec.rho0.get_ref(), &theta0);
     let tr = integrate(
         ssm,
         order,

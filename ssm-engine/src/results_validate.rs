@@ -90,15 +90,7 @@ pub fn validation(
                     .theta0
                     .as_ref()
                     .map_or_else(|| vec![0.0; rho0.get_ref().len()], |t| t.get_ref().clone());
-                let p0: Vec<C64> = rho0
-                    .get_ref()
-                    .iter()
-                    .zip(&theta0)
-                    .flat_map(|(&r, &t)| {
-                        let q = C64::from_polar(r, t);
-                        [q, q.conj()]
-                    })
-                    .collect();
+                let p0 = crate::results::polar_point(rho0.get_ref(), &theta0);
                 let start = json!({"kind": "ssm", "rho0": rho0.get_ref(), "theta0": theta0});
                 (p0, None, start)
             }
