@@ -64,6 +64,38 @@ pub fn system(crate_name: &str, model: &str, params: &str) -> System {
     System::from_model(plugin.name(), m).expect("model is valid")
 }
 
+/// A registry with the repository's model plugins.
+pub fn registry() -> ssm_engine::plugin::Registry {
+    ssm_engine::plugin::Registry::discover(&[
+        plugin_path("spatial-oscillator"),
+        plugin_path("oscillator-chain"),
+        plugin_path("duffing"),
+        plugin_path("pendulum"),
+    ])
+    .expect("plugins load")
+}
+
+/// Runs the scene text `text` (as `test.toml`) with [`registry`].
+pub fn run_scene_text(text: &str) -> Result<ssm_engine::job::JobResult, ssm_engine::job::JobError> {
+    let scene =
+        ssm_engine::scene::SceneFile::parse(std::path::Path::new("test.toml"), text.to_owned())?;
+    ssm_engine::job::run(&scene, &mut registry(), &ssm_engine::job::Quiet)
+}
+
+/// The line and `key: message` of the scene error `text` must produce.
+pub fn scene_error(text: &str) -> (usize, String) {
+    use ssm_engine::job::JobError;
+    use ssm_engine::scene::SceneError;
+    match run_scene_text(text) {
+        Err(JobError::Scene(SceneError::Parse { line, message, .. })) => (line, message),
+        Err(JobError::Scene(SceneError::Invalid {
+            line, key, message, ..
+        })) => (line, format!("{key}: {message}")),
+        Err(e) => panic!("expected a scene error, got: {e}"),
+        Ok(_) => panic!("expected a scene error, the scene ran"),
+    }
+}
+
 /// A fresh scratch directory for test outputs.
 pub fn tmp_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("ssm-test-{}-{name}", std::process::id()));

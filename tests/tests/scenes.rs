@@ -1,36 +1,13 @@
 //! Scenes end to end: the bundled zoo scenes through the real binary, and every
 //! kind of bad input with its error naming the place.
 
-use std::path::Path;
 use std::process::Command;
 
-use ssm_engine::job::{self, JobError, Quiet};
-use ssm_engine::plugin::Registry;
-use ssm_engine::scene::{SceneError, SceneFile};
-use ssm_tests::{engine_binary, plugin_path, repo_root, run_zoo, run_zoo_in, tmp_dir};
-
-fn registry() -> Registry {
-    Registry::discover(&[
-        plugin_path("spatial-oscillator"),
-        plugin_path("oscillator-chain"),
-    ])
-    .unwrap()
-}
+use ssm_engine::job::{self, JobError};
+use ssm_tests::{engine_binary, plugin_path, repo_root, run_zoo, run_zoo_in, scene_error, tmp_dir};
 
 fn run_text(text: &str) -> Result<job::JobResult, JobError> {
-    let scene = SceneFile::parse(Path::new("test.toml"), text.to_owned())?;
-    job::run(&scene, &mut registry(), &Quiet)
-}
-
-fn scene_error(text: &str) -> (usize, String) {
-    match run_text(text) {
-        Err(JobError::Scene(SceneError::Parse { line, message, .. })) => (line, message),
-        Err(JobError::Scene(SceneError::Invalid {
-            line, key, message, ..
-        })) => (line, format!("{key}: {message}")),
-        Err(e) => panic!("expected a scene error, got: {e}"),
-        Ok(_) => panic!("expected a scene error, the scene ran"),
-    }
+    ssm_tests::run_scene_text(text)
 }
 
 const GOOD: &str = "[model]\nplugin = \"spatial-oscillator\"\n[model.params]\nconstraint = \"cubic\"\n[ssm]\nmaster_pairs = [1]\norder = 13\n[outputs]\ncoordinates = [\"x1\"]\n";

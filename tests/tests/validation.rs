@@ -7,7 +7,7 @@ use std::path::Path;
 use ssm_engine::job::{self, JobError, Quiet};
 use ssm_engine::plugin::Registry;
 use ssm_engine::scene::{SceneError, SceneFile};
-use ssm_tests::{plugin_path, run_zoo_in, run_zoo_with};
+use ssm_tests::{plugin_path, run_zoo_in, run_zoo_with, scene_error};
 
 /// Rows of a CSV file as maps from the header names.
 fn read_csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
@@ -222,25 +222,6 @@ fn oscillator_report_and_validation_files() {
         .unwrap()
         .contains("x1 full system"));
     let _ = std::fs::remove_dir_all(&out);
-}
-
-fn scene_error(text: &str) -> (usize, String) {
-    let scene = match SceneFile::parse(Path::new("test.toml"), text.to_owned()) {
-        Ok(s) => s,
-        Err(SceneError::Invalid {
-            line, key, message, ..
-        }) => return (line, format!("{key}: {message}")),
-        Err(SceneError::Parse { line, message, .. }) => return (line, message),
-        Err(e) => panic!("unexpected {e}"),
-    };
-    let mut reg = Registry::discover(&[plugin_path("spatial-oscillator")]).unwrap();
-    match job::run(&scene, &mut reg, &Quiet) {
-        Err(JobError::Scene(SceneError::Invalid {
-            line, key, message, ..
-        })) => (line, format!("{key}: {message}")),
-        Err(e) => panic!("expected a scene error, got: {e}"),
-        Ok(_) => panic!("expected a scene error, the scene ran"),
-    }
 }
 
 const BASE: &str = "[model]\nplugin = \"spatial-oscillator\"\n[model.params]\nconstraint = \"cubic\"\n[ssm]\nmaster_pairs = [1]\norder = 5\n[outputs]\ncoordinates = [\"x1\"]\n";
