@@ -23,32 +23,33 @@ use std::rc::Rc;
 use abi_stable::std_types::RVec;
 use abi_stable::StableAbi;
 
-/// Operation of one [`ExprNode`].
-#[repr(u8)]
-#[derive(StableAbi, Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ExprOp {
-    /// The constant `value`.
-    Const,
-    /// State number `a`.
-    Var,
-    /// `node a + node b`.
-    Add,
-    /// `node a * node b`.
-    Mul,
-    /// `(node a)^value`, `value` an integer (negative allowed).
-    Powi,
-    /// `sin(node a)`.
-    Sin,
-    /// `cos(node a)`.
-    Cos,
-    /// `exp(node a)`.
-    Exp,
-    /// `ln(node a)` (natural logarithm).
-    Ln,
-    /// `sqrt(node a)`.
-    Sqrt,
-    /// `1 / node a`.
-    Recip,
+growable_tag! {
+    /// Operation of one [`ExprNode`] (a transparent `u8`: later versions may
+    /// add functions; an engine refuses one it does not know with a typed error).
+    ExprOp {
+        /// The constant `value`.
+        Const = 0,
+        /// State number `a`.
+        Var = 1,
+        /// `node a + node b`.
+        Add = 2,
+        /// `node a * node b`.
+        Mul = 3,
+        /// `(node a)^value`, `value` an integer (negative allowed).
+        Powi = 4,
+        /// `sin(node a)`.
+        Sin = 5,
+        /// `cos(node a)`.
+        Cos = 6,
+        /// `exp(node a)`.
+        Exp = 7,
+        /// `ln(node a)` (natural logarithm).
+        Ln = 8,
+        /// `sqrt(node a)`.
+        Sqrt = 9,
+        /// `1 / node a`.
+        Recip = 10,
+    }
 }
 
 impl ExprOp {
@@ -66,6 +67,7 @@ impl ExprOp {
             Self::Ln => "ln",
             Self::Sqrt => "sqrt",
             Self::Recip => "recip",
+            _ => "unknown",
         }
     }
 }
@@ -310,7 +312,7 @@ impl Expr {
             Node::Powi(a, n) => a.eval(z).powi(*n),
             Node::Unary(op, a) => {
                 let x = a.eval(z);
-                match op {
+                match *op {
                     ExprOp::Sin => x.sin(),
                     ExprOp::Cos => x.cos(),
                     ExprOp::Exp => x.exp(),
@@ -335,7 +337,7 @@ impl Expr {
                 if da.as_const() == Some(0.0) {
                     return da;
                 }
-                let outer = match op {
+                let outer = match *op {
                     ExprOp::Sin => a.clone().cos(),
                     ExprOp::Cos => -a.clone().sin(),
                     ExprOp::Exp => self.clone(),

@@ -23,33 +23,52 @@
 //!   states, with an optional equilibrium to expand about. The engine turns them
 //!   into a polynomial DAE with auxiliary states (`u1 = sin phi`,
 //!   `u2 = 1 - cos phi`) and knows which states are auxiliary.
-//! - **Reducer**: a further constructor of the root module. The root module is a
-//!   prefix type whose fields are only ever appended, so such entry points are
-//!   added as new trailing fields in later API versions without breaking plugins
-//!   built against this one; an engine that finds a plugin without them treats
-//!   the capability as absent.
+//! - **Reducer** ([`ReducerInfo`], [`ReducerInput`], [`Reduced`]): turns sampled
+//!   [`Signals`] and/or a [`Model`] into a reduced model (flow or map), with an
+//!   optional [`Lift`] back to the full coordinates and named [`Diagnostic`]s.
+//!   A plugin offers reducers through the `reducers:`/`reduce:` arguments of
+//!   [`declare_plugin!`].
 //!
-//! ## Versioning
-//! The API version is this crate's package version ([`API_VERSION`]). The engine
-//! refuses a plugin built against an incompatible version (different major, or for
-//! 0.x a different minor) and names both versions; abi_stable additionally checks
-//! the full type layout of the root module at load time.
+//! ## Versioning and growth
+//! The API version is this crate's package version ([`API_VERSION`]). 1.0 is
+//! the model layout (root module up to `build_model`); 1.1 appended the reducer
+//! entry. The rules that let the API grow without breaking plugins:
+//! - the root module ([`SsmPlugin`]) only grows by appended fields, each
+//!   optional (`missing_field(option)`): an engine loads every plugin built
+//!   against an older 1.x API and sees a missing entry as an absent capability;
+//!   abi_stable checks only the major version for 1.x and the full layout of
+//!   the fields both sides know;
+//! - tags that will grow ([`ErrorKind`], [`StateKind`], [`MotionKind`],
+//!   [`InputNeeds`]) are transparent `u8` values with named constants, not
+//!   enums, so new values change no layout;
+//! - a plugin built against another major version is refused at load with
+//!   both versions named.
 
+#[macro_use]
+mod tag;
+
+mod error;
 mod expr;
+mod listing;
 mod mechanical;
 mod model;
 mod params;
 mod plugin;
+mod reducer;
+pub mod v1_0;
 
+pub use error::{guard, ErrorKind, PluginError};
 pub use expr::{Expr, ExprNode, ExprOp, ExprTerm, ExprVector};
+pub use listing::{select_model, ModelInfo, ParamInfo};
 pub use mechanical::{BuildError, Constraints, Equilibrium, MechanicalSystem};
 pub use model::{
     Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyTerm, PolyVector, SparseMatrix,
     StateInfo, StateKind, TimeKind, Triplet, VarPower, Weight,
 };
 pub use params::{ParamKind, ParamSpec, ParamValue, Params};
-pub use plugin::{
-    guard, ErrorKind, ModelInfo, ParamInfo, PluginError, SsmPlugin, SsmPluginRef, API_VERSION,
+pub use plugin::{SsmPlugin, SsmPluginRef, API_VERSION};
+pub use reducer::{
+    Diagnostic, InputNeeds, Lift, Reduced, ReducerInfo, ReducerInput, Signals, Trajectory,
 };
 
 /// Re-exports used by [`declare_plugin!`]; not part of the documented API.

@@ -432,11 +432,9 @@ impl MechanicalSystem {
             states,
             outputs,
             time: TimeKind::Flow,
-            mechanical: abi_stable::std_types::ROption::RSome(MechanicalInfo {
-                n_dof: n as u32,
-                n_constraints: nc as u32,
-                mass: self.mass,
-            }),
+            mechanical: abi_stable::std_types::ROption::RSome(MechanicalInfo::canonical(
+                n, nc, self.mass,
+            )),
             expressions,
             equilibrium,
         })

@@ -166,34 +166,34 @@ pub struct Harmonic {
     pub sin: PolyVector,
 }
 
-/// What a state variable is, for reducers and reports that need it.
-#[repr(u8)]
-#[derive(StableAbi, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StateKind {
-    /// A generalized displacement `x_i`.
-    Displacement,
-    /// A generalized velocity `x_i'`.
-    Velocity,
-    /// A Lagrange multiplier of a configuration constraint.
-    Multiplier,
-    /// An auxiliary variable introduced by a recast of non-polynomial terms.
-    Auxiliary,
-    /// Anything else (e.g. a state of a map).
-    Other,
+growable_tag! {
+    /// What a state variable is, for reducers and reports that need it.
+    StateKind {
+        /// A generalized displacement `x_i`.
+        Displacement = 0,
+        /// A generalized velocity `x_i'`.
+        Velocity = 1,
+        /// A Lagrange multiplier of a configuration constraint.
+        Multiplier = 2,
+        /// An auxiliary variable introduced by a recast of non-polynomial terms.
+        Auxiliary = 3,
+        /// Anything else (e.g. a state of a map).
+        Other = 4,
+    }
 }
 
-/// Physical nature of a displacement (or of its velocity).
-#[repr(u8)]
-#[derive(StableAbi, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MotionKind {
-    /// A translation.
-    Translational,
-    /// A rotation (angle).
-    Rotational,
-    /// A flexible (elastic) coordinate.
-    Flexible,
-    /// Not specified.
-    Unspecified,
+growable_tag! {
+    /// Physical nature of a displacement (or of its velocity).
+    MotionKind {
+        /// A translation.
+        Translational = 0,
+        /// A rotation (angle).
+        Rotational = 1,
+        /// A flexible (elastic) coordinate.
+        Flexible = 2,
+        /// Not specified.
+        Unspecified = 3,
+    }
 }
 
 /// Name and tags of one state variable.
@@ -241,8 +241,14 @@ pub enum TimeKind {
     },
 }
 
-/// Structure kept from a mechanical model built by [`crate::MechanicalSystem`]:
-/// `z = (x, x', mu)` with `n_dof` displacements and `n_constraints` multipliers.
+/// Structure kept from a mechanical model: which states are the
+/// displacements `x`, velocities `x'` and multipliers `mu`, and which rows of
+/// the model are the configuration constraints `0 = g(x)`.
+///
+/// The layout is explicit, so a model assembled by hand in any order is read
+/// correctly; the engine checks it against the state tags ([`StateKind`]).
+/// [`crate::MechanicalSystem`] writes the canonical layout `z = (x, x', mu)`
+/// with the constraints in rows `2n .. 2n + n_c`.
 #[repr(C)]
 #[derive(StableAbi, Clone, Debug, PartialEq)]
 pub struct MechanicalInfo {
@@ -252,6 +258,31 @@ pub struct MechanicalInfo {
     pub n_constraints: u32,
     /// Mass matrix `M` (`n x n`), for mass normalization of modes.
     pub mass: SparseMatrix,
+    /// State index of each displacement `x_i` (`n` entries).
+    pub displacements: RVec<u32>,
+    /// State index of each velocity `x_i'` (`n` entries, in the order of `displacements`).
+    pub velocities: RVec<u32>,
+    /// State index of each multiplier `mu_j` (`n_c` entries).
+    pub multipliers: RVec<u32>,
+    /// Row of the model holding constraint `g_j(x) = 0` (`n_c` entries, in the
+    /// order of `multipliers`).
+    pub constraint_rows: RVec<u32>,
+}
+
+impl MechanicalInfo {
+    /// The canonical layout `z = (x, x', mu)`, constraints in rows `2n .. 2n + n_c`.
+    pub fn canonical(n_dof: usize, n_constraints: usize, mass: SparseMatrix) -> Self {
+        let range = |lo: usize, len: usize| (lo..lo + len).map(|k| k as u32).collect();
+        Self {
+            n_dof: n_dof as u32,
+            n_constraints: n_constraints as u32,
+            mass,
+            displacements: range(0, n_dof),
+            velocities: range(n_dof, n_dof),
+            multipliers: range(2 * n_dof, n_constraints),
+            constraint_rows: range(2 * n_dof, n_constraints),
+        }
+    }
 }
 
 /// A model in first-order form, as it crosses the plugin boundary.

@@ -3,7 +3,8 @@
 
 use std::collections::BTreeMap;
 
-use crate::plugin::{ErrorKind, ParamInfo, PluginError};
+use crate::error::{ErrorKind, PluginError};
+use crate::listing::ParamInfo;
 
 /// Type (and for strings, the allowed values) of a parameter.
 #[derive(Clone, Copy, Debug, PartialEq)]

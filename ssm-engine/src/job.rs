@@ -7,13 +7,16 @@ use std::time::Instant;
 
 use serde_json::json;
 
-use crate::plugin::{PluginLoadError, Registry};
+use toml::Spanned;
+
+use crate::plugin::{Plugin, PluginLoadError, Registry};
+use crate::reduce::{self, Reduction, SignalsError};
 use crate::report::{spectrum_csv, OutputError, OutputSet};
 use crate::results::{self, ResultError};
 use crate::results_frc::{self, FrcError};
 use crate::results_report::{self, ReportError, ReportInputs};
 use crate::results_validate;
-use crate::scene::{SceneError, SceneFile, SpectrumMethod};
+use crate::scene::{ModelSection, SceneError, SceneFile, SpectrumMethod};
 use crate::spectrum::{self, MasterMode, Method, Spectrum, SpectrumError, SpectrumOptions};
 use crate::ssm::{self, Dynamics, SsmError, SsmExpansion, SsmOptions};
 use crate::system::{ModelError, OutputMap, System};
@@ -28,6 +31,9 @@ pub enum JobError {
     /// A plugin could not be loaded, or returned an error or panicked.
     #[error(transparent)]
     Plugin(#[from] PluginLoadError),
+    /// A `[data]` file cannot be used.
+    #[error("data: {0}")]
+    Signals(#[from] SignalsError),
     /// The plugin's model is inconsistent.
     #[error(transparent)]
     Model(#[from] ModelError),
@@ -84,49 +90,198 @@ pub struct JobResult {
     pub outputs: OutputSet,
 }
 
-/// Loads and validates the model a scene names.
-pub fn build_system(scene: &SceneFile, registry: &mut Registry) -> Result<System, JobError> {
-    let m = &scene.scene.model;
-    let plugin = registry.resolve(m.plugin.get_ref()).map_err(|e| match e {
+/// Builds the model of `[model]` with its plugin (as the plugin gives it).
+fn build_model(
+    scene: &SceneFile,
+    m: &ModelSection,
+    registry: &mut Registry,
+) -> Result<(String, ssm_api::Model), JobError> {
+    let plugin = resolve(scene, registry, &m.plugin, "model.plugin")?;
+    let name = m.name.as_ref().map_or("", |n| n.get_ref().as_str());
+    let params = params_toml(scene, &m.params, "model.params")?;
+    let model = plugin
+        .build_model(name, &params)
+        .map_err(|e| plugin_error(scene, e, "model.params"))?;
+    Ok((plugin.name().to_owned(), model))
+}
+
+fn resolve(
+    scene: &SceneFile,
+    registry: &mut Registry,
+    name: &Spanned<String>,
+    key: &str,
+) -> Result<Plugin, JobError> {
+    registry.resolve(name.get_ref()).map_err(|e| match e {
         PluginLoadError::NotFound { .. } => {
-            JobError::Scene(scene.invalid(m.plugin.span(), "model.plugin", e.to_string()))
+            JobError::Scene(scene.invalid(name.span(), key, e.to_string()))
         }
         other => JobError::Plugin(other),
-    })?;
-    let name = m.name.as_ref().map_or("", |n| n.get_ref().as_str());
-    let params = toml::to_string(m.params.get_ref()).map_err(|e| {
+    })
+}
+
+fn params_toml(
+    scene: &SceneFile,
+    table: &Spanned<toml::Table>,
+    key: &str,
+) -> Result<String, JobError> {
+    Ok(toml::to_string(table.get_ref()).map_err(|e| {
         scene.invalid(
-            m.params.span(),
-            "model.params",
+            table.span(),
+            key,
             format!("cannot pass the parameter table to the plugin: {e}"),
         )
-    })?;
-    let model = plugin.build_model(name, &params).map_err(|e| match e {
+    })?)
+}
+
+/// A plugin's [`ssm_api::ErrorKind::InvalidParameter`] becomes a scene error
+/// at the parameter's line in the `[table]` it came from.
+fn plugin_error(scene: &SceneFile, e: PluginLoadError, table: &str) -> JobError {
+    match e {
         PluginLoadError::Plugin { plugin, error }
             if error.kind == ssm_api::ErrorKind::InvalidParameter =>
         {
-            let line = param_line(&scene.text, error.context.as_str());
+            let line = param_line(&scene.text, table, error.context.as_str());
             JobError::Scene(SceneError::Invalid {
                 path: scene.path.clone(),
                 line,
-                key: format!("model.params.{}", error.context),
+                key: format!("{table}.{}", error.context),
                 message: format!("plugin '{plugin}': {}", error.message),
             })
         }
         other => JobError::Plugin(other),
-    })?;
-    Ok(System::from_model(plugin.name(), model)?)
+    }
 }
 
-/// Line of `key = ...` inside the `[model.params]` table (the table header's
-/// line when the key is not found there).
-fn param_line(text: &str, key: &str) -> usize {
+/// The model the analyses run on: the plugin's model of `[model]`, or the
+/// model the reducer of `[reduce]` makes from it and/or the `[data]` signals;
+/// validated into a [`System`].
+pub fn obtain_model(
+    scene: &SceneFile,
+    registry: &mut Registry,
+) -> Result<(System, Option<Reduction>), JobError> {
+    let sc = &scene.scene;
+    let full = sc
+        .model
+        .as_ref()
+        .map(|m| build_model(scene, m, registry))
+        .transpose()?;
+    let Some(red) = &sc.reduce else {
+        let (plugin, model) = full.ok_or_else(|| {
+            scene.invalid(0..0, "model", "the scene has no [model] section".into())
+        })?;
+        return Ok((System::from_model(&plugin, model)?, None));
+    };
+    let plugin = resolve(scene, registry, &red.plugin, "reduce.plugin")?;
+    let listed = match plugin.reducers() {
+        None => {
+            return Err(scene
+                .invalid(
+                    red.plugin.span(),
+                    "reduce.plugin",
+                    PluginLoadError::NoReducers {
+                        plugin: plugin.name().to_owned(),
+                    }
+                    .to_string(),
+                )
+                .into())
+        }
+        Some(list) => list?,
+    };
+    let wanted = red.reducer.get_ref();
+    let info = listed
+        .iter()
+        .find(|r| r.name.as_str() == wanted)
+        .ok_or_else(|| {
+            let names: Vec<&str> = listed.iter().map(|r| r.name.as_str()).collect();
+            scene.invalid(
+                red.reducer.span(),
+                "reduce.reducer",
+                format!(
+                    "plugin '{}' has no reducer '{wanted}'; it offers: {}",
+                    plugin.name(),
+                    if names.is_empty() {
+                        "none".to_owned()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            )
+        })?;
+    if info.needs.model() && full.is_none() {
+        return Err(scene
+            .invalid(
+                red.reducer.span(),
+                "reduce.reducer",
+                format!("reducer '{wanted}' needs a model: add a [model] section"),
+            )
+            .into());
+    }
+    if info.needs.signals() && sc.data.is_none() {
+        return Err(scene
+            .invalid(
+                red.reducer.span(),
+                "reduce.reducer",
+                format!("reducer '{wanted}' needs sampled signals: add a [data] section"),
+            )
+            .into());
+    }
+    let signals = sc
+        .data
+        .as_ref()
+        .map(|d| {
+            let files: Vec<_> = d
+                .files
+                .get_ref()
+                .iter()
+                .map(|f| scene.relative(f))
+                .collect();
+            reduce::read_signals(&files, d.columns.as_ref().map(|c| c.get_ref().as_slice()))
+        })
+        .transpose()?;
+    let n_trajectories = signals.as_ref().map_or(0, |s| s.trajectories.len());
+    let (full_plugin, full_model) = full.unzip();
+    let input = ssm_api::ReducerInput {
+        model: full_model.into(),
+        signals: signals.into(),
+    };
+    let params = params_toml(scene, &red.params, "reduce.params")?;
+    let reduced = plugin
+        .reduce(wanted, &params, &input)
+        .map_err(|e| plugin_error(scene, e, "reduce.params"))?;
+    let mut model = reduced.model;
+    let lift = reduced.lift.into_option();
+    let lifted_outputs = match (&lift, input.model.as_ref().into_option()) {
+        (Some(l), Some(full)) => reduce::lift_outputs(&mut model, full, l),
+        _ => Vec::new(),
+    };
+    let origin = match full_plugin {
+        Some(p) => format!("{} via {}", p, plugin.name()),
+        None => plugin.name().to_owned(),
+    };
+    let system = System::from_model(&origin, model)?;
+    let reduction = Reduction {
+        plugin: plugin.name().to_owned(),
+        reducer: wanted.clone(),
+        n_input_states: input.model.as_ref().into_option().map(|m| m.n_states()),
+        n_trajectories,
+        n_reduced_states: system.n_states(),
+        lift,
+        diagnostics: reduced.diagnostics.into_iter().collect(),
+        lifted_outputs,
+    };
+    Ok((system, Some(reduction)))
+}
+
+/// Line of `key = ...` inside the `[table]` (the table header's line when the
+/// key is not found there).
+fn param_line(text: &str, table: &str, key: &str) -> usize {
+    let header_text = format!("[{table}]");
     let mut in_params = false;
     let mut header = 0;
     for (i, line) in text.lines().enumerate() {
         let t = line.trim();
         if t.starts_with('[') {
-            in_params = t == "[model.params]";
+            in_params = t == header_text;
             if in_params {
                 header = i + 1;
             }
@@ -151,7 +306,7 @@ pub fn run(
 ) -> Result<JobResult, JobError> {
     let t0 = Instant::now();
     progress.stage("building model");
-    let system = build_system(scene, registry)?;
+    let (system, reduction) = obtain_model(scene, registry)?;
     let sc = &scene.scene;
     let mut warnings = Vec::new();
     for name in sc.outputs.coordinates.get_ref() {
@@ -249,6 +404,7 @@ pub fn run(
         Dynamics::Flow => spectrum.eigenvalues.clone(),
         Dynamics::Map { period } => spectrum::multipliers_to_rates(&spectrum.eigenvalues, period),
     };
+    let t_res = Instant::now();
     let res = spectrum::check_resonances(
         &rates,
         &master_indices,
@@ -256,6 +412,7 @@ pub fn run(
         *sc.ssm.resonance_tol.get_ref(),
         spectrum.complete,
     );
+    let resonance_s = t_res.elapsed().as_secs_f64();
     warnings.extend(res.warnings.iter().cloned());
     if !spectrum.complete {
         warnings.push(format!(
@@ -470,6 +627,7 @@ pub fn run(
             "n_states": system.n_states(),
             "n_finite_modes": n_finite,
         },
+        "reduction": reduction.as_ref().map(reduction_json),
         "recast": system.recast.as_ref().map(|r| json!({
             "n_original_states": r.n_original,
             "equilibrium_shifted": r.equilibrium.iter().any(|&v| v != 0.0),
@@ -503,6 +661,7 @@ pub fn run(
         "warnings": warnings,
         "timing_s": {
             "spectrum": spectrum_s,
+            "resonance_check": resonance_s,
             "ssm": ssm_s,
             "ssm_composition": expansion.timing.compose_s,
             "ssm_factorization": expansion.timing.linear.factor_s,
@@ -530,6 +689,36 @@ pub fn run(
         ssm: expansion,
         warnings,
         outputs,
+    })
+}
+
+fn reduction_json(r: &Reduction) -> serde_json::Value {
+    let diagnostics: serde_json::Map<String, serde_json::Value> = r
+        .diagnostics
+        .iter()
+        .map(|d| {
+            let v = match (d.values.len(), d.text.is_empty()) {
+                (_, false) if d.values.is_empty() => json!(d.text.as_str()),
+                (1, true) => json!(d.values[0]),
+                (_, true) => json!(d.values.as_slice()),
+                _ => json!({"values": d.values.as_slice(), "text": d.text.as_str()}),
+            };
+            (d.name.to_string(), v)
+        })
+        .collect();
+    json!({
+        "plugin": r.plugin,
+        "reducer": r.reducer,
+        "n_input_states": r.n_input_states,
+        "n_trajectories": r.n_trajectories,
+        "n_reduced_states": r.n_reduced_states,
+        "lift": r.lift.as_ref().map(|l| json!({
+            "n_full_states": l.basis.nrows,
+            "n_reduced_states": l.basis.ncols,
+            "offset": !l.offset.is_empty(),
+        })),
+        "lifted_outputs": r.lifted_outputs,
+        "diagnostics": diagnostics,
     })
 }
 

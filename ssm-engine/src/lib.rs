@@ -7,9 +7,11 @@
 //! Modules, one concern each:
 //! - [`plugin`]: finding and loading plugins, ABI/version checks;
 //! - [`scene`]: the TOML scene format, validated with line numbers;
+//! - [`layout`]: the declared constraint layout, checked and made canonical;
 //! - [`system`]: the engine-side first-order system built from a plugin's model;
 //! - [`recast`]: non-polynomial terms turned into a polynomial DAE with
 //!   auxiliary states, equilibrium shift, and the physical pencil;
+//! - [`reduce`]: models made by reducers, from `[data]` signals and/or a model;
 //! - [`spectrum`]: finite spectrum of the (possibly singular) pencil `(A, B)`,
 //!   master modes, normalization, spectral quotients and non-resonance checks;
 //! - [`poly`]: multi-indices, truncated series, order-by-order composition `F(W(p))`;
@@ -34,10 +36,12 @@
 pub mod continuation;
 pub mod frc;
 pub mod job;
+pub mod layout;
 pub mod plot;
 pub mod plugin;
 pub mod poly;
 pub mod recast;
+pub mod reduce;
 pub mod report;
 pub mod results;
 pub mod results_frc;

@@ -19,6 +19,12 @@ SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
   [model.params]                  # the model's parameters (paper symbols; defaults = paper)
   constraint = \"cubic\"
 
+  [reduce]                        # instead of (or on top of) [model]: a reducer's model
+  plugin = \"modal-truncation\"     # a plugin offering reducers (`ssm-engine plugins`)
+  reducer = \"modal-truncation\"    # [reduce.params]: the reducer's parameters
+  [data]                          # sampled signals for reducers: CSV, header t,<obs>,...
+  files = [\"decay1.csv\"]          # relative to the scene; columns = [...] (default all)
+
   [ssm]
   master_pairs = [1]              # 1-based underdamped mode pairs, slowest first
   order = 13                      # expansion order; non-resonance checks go up to it
@@ -41,7 +47,7 @@ SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
   rho0 = [0.35]                   # theta0, t_end, samples = 1001, order, rtol = 1e-9
   t_end = 100.0
 
-  [forcing]                       # forced response curves (one master pair)
+  [forcing]                       # forced response curves (continuation for several pairs)
   epsilon = [0.01, 0.02]          # one curve each; the load shape is the model's Fext
   omega_range = [1.9, 2.1]
   orders = [3, 5, 7]              # one curve each (default [ssm] order)
@@ -152,6 +158,24 @@ fn list_plugins(registry: &Registry) -> anyhow::Result<()> {
                 }
             }
             Err(e) => println!("  cannot list models: {e}"),
+        }
+        match p.reducers() {
+            None => println!("  (built against ssm-api 1.0: no reducers)"),
+            Some(Ok(reducers)) => {
+                for r in reducers {
+                    println!(
+                        "  reducer '{}' (needs {:?}): {}",
+                        r.name, r.needs, r.description
+                    );
+                    for par in r.params.iter() {
+                        println!(
+                            "    {:<12} = {:<10} [{}] {}",
+                            par.name, par.default, par.kind, par.description
+                        );
+                    }
+                }
+            }
+            Some(Err(e)) => println!("  cannot list reducers: {e}"),
         }
     }
     for e in &registry.rejected {

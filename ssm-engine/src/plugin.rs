@@ -13,7 +13,9 @@
 use std::path::{Path, PathBuf};
 
 use abi_stable::library::{lib_header_from_path, LibraryError};
-use ssm_api::{Model, ModelInfo, PluginError, SsmPluginRef, API_VERSION};
+use ssm_api::{
+    Model, ModelInfo, PluginError, Reduced, ReducerInfo, ReducerInput, SsmPluginRef, API_VERSION,
+};
 
 /// What went wrong while loading or calling a plugin.
 #[derive(Debug, thiserror::Error)]
@@ -51,6 +53,12 @@ pub enum PluginLoadError {
         /// Where it looked.
         searched: String,
     },
+    /// The plugin was built against API 1.0, before the reducer entry.
+    #[error("plugin '{plugin}' was built against ssm-api 1.0, which has no reducers: rebuild it against ssm-api {} to offer reducers", API_VERSION)]
+    NoReducers {
+        /// Plugin name.
+        plugin: String,
+    },
     /// The plugin returned an error or panicked.
     #[error("plugin '{plugin}' failed: {error}")]
     Plugin {
@@ -61,10 +69,19 @@ pub enum PluginLoadError {
     },
 }
 
+/// The root module of a loaded plugin, by the API layout it was built with.
+#[derive(Clone, Copy)]
+enum RootModule {
+    /// The current layout (or a later 1.x, whose extra fields are ignored).
+    Current(SsmPluginRef),
+    /// API 1.0: no reducer entry.
+    V1_0(ssm_api::v1_0::SsmPluginRef),
+}
+
 /// A loaded plugin.
 #[derive(Clone, Copy)]
 pub struct Plugin {
-    module: SsmPluginRef,
+    module: RootModule,
 }
 
 impl std::fmt::Debug for Plugin {
@@ -83,42 +100,63 @@ impl Plugin {
         }
         let invalid = |e: LibraryError| PluginLoadError::Invalid {
             path: path.to_owned(),
-            detail: e.to_string(),
+            detail: short_detail(&e.to_string()),
         };
         let header = lib_header_from_path(path).map_err(invalid)?;
-        let module = header
-            .init_root_module::<SsmPluginRef>()
-            .map_err(|e| match e {
-                LibraryError::IncompatibleVersionNumber { actual_version, .. } => {
-                    PluginLoadError::VersionMismatch {
-                        path: path.to_owned(),
-                        found: actual_version.to_string(),
-                        expected: API_VERSION.to_owned(),
-                    }
+        // every layout is checked in full by abi_stable; an older 1.x plugin
+        // fails the current layout (its root module has fewer fields) and
+        // passes its own
+        let module = match header.init_root_module::<SsmPluginRef>() {
+            Ok(m) => RootModule::Current(m),
+            Err(LibraryError::AbiInstability(current)) => {
+                match header.init_root_module::<ssm_api::v1_0::SsmPluginRef>() {
+                    Ok(m) => RootModule::V1_0(m),
+                    Err(_) => return Err(invalid(LibraryError::AbiInstability(current))),
                 }
-                other => invalid(other),
-            })?;
+            }
+            Err(LibraryError::IncompatibleVersionNumber { actual_version, .. }) => {
+                return Err(PluginLoadError::VersionMismatch {
+                    path: path.to_owned(),
+                    found: actual_version.to_string(),
+                    expected: API_VERSION.to_owned(),
+                })
+            }
+            Err(e) => return Err(invalid(e)),
+        };
         Ok(Self { module })
     }
 
     /// Plugin name.
     pub fn name(&self) -> &'static str {
-        self.module.name().as_str()
+        match self.module {
+            RootModule::Current(m) => m.name().as_str(),
+            RootModule::V1_0(m) => m.name().as_str(),
+        }
     }
 
     /// Plugin version.
     pub fn version(&self) -> &'static str {
-        self.module.version().as_str()
+        match self.module {
+            RootModule::Current(m) => m.version().as_str(),
+            RootModule::V1_0(m) => m.version().as_str(),
+        }
     }
 
     /// One-line description.
     pub fn description(&self) -> &'static str {
-        self.module.description().as_str()
+        match self.module {
+            RootModule::Current(m) => m.description().as_str(),
+            RootModule::V1_0(m) => m.description().as_str(),
+        }
     }
 
     /// The models offered, with parameters and defaults.
     pub fn models(&self) -> Result<Vec<ModelInfo>, PluginLoadError> {
-        (self.module.models())()
+        let models = match self.module {
+            RootModule::Current(m) => m.models(),
+            RootModule::V1_0(m) => m.models(),
+        };
+        models()
             .into_result()
             .map(|v| v.into_iter().collect())
             .map_err(|error| self.failed(error))
@@ -127,7 +165,45 @@ impl Plugin {
     /// Builds model `name` (empty: the plugin's only/default model) from the TOML
     /// text of the scene's `[model.params]`.
     pub fn build_model(&self, name: &str, params_toml: &str) -> Result<Model, PluginLoadError> {
-        (self.module.build_model())(name.into(), params_toml.into())
+        let build = match self.module {
+            RootModule::Current(m) => m.build_model(),
+            RootModule::V1_0(m) => m.build_model(),
+        };
+        build(name.into(), params_toml.into())
+            .into_result()
+            .map_err(|error| self.failed(error))
+    }
+
+    /// The reducers offered: `None` for a plugin built against API 1.0 (its
+    /// root module ends before the reducer entry), else the listing.
+    pub fn reducers(&self) -> Option<Result<Vec<ReducerInfo>, PluginLoadError>> {
+        let RootModule::Current(m) = self.module else {
+            return None;
+        };
+        let list = m.reducers()?;
+        Some(
+            list()
+                .into_result()
+                .map(|v| v.into_iter().collect())
+                .map_err(|error| self.failed(error)),
+        )
+    }
+
+    /// Runs reducer `name` with the TOML text of `[reduce.params]` on `input`.
+    pub fn reduce(
+        &self,
+        name: &str,
+        params_toml: &str,
+        input: &ReducerInput,
+    ) -> Result<Reduced, PluginLoadError> {
+        let no_reducers = || PluginLoadError::NoReducers {
+            plugin: self.name().to_owned(),
+        };
+        let RootModule::Current(m) = self.module else {
+            return Err(no_reducers());
+        };
+        let reduce = m.reduce().ok_or_else(no_reducers)?;
+        reduce(name.into(), params_toml.into(), input)
             .into_result()
             .map_err(|error| self.failed(error))
     }
@@ -209,6 +285,23 @@ impl Registry {
             searched: self.searched.join(", "),
         })
     }
+}
+
+/// The head of a loader error: abi_stable explains a layout mismatch type by
+/// type over hundreds of lines; its last lines name the difference.
+fn short_detail(detail: &str) -> String {
+    const KEEP: usize = 8;
+    let lines: Vec<&str> = detail.lines().filter(|l| !l.trim().is_empty()).collect();
+    if lines.len() <= 2 * KEEP {
+        return lines.join("\n");
+    }
+    format!(
+        "{}\n  ... ({} lines of abi_stable's layout report left out) ...\n{}\nThe plugin was most likely built against another ssm-api: rebuild it against ssm-api {}",
+        lines[..KEEP].join("\n"),
+        lines.len() - 2 * KEEP,
+        lines[lines.len() - KEEP..].join("\n"),
+        API_VERSION
+    )
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {

@@ -42,8 +42,10 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::Spanned;
 
+mod reduce;
 mod validate;
 
+pub use reduce::{DataSection, ReduceSection};
 pub use validate::{ReportSection, SteadyStart, SteadyStateSection, ValidateSection};
 
 /// A scene that cannot be used, with the place and the problem.
@@ -85,8 +87,15 @@ pub enum SceneError {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
-    /// Which model.
-    pub model: ModelSection,
+    /// Which model (also the input of a reducer that needs one).
+    #[serde(default)]
+    pub model: Option<ModelSection>,
+    /// A reducer producing the model the analyses run on.
+    #[serde(default)]
+    pub reduce: Option<ReduceSection>,
+    /// Sampled signals for a reducer.
+    #[serde(default)]
+    pub data: Option<DataSection>,
     /// SSM settings.
     #[serde(default)]
     pub ssm: SsmSection,
@@ -474,6 +483,7 @@ impl SceneFile {
                 format!("must lie in (0, 1), found {tol}"),
             ));
         }
+        self.check_model_source()?;
         self.check_outputs()?;
         self.check_forcing()?;
         self.check_validate()?;

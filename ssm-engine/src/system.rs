@@ -59,6 +59,14 @@ pub enum ModelError {
         /// What went wrong.
         source: RecastError,
     },
+    /// The declared constraint layout contradicts the states or the model.
+    #[error("model '{model}': constraint layout: {source}")]
+    Layout {
+        /// Model name.
+        model: String,
+        /// What is wrong.
+        source: crate::layout::LayoutError,
+    },
     /// The nonlinearity has a constant or linear term.
     #[error("model '{model}': F, equation {eq}, has a term of degree {degree}; F must start at degree 2 (linear terms belong in A)")]
     LowDegree {
@@ -123,6 +131,10 @@ impl System {
     /// Validates a plugin's model and converts its matrices to compressed form.
     pub fn from_model(plugin: &str, m: ssm_api::Model) -> Result<Self, ModelError> {
         let model = m.name.to_string();
+        let m = crate::layout::canonicalize(m).map_err(|source| ModelError::Layout {
+            model: model.clone(),
+            source,
+        })?;
         let n = m.states.len();
         let a = to_csc(&model, "A", &m.a, n, n)?;
         let b = to_csc(&model, "B", &m.b, n, n)?;

@@ -67,7 +67,20 @@ impl ExprGraph {
                         ));
                     }
                 }
-                _ => child(node.a)?,
+                ExprOp::Sin
+                | ExprOp::Cos
+                | ExprOp::Exp
+                | ExprOp::Ln
+                | ExprOp::Sqrt
+                | ExprOp::Recip => child(node.a)?,
+                op => {
+                    return Err(bad(
+                        k,
+                        format!(
+                            "unknown operation {op:?}: the plugin was built against a later ssm-api; update the engine"
+                        ),
+                    ))
+                }
             }
         }
         let mut terms = Vec::with_capacity(v.terms.len());
@@ -119,6 +132,7 @@ impl ExprGraph {
                 ExprOp::Ln => a().ln(),
                 ExprOp::Sqrt => a().sqrt(),
                 ExprOp::Recip => a().recip(),
+                op => unreachable!("operation {op:?} is refused when the graph is built"),
             };
             val.push(x);
         }
