@@ -153,6 +153,16 @@ pub fn canonicalize(mut model: Model) -> Result<Model, LayoutError> {
     Ok(model)
 }
 
+/// One declared list: name, indices, expected length, why, required tag, role.
+type RoleList<'a> = (
+    &'static str,
+    &'a [u32],
+    usize,
+    &'static str,
+    StateKind,
+    &'static str,
+);
+
 /// The state order `(x, x', mu, rest)` and the row order (non-constraint rows
 /// filling `0 .. 2n`, the constraints, then the remaining rows), after
 /// checking every declared index and tag.
@@ -162,14 +172,7 @@ fn check(
     n_states: usize,
 ) -> Result<(Vec<usize>, Vec<usize>), LayoutError> {
     let (nd, nc) = (info.n_dof as usize, info.n_constraints as usize);
-    let lists: [(
-        &'static str,
-        &[u32],
-        usize,
-        &'static str,
-        StateKind,
-        &'static str,
-    ); 3] = [
+    let lists: [RoleList; 3] = [
         (
             "displacements",
             &info.displacements,

@@ -146,7 +146,7 @@ pub fn read_signals(
         let table = read_table(path)?;
         let n = table.t.len();
         let dt = (table.t[n - 1] - table.t[0]) / (n - 1) as f64;
-        if !(dt > 0.0) {
+        if dt.is_nan() || dt <= 0.0 {
             return Err(SignalsError::NonUniform {
                 path: path.clone(),
                 line: 2,

@@ -151,11 +151,11 @@ fn declared_layout_in_another_order_is_read_correctly() {
     // rows: constraints first, the rest in order after them
     let mut row_of_old = vec![0usize; n];
     let mut next = nc;
-    for r in 0..n {
+    for (r, row) in row_of_old.iter_mut().enumerate() {
         if r >= 2 * nd && r < 2 * nd + nc {
-            row_of_old[r] = r - 2 * nd;
+            *row = r - 2 * nd;
         } else {
-            row_of_old[r] = next;
+            *row = next;
             next += 1;
         }
     }
@@ -271,7 +271,7 @@ fn data_files_are_read_with_typed_errors() {
         p
     };
     let good = write("good.csv", "t,v1,v2\n0,1,2\n0.5,3,4\n1.0,5,6\n");
-    let s = read_signals(&[good.clone()], Some(&["v2".to_owned()])).unwrap();
+    let s = read_signals(std::slice::from_ref(&good), Some(&["v2".to_owned()])).unwrap();
     assert_eq!(s.period, 0.5);
     assert_eq!(s.n_samples(0), 3);
     assert_eq!(s.sample(0, 2), &[6.0]);
@@ -281,7 +281,7 @@ fn data_files_are_read_with_typed_errors() {
     let uneven = write("uneven.csv", "t,v1\n0,1\n1,1\n2.5,1\n3,1\n");
     let e = read_signals(&[uneven], None).unwrap_err();
     assert!(matches!(e, SignalsError::NonUniform { line: 4, .. }), "{e}");
-    let e = read_signals(&[good.clone()], Some(&["v9".to_owned()])).unwrap_err();
+    let e = read_signals(std::slice::from_ref(&good), Some(&["v9".to_owned()])).unwrap_err();
     assert!(e.to_string().contains("no column 'v9'"), "{e}");
     let ragged = write("ragged.csv", "t,v1\n0,1\n1\n");
     let e = read_signals(&[ragged], None).unwrap_err();

@@ -332,7 +332,12 @@ fn lowest_resonance_57(re: &[f64], t: f64, mode: usize, hi: usize, tol: f64) -> 
             let upper = ((partial - self.t + self.band) / q).floor();
             let min_k = 2u64.saturating_sub(deg);
             let max_k = self.hi - deg;
-            if !(upper >= lower) || upper < min_k as f64 || lower > max_k as f64 {
+            if upper.is_nan()
+                || lower.is_nan()
+                || upper < lower
+                || upper < min_k as f64
+                || lower > max_k as f64
+            {
                 return;
             }
             let mut lo = (lower as u64).max(min_k);
