@@ -111,6 +111,12 @@ fn reducer_scene_errors_name_the_key() {
     ));
     assert_eq!(line, 7, "{msg}");
     assert!(msg.starts_with("reduce.params.pairs"), "{msg}");
+    // more pairs than the model has is refused, not silently truncated
+    let (line, msg) = ssm_tests::scene_error(&format!(
+        "[model]\nplugin = \"spatial-oscillator\"\n{base}reducer = \"modal-truncation\"\n[reduce.params]\npairs = 4\n"
+    ));
+    assert_eq!(line, 7, "{msg}");
+    assert!(msg.contains("has 3 underdamped pairs"), "{msg}");
     // a constrained model has constraint modes (B is singular) that a
     // truncation of B^-1 A cannot represent: refused as invalid input
     match run_scene_text(&format!(
