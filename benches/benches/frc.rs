@@ -10,7 +10,7 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use ssm_engine::frc::{one_pair_frc, response_amplitudes, OnePair};
+use ssm_engine::rom::frc::{one_pair_frc, response_amplitudes, OnePair};
 use ssm_engine::scene::Normalization;
 use ssm_engine::spectrum;
 use ssm_engine::ssm::analysis::{invariance_error, polar};

@@ -33,26 +33,21 @@
 //! - [`report`]: `summary.json` and CSV tables, written atomically;
 //! - [`job`]: running a scene end to end.
 
-pub mod continuation;
-pub mod frc;
-pub mod job;
-pub mod layout;
-pub mod plot;
-pub mod plugin;
+pub mod compare;
+pub mod fom;
+pub mod model;
+pub mod output;
+pub mod pipeline;
 pub mod poly;
-pub mod recast;
 pub mod reduce;
-pub mod report;
 pub mod results;
 pub mod results_frc;
 pub mod results_frc_multi;
 pub mod results_report;
 pub mod results_validate;
+pub mod rom;
 pub mod scene;
-pub mod simulate;
 pub mod spectrum;
 pub mod ssm;
-pub mod system;
-pub mod validate;
 
 pub use num_complex::Complex64 as C64;

@@ -6,8 +6,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use ssm_engine::job::{self, Progress};
-use ssm_engine::plugin::Registry;
+use ssm_engine::model::plugin::Registry;
+use ssm_engine::pipeline::{self, Progress};
 use ssm_engine::scene::{ReportSection, SceneFile};
 
 const SCENE_HELP: &str = "\
@@ -201,10 +201,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         scene.scene.report = Some(ReportSection { orders: None });
     }
     let progress = spinner();
-    let result = job::run(&scene, &mut registry, &progress);
+    let result = pipeline::run(&scene, &mut registry, &progress);
     progress.0.finish_and_clear();
     let result = result?;
-    let out = out.unwrap_or_else(|| job::default_out_dir(&scene));
+    let out = out.unwrap_or_else(|| pipeline::default_out_dir(&scene));
     result.outputs.write(&out)?;
     for w in &result.warnings {
         eprintln!("warning: {w}");

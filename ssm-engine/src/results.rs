@@ -4,12 +4,12 @@
 
 use serde_json::{json, Value};
 
-use crate::plot::{line_plot, Curve, PlotError, Scale};
+use crate::model::system::{OutputMap, System};
+use crate::output::plot::{line_plot, Curve, PlotError, Scale};
 use crate::scene::{BackboneSection, InvarianceErrorSection, TransientSection};
 use crate::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar, PolarError};
 use crate::ssm::rom::{integrate, RomError};
 use crate::ssm::{Dynamics, SsmExpansion};
-use crate::system::{OutputMap, System};
 use crate::C64;
 
 /// `"ssm"`: order, dimension, resonant terms and reduced dynamics

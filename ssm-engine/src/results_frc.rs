@@ -1,20 +1,20 @@
 //! Forced response curves for the report: `frc.csv`, `frc.svg` and the `frc`
 //! entry of `summary.json`, from the leading-order periodic SSM
-//! ([`crate::ssm::forced`]) and the rotating-frame fixed points ([`crate::frc`]).
+//! ([`crate::ssm::forced`]) and the rotating-frame fixed points ([`crate::rom::frc`]).
 
 use serde_json::{json, Value};
 
-use crate::frc::{
+use crate::model::system::{OutputMap, System};
+use crate::output::plot::{line_plot, Curve, PlotError, Scale};
+use crate::poly::MultiIndexSet;
+use crate::rom::frc::{
     chebyshev_interpolate, one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair,
 };
-use crate::plot::{line_plot, Curve, PlotError, Scale};
-use crate::poly::MultiIndexSet;
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{invariance_error, polar, PolarError};
 use crate::ssm::forced::{ForcedError, ForcedSsm};
 use crate::ssm::SsmExpansion;
-use crate::system::{OutputMap, System};
 use crate::C64;
 
 /// Why an FRC could not be produced.
@@ -34,7 +34,7 @@ pub enum FrcError {
     Unsupported(String),
     /// The continuation could not start.
     #[error("FRC: {0}")]
-    Continuation(#[from] crate::continuation::ContinuationError),
+    Continuation(#[from] crate::rom::continuation::ContinuationError),
 }
 
 /// External resonance ratios chosen from the forcing frequency (eq. 16): the

@@ -1,18 +1,18 @@
 //! Forced response of several master pairs (internal resonance) for the
 //! report: continuation of the rotating-frame reduced dynamics
-//! ([`crate::continuation`]) with branch switching at branch points, and the
+//! ([`crate::rom::continuation`]) with branch switching at branch points, and the
 //! physical amplitudes of each point rebuilt from `W(p(t)) + eps X0(Omega t)`.
 
 use serde_json::{json, Value};
 
-use crate::continuation::{Branch, LocatedKind, PolarTerm, RotatingFrame, Settings};
-use crate::plot::Curve;
+use crate::model::system::{OutputMap, System};
+use crate::output::plot::Curve;
 use crate::results_frc::{assemble, csv_header, FrcError, FrcReport, FrcRow};
+use crate::rom::continuation::{Branch, LocatedKind, PolarTerm, RotatingFrame, Settings};
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::forced::ForcedSsm;
 use crate::ssm::SsmExpansion;
-use crate::system::{OutputMap, System};
 use crate::C64;
 
 /// Branch switches at most per curve (each branch point found is switched once).
@@ -164,7 +164,7 @@ pub fn frc_multi(
         for (bi, br) in branches.iter().enumerate() {
             let mut seg: Vec<(f64, f64)> = Vec::new();
             // (point, plotted amplitude) of the branch, for bifurcation markers
-            let mut plotted: Vec<(&crate::continuation::BranchPoint, f64)> = Vec::new();
+            let mut plotted: Vec<(&crate::rom::continuation::BranchPoint, f64)> = Vec::new();
             let mut seg_stable = None;
             for p in br
                 .points
@@ -252,7 +252,7 @@ pub fn frc_multi(
                 if l.at.omega < range.0 || l.at.omega > range.1 {
                     continue;
                 }
-                let dist = |p: &crate::continuation::BranchPoint| {
+                let dist = |p: &crate::rom::continuation::BranchPoint| {
                     (p.omega - l.at.omega).abs()
                         + p.q
                             .iter()

@@ -8,7 +8,8 @@ use std::time::Instant;
 
 use serde_json::{json, Value};
 
-use crate::plot::{line_plot, Curve, PlotError, Scale};
+use crate::model::system::{OutputMap, System};
+use crate::output::plot::{line_plot, Curve, PlotError, Scale};
 use crate::results_frc::{self, FrcError};
 use crate::results_validate::{frc_error, ValidationProducts};
 use crate::scene::ForcingSection;
@@ -16,7 +17,6 @@ use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar};
 use crate::ssm::rom::{integrate, RomError};
 use crate::ssm::{self, SsmError, SsmOptions};
-use crate::system::{OutputMap, System};
 use crate::C64;
 use toml::Spanned;
 

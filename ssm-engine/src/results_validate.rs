@@ -7,16 +7,16 @@ use std::time::Instant;
 use serde_json::{json, Value};
 use ssm_api::StateKind;
 
-use crate::plot::{line_plot, Curve, Scale};
-use crate::results_frc::{frc_svg, FrcReport, FrcRow};
-use crate::scene::{SteadyStart, ValidateSection};
-use crate::simulate::{
+use crate::compare::{self, TransientValidation, ValidateError};
+use crate::fom::{
     consistent_initial_keeping, DaeProblem, RadauOptions, SteadyOptions, SteadyState,
 };
+use crate::model::system::{OutputMap, System};
+use crate::output::plot::{line_plot, Curve, Scale};
+use crate::results_frc::{frc_svg, FrcReport, FrcRow};
+use crate::scene::{SteadyStart, ValidateSection};
 use crate::spectrum::MasterMode;
 use crate::ssm::SsmExpansion;
-use crate::system::{OutputMap, System};
-use crate::validate::{self, TransientValidation, ValidateError};
 use crate::C64;
 
 /// Steady-state reference points of one forcing amplitude.
@@ -107,7 +107,7 @@ pub fn validation(
                 }
                 let problem = DaeProblem::new(sys, 0.0, 0.0);
                 let c = consistent_initial_keeping(&problem, 0.0, &z, &keep)?;
-                let (p0, distance) = validate::nearest_on_ssm(ssm, sys, order, masters, &c.z);
+                let (p0, distance) = compare::nearest_on_ssm(ssm, sys, order, masters, &c.z);
                 let start = json!({
                     "kind": "given",
                     "values": sec.given_start().into_iter().map(|(k, v)| (k, json!(v))).collect::<serde_json::Map<_, _>>(),
@@ -127,10 +127,10 @@ pub fn validation(
                 outs.push(m);
             }
         }
-        let tv = validate::transient(
+        let tv = compare::transient(
             ssm,
             sys,
-            &validate::TransientSettings {
+            &compare::TransientSettings {
                 order,
                 p0: &p0,
                 t_end: *t_end.get_ref(),
@@ -169,7 +169,7 @@ pub fn validation(
             _ => None,
         };
         let t0 = Instant::now();
-        let points = validate::steady_state_reference(
+        let points = compare::steady_state_reference(
             sys,
             eps,
             &omegas,

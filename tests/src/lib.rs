@@ -8,11 +8,11 @@
 use std::path::PathBuf;
 
 use num_complex::Complex64 as C64;
-use ssm_engine::plugin::Plugin;
+use ssm_engine::model::plugin::Plugin;
+use ssm_engine::model::system::System;
 use ssm_engine::scene::Normalization;
 use ssm_engine::spectrum::{self, Method, Spectrum, SpectrumOptions};
 use ssm_engine::ssm::{self as ssm_mod, SsmExpansion, SsmOptions};
-use ssm_engine::system::System;
 
 /// `target/<profile>` of the running test or bench executable.
 pub fn profile_dir() -> PathBuf {
@@ -65,8 +65,8 @@ pub fn system(crate_name: &str, model: &str, params: &str) -> System {
 }
 
 /// A registry with the repository's model plugins.
-pub fn registry() -> ssm_engine::plugin::Registry {
-    ssm_engine::plugin::Registry::discover(&[
+pub fn registry() -> ssm_engine::model::plugin::Registry {
+    ssm_engine::model::plugin::Registry::discover(&[
         plugin_path("spatial-oscillator"),
         plugin_path("oscillator-chain"),
         plugin_path("duffing"),
@@ -78,15 +78,17 @@ pub fn registry() -> ssm_engine::plugin::Registry {
 }
 
 /// Runs the scene text `text` (as `test.toml`) with [`registry`].
-pub fn run_scene_text(text: &str) -> Result<ssm_engine::job::JobResult, ssm_engine::job::JobError> {
+pub fn run_scene_text(
+    text: &str,
+) -> Result<ssm_engine::pipeline::JobResult, ssm_engine::pipeline::JobError> {
     let scene =
         ssm_engine::scene::SceneFile::parse(std::path::Path::new("test.toml"), text.to_owned())?;
-    ssm_engine::job::run(&scene, &mut registry(), &ssm_engine::job::Quiet)
+    ssm_engine::pipeline::run(&scene, &mut registry(), &ssm_engine::pipeline::Quiet)
 }
 
 /// The line and `key: message` of the scene error `text` must produce.
 pub fn scene_error(text: &str) -> (usize, String) {
-    use ssm_engine::job::JobError;
+    use ssm_engine::pipeline::JobError;
     use ssm_engine::scene::SceneError;
     match run_scene_text(text) {
         Err(JobError::Scene(SceneError::Parse { line, message, .. })) => (line, message),

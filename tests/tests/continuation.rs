@@ -3,7 +3,7 @@
 //! closed form from its averaged (quadratic) equations.
 
 use num_complex::Complex64 as C64;
-use ssm_engine::continuation::{LocatedKind, PolarTerm, RotatingFrame, Settings};
+use ssm_engine::rom::continuation::{LocatedKind, PolarTerm, RotatingFrame, Settings};
 use ssm_engine::scene::Normalization;
 use ssm_engine::spectrum;
 use ssm_tests::{one_to_two_resonant, spectrum_options, ssm_of};
@@ -133,7 +133,7 @@ fn one_to_two_branch_points_match_the_closed_form() {
     let coupled = switched
         .iter()
         .max_by(|a, b| {
-            let m = |br: &ssm_engine::continuation::Branch| {
+            let m = |br: &ssm_engine::rom::continuation::Branch| {
                 br.points.iter().map(|p| p.q[0].norm()).fold(0.0, f64::max)
             };
             m(a).total_cmp(&m(b))

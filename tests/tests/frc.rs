@@ -4,13 +4,13 @@
 //! dynamics around unstable fixed points.
 
 use num_complex::Complex64 as C64;
-use ssm_engine::frc::{one_pair_frc, response_amplitudes, BifurcationKind, Frc, OnePair};
+use ssm_engine::model::system::System;
+use ssm_engine::rom::frc::{one_pair_frc, response_amplitudes, BifurcationKind, Frc, OnePair};
 use ssm_engine::scene::Normalization;
 use ssm_engine::spectrum::{self, MasterMode};
 use ssm_engine::ssm::analysis::polar;
 use ssm_engine::ssm::forced::ForcedSsm;
 use ssm_engine::ssm::SsmExpansion;
-use ssm_engine::system::System;
 use ssm_tests::{spectrum_options, ssm_of, system};
 
 const ZETA: f64 = 0.002;
@@ -340,7 +340,7 @@ fn duffing_steady_state(zeta: f64, eps: f64, omega: f64) -> f64 {
 /// simulated maximum is sampled at 400 steps per period, 1e-4 relative).
 #[test]
 fn higher_order_nonautonomous_terms_improve_the_frc() {
-    use ssm_engine::frc::ForcedCoefficients;
+    use ssm_engine::rom::frc::ForcedCoefficients;
     let zeta = 0.01;
     let sys = system(
         "duffing",
@@ -380,7 +380,7 @@ fn higher_order_nonautonomous_terms_improve_the_frc() {
         let k = (1..pts.len())
             .find(|&k| (pts[k - 1].omega - w) * (pts[k].omega - w) <= 0.0)
             .expect("frequency on the curve");
-        let mut amp = |q: &ssm_engine::frc::FrcPoint| {
+        let mut amp = |q: &ssm_engine::rom::frc::FrcPoint| {
             let x0 = forced.at(q.omega).unwrap();
             response_amplitudes(&ssm, &series, order, q, &|_, phi| {
                 eps * x0.output_at(&weights, phi)

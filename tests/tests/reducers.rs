@@ -5,10 +5,10 @@
 //! refused; `[data]` files are read with typed errors.
 
 use ssm_api::{ErrorKind, Model, StateKind};
-use ssm_engine::job::JobError;
-use ssm_engine::plugin::{Plugin, PluginLoadError};
+use ssm_engine::model::plugin::{Plugin, PluginLoadError};
+use ssm_engine::model::system::{ModelError, System};
+use ssm_engine::pipeline::JobError;
 use ssm_engine::reduce::{read_signals, SignalsError};
-use ssm_engine::system::{ModelError, System};
 use ssm_engine::C64;
 use ssm_tests::{oscillator_with_spectrum, plugin_path, run_scene_text, spectrum_options, tmp_dir};
 

@@ -3,10 +3,10 @@
 
 use std::process::Command;
 
-use ssm_engine::job::{self, JobError};
+use ssm_engine::pipeline::{self, JobError};
 use ssm_tests::{engine_binary, plugin_path, repo_root, run_zoo, run_zoo_in, scene_error, tmp_dir};
 
-fn run_text(text: &str) -> Result<job::JobResult, JobError> {
+fn run_text(text: &str) -> Result<pipeline::JobResult, JobError> {
     ssm_tests::run_scene_text(text)
 }
 

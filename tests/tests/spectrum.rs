@@ -1,9 +1,9 @@
 //! Spectrum of the pencil against published and closed-form references.
 
 use num_complex::Complex64 as C64;
+use ssm_engine::model::system::System;
 use ssm_engine::scene::Normalization;
 use ssm_engine::spectrum::{self, Method};
-use ssm_engine::system::System;
 use ssm_tests::{chain_eigenvalues, oscillator_published_eigenvalues, system, CHAIN_DEFAULTS};
 
 use ssm_tests::spectrum_options as opts;

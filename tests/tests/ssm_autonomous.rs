@@ -181,7 +181,7 @@ fn order_35_stays_finite_and_converges() {
 /// map, by direct expansion of the monomials of `F` (independent of the
 /// engine's composition code): `g[j][exponents]`.
 fn diagonal_coefficients(
-    sys: &ssm_engine::system::System,
+    sys: &ssm_engine::model::system::System,
     v: &[[C64; 4]; 4],
     vinv: &[[C64; 4]; 4],
 ) -> Vec<std::collections::HashMap<[u8; 4], C64>> {

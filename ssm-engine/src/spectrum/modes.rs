@@ -22,8 +22,8 @@ use faer::Mat;
 
 use super::sparse::pseudo_random;
 use super::{pair_starts, Spectrum, SpectrumError};
+use crate::model::system::System;
 use crate::scene::Normalization;
-use crate::system::System;
 use crate::C64;
 
 /// One master mode (the member of its pair with positive imaginary part).

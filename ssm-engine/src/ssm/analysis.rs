@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 use super::{Dynamics, SsmExpansion};
-use crate::system::System;
+use crate::model::system::System;
 use crate::C64;
 
 /// Coefficients of the polar reduced dynamics of a two-dimensional SSM.

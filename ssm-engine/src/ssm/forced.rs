@@ -28,8 +28,8 @@ use ssm_api::PolyVector;
 
 use super::homological::{Homological, HomologicalError};
 use super::reduced_modes;
+use crate::model::system::System;
 use crate::spectrum::MasterMode;
-use crate::system::System;
 use crate::C64;
 
 /// Why the forced SSM could not be computed.

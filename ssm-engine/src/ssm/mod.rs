@@ -45,10 +45,10 @@ use std::time::Instant;
 
 use ssm_api::{PolyVector, TimeKind};
 
+use crate::model::system::System;
 use crate::poly::{eval_poly, Composition, MultiIndexSet};
 use crate::spectrum::modes::spmv;
 use crate::spectrum::MasterMode;
-use crate::system::System;
 use crate::C64;
 use homological::{Homological, HomologicalError, SolveStats};
 

@@ -26,9 +26,9 @@
 
 use super::forced::{ForcedError, ForcedSsm};
 use super::SsmExpansion;
+use crate::model::system::System;
 use crate::poly::MultiIndexSet;
 use crate::spectrum::modes::spmv;
-use crate::system::System;
 use crate::C64;
 
 /// One harmonic's expansion: coefficient of `e^{i kappa phi} p^k`.
@@ -344,7 +344,7 @@ impl NonAutonomous {
 impl NonAutonomous {
     /// One master pair, first harmonic, `r = 1`: the coefficients of the
     /// rotating-frame forcing `sigma(u) + q^2 tau(u)` (`u = |q|^2`) of
-    /// [`crate::frc::ForcedCoefficients`]: `sigma_a = s_{(a,a)}` of `p`,
+    /// [`crate::rom::frc::ForcedCoefficients`]: `sigma_a = s_{(a,a)}` of `p`,
     /// `tau_b = conj(s_{(b,b+2)})` of `conj p` (the conjugate harmonic's terms
     /// in the equation of `p`).
     pub fn rotating_frame_coefficients(&self) -> (Vec<C64>, Vec<C64>) {

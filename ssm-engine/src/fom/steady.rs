@@ -19,7 +19,7 @@ use std::collections::VecDeque;
 use ssm_api::StateKind;
 
 use super::{DaeProblem, Radau, RadauOptions, RadauStats, SimError};
-use crate::system::OutputMap;
+use crate::model::system::OutputMap;
 
 /// Settings of a steady-state run.
 #[derive(Debug, Clone, Copy, PartialEq)]

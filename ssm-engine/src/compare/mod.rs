@@ -13,13 +13,13 @@ use std::time::Instant;
 use rayon::prelude::*;
 use ssm_api::StateKind;
 
-use crate::simulate::{
+use crate::fom::{
     consistent_initial, consistent_initial_keeping, steady_state, Consistent, DaeProblem, Radau,
     RadauOptions, RadauStats, SimError, SteadyOptions, SteadyState,
 };
+use crate::model::system::{OutputMap, System};
 use crate::ssm::rom::{integrate, RomError};
 use crate::ssm::SsmExpansion;
-use crate::system::{OutputMap, System};
 use crate::C64;
 
 /// Why a validation could not be produced.
@@ -33,7 +33,7 @@ pub enum ValidateError {
     Reduced(#[from] RomError),
     /// A plot could not be drawn.
     #[error(transparent)]
-    Plot(#[from] crate::plot::PlotError),
+    Plot(#[from] crate::output::plot::PlotError),
     /// A steady-state point failed.
     #[error("steady-state reference at Omega = {omega}: {source}")]
     SteadyPoint {
@@ -319,7 +319,7 @@ pub fn transient(
         .collect();
     let algebraic_residual = states
         .iter()
-        .map(|z| crate::simulate::consistent::algebraic_residual(&problem, z).0)
+        .map(|z| crate::fom::consistent::algebraic_residual(&problem, z).0)
         .collect();
     Ok(TransientValidation {
         p0: p0.to_vec(),

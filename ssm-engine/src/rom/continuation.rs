@@ -32,7 +32,7 @@
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
-use crate::frc::BifurcationKind;
+use crate::rom::frc::BifurcationKind;
 use crate::C64;
 
 /// One term `coeff * q^exponents` of the equation of pair `pair`; exponents

@@ -566,7 +566,7 @@ mod tests {
             assert!(d < 1e-9, "Hopf at u = {u}, trace roots {roots:?}");
         }
         // the continuation finds the same Hopf frequencies
-        use crate::continuation::{LocatedKind, PolarTerm, RotatingFrame, Settings};
+        use crate::rom::continuation::{LocatedKind, PolarTerm, RotatingFrame, Settings};
         let frame = RotatingFrame {
             terms: vec![
                 PolarTerm {

@@ -9,9 +9,11 @@ use serde_json::json;
 
 use toml::Spanned;
 
-use crate::plugin::{Plugin, PluginLoadError, Registry};
+use crate::compare::ValidateError;
+use crate::model::plugin::{Plugin, PluginLoadError, Registry};
+use crate::model::system::{ModelError, OutputMap, System};
+use crate::output::{spectrum_csv, OutputError, OutputSet};
 use crate::reduce::{self, Reduction, SignalsError};
-use crate::report::{spectrum_csv, OutputError, OutputSet};
 use crate::results::{self, ResultError};
 use crate::results_frc::{self, FrcError};
 use crate::results_report::{self, ReportError, ReportInputs};
@@ -19,8 +21,6 @@ use crate::results_validate;
 use crate::scene::{ModelSection, SceneError, SceneFile, SpectrumMethod};
 use crate::spectrum::{self, MasterMode, Method, Spectrum, SpectrumError, SpectrumOptions};
 use crate::ssm::{self, Dynamics, SsmError, SsmExpansion, SsmOptions};
-use crate::system::{ModelError, OutputMap, System};
-use crate::validate::ValidateError;
 
 /// Anything that stops a run; each variant says where.
 #[derive(Debug, thiserror::Error)]

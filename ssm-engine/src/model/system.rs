@@ -4,7 +4,7 @@
 use faer::sparse::{SparseColMat, Triplet};
 use ssm_api::{Harmonic, MotionKind, PolyVector, StateInfo, StateKind, TimeKind};
 
-use crate::recast::{self, RecastError, RecastInfo};
+use crate::model::recast::{self, RecastError, RecastInfo};
 
 /// A plugin's model that the engine cannot use.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -65,7 +65,7 @@ pub enum ModelError {
         /// Model name.
         model: String,
         /// What is wrong.
-        source: crate::layout::LayoutError,
+        source: crate::model::layout::LayoutError,
     },
     /// The nonlinearity has a constant or linear term.
     #[error("model '{model}': F, equation {eq}, has a term of degree {degree}; F must start at degree 2 (linear terms belong in A)")]
@@ -131,7 +131,7 @@ impl System {
     /// Validates a plugin's model and converts its matrices to compressed form.
     pub fn from_model(plugin: &str, m: ssm_api::Model) -> Result<Self, ModelError> {
         let model = m.name.to_string();
-        let m = crate::layout::canonicalize(m).map_err(|source| ModelError::Layout {
+        let m = crate::model::layout::canonicalize(m).map_err(|source| ModelError::Layout {
             model: model.clone(),
             source,
         })?;

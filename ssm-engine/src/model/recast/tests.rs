@@ -7,10 +7,10 @@
 use ssm_api::{Constraints, Equilibrium, Expr, MechanicalSystem, SparseMatrix};
 
 use super::AuxKind;
+use crate::model::system::{ModelError, System};
 use crate::poly::eval_poly;
 use crate::spectrum::dense::finite_eigenvalues;
 use crate::spectrum::modes::spmv;
-use crate::system::{ModelError, System};
 use crate::C64;
 
 /// Two dofs and one constraint using every supported function, nested ones

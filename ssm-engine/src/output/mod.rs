@@ -2,6 +2,8 @@
 //! written to a temporary name in the output directory and renamed, so an
 //! error or a crash never leaves a half-written result.
 
+pub mod plot;
+
 use std::path::{Path, PathBuf};
 
 use crate::spectrum::Spectrum;

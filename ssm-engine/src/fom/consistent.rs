@@ -11,7 +11,7 @@
 //!    where `J_mu` is the (exact) Jacobian of the momentum rows with respect to
 //!    the multipliers.
 //!
-//! Auxiliary states follow their definitions exactly ([`crate::recast::RecastInfo::lift`]).
+//! Auxiliary states follow their definitions exactly ([`crate::model::recast::RecastInfo::lift`]).
 //! `g` is evaluated exactly; its Jacobian `G` is exact for polynomial models and
 //! taken by central differences through the lift for recast ones (relative
 //! accuracy about `1e-10`, which affects only the size of the correction, not

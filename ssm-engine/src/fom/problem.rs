@@ -4,7 +4,7 @@
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use ssm_api::{PolyVector, StateKind};
 
-use crate::system::System;
+use crate::model::system::System;
 
 /// One monomial derivative `d F_eq / d z_var`, accumulated into `slot`.
 #[derive(Debug, Clone, Copy)]
