@@ -10,74 +10,18 @@ use ssm_engine::model::plugin::Registry;
 use ssm_engine::pipeline::{self, Progress};
 use ssm_engine::scene::{ReportSection, SceneFile};
 
-const SCENE_HELP: &str = "\
-SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):
-
-  [model]
-  plugin = \"spatial-oscillator\"   # a name listed by `ssm-engine plugins`, or a path to a .so
-  # name = \"oscillator\"           # which model, when a plugin offers several
-  [model.params]                  # the model's parameters (paper symbols; defaults = paper)
-  constraint = \"cubic\"
-
-  [reduce]                        # instead of (or on top of) [model]: a reducer's model
-  plugin = \"modal-truncation\"     # a plugin offering reducers (`ssm-engine plugins`)
-  reducer = \"modal-truncation\"    # [reduce.params]: the reducer's parameters
-  [data]                          # sampled signals for reducers: CSV, header t,<obs>,...
-  files = [\"decay1.csv\"]          # relative to the scene; columns = [...] (default all)
-
-  [ssm]
-  master_pairs = [1]              # 1-based underdamped mode pairs, slowest first
-  order = 13                      # expansion order; non-resonance checks go up to it
-  normalization = \"unit\"          # \"unit\" (||v|| = 1), \"mass\" (x^H M x = 1), or { scale = s }
-  resonance_tol = 0.02            # relative distance counted as a near resonance
-
-  [spectrum]
-  method = \"auto\"                 # \"dense\", \"sparse\", or \"auto\" (dense up to 1000 states)
-  modes = 12                      # finite modes computed on the sparse path
-  shift = 0.0                     # sparse path: modes nearest this real shift
-
-  [outputs]
-  coordinates = [\"x1\"]            # named outputs of the model
-  [outputs.invariance_error]      # eq. (41): radii, orders, n_alpha = 10, n_theta = 30
-  radii = [0.01, 0.1]
-  orders = [3, 5, 7]
-  [outputs.backbone]              # one master pair: rho_max, points = 101, orders
-  rho_max = 0.35
-  [outputs.transient]             # reduced model from (rho0, theta0) per pair, lifted by W
-  rho0 = [0.35]                   # theta0, t_end, samples = 1001, order, rtol = 1e-9
-  t_end = 100.0
-
-  [forcing]                       # forced response curves (continuation for several pairs)
-  epsilon = [0.01, 0.02]          # one curve each; the load shape is the model's Fext
-  omega_range = [1.9, 2.1]
-  orders = [3, 5, 7]              # one curve each (default [ssm] order)
-  # points = 200, rho_max = ..., resonance = [1]
-  # nonautonomous_order = 4       # O(eps |p|^k) terms beyond the leading order
-
-  [validate]                      # full-system references (Radau IIA on the DAE)
-  rho0 = [0.35]                   # transient from W(p0), p0 = rho0 e^(i theta0), against the ROM
-  theta0 = [0.5]                  # t_end, samples = 1001, order = [ssm] order,
-  t_end = 100.0                   # outputs = [outputs] coordinates (multipliers are added),
-                                  # rtol = 1e-8, atol = 1e-10
-  # x0 = { x1 = 0.1 }             # instead of rho0: given displacements (kept where the
-  # v0 = { x1_dot = 0.0 }         # constraints allow) and velocities; the reduced model
-                                  # starts from the nearest point of the SSM
-  [validate.steady_state]         # periodic response by integration from rest, criterion (47)
-  epsilon = 0.6                   # omega = [...] or omega_range = [min, max] with points = 21
-  omega_range = [1.8, 2.2]        # delta = 1e-3, max_periods = 2000, samples_per_period = 128
-  # start = \"ssm\"               # from the FRC's largest stable response instead of rest
-  # max_period_multiple = 2       # also accept responses of period 2T (subharmonics)
-
-  [report]                        # speed against error, one row per order
-  orders = [3, 5, 7]              # default: the odd orders up to [ssm] order
-
+const SCENE_HELP: &str = concat!(
+    "SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):\n\n",
+    include_str!("scene/format.toml"),
+    "\n\
 OUTPUTS (in --out DIR, default ./out/<scene file stem>): summary.json, spectrum.csv,
 backbone.csv/.svg, rom_trajectory.csv, frc.csv/.svg, validation.csv/.svg,
 steady_state.csv (also drawn into frc.svg), report.csv/.md/.svg (as requested).
 Files are written to temporary names and renamed; a failed run writes nothing.
 
 PLUGINS are found from --plugin PATH, from SSM_PLUGIN_PATH (':'-separated files or
-directories), and from the directory of this binary.";
+directories), and from the directory of this binary."
+);
 
 #[derive(Parser)]
 #[command(

@@ -8,6 +8,9 @@
 //! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sects.
 //! 5.1.1, 5.2.2, 5.2.3, Appendix G.1, eq. (47).
 
+pub mod report;
+pub mod validation;
+
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -31,9 +34,6 @@ pub enum ValidateError {
     /// The reduced trajectory failed.
     #[error(transparent)]
     Reduced(#[from] RomError),
-    /// A plot could not be drawn.
-    #[error(transparent)]
-    Plot(#[from] crate::output::plot::PlotError),
     /// A steady-state point failed.
     #[error("steady-state reference at Omega = {omega}: {source}")]
     SteadyPoint {

@@ -1,12 +1,21 @@
-//! Writing results: every file of a run is produced in memory first and then
-//! written to a temporary name in the output directory and renamed, so an
-//! error or a crash never leaves a half-written result.
+//! The output layer: writers that turn the typed results of a run into files
+//! (`summary.json`, CSV tables, SVG plots) and compute nothing, and the
+//! [`OutputSet`] that holds them in memory until they are written to the
+//! output directory.
 
+pub mod frc;
 pub mod plot;
+pub mod report;
+pub mod ssm;
+pub mod summary;
+pub mod validation;
 
 use std::path::{Path, PathBuf};
 
+use crate::rom::autonomous::{BackboneCurve, LiftedTransient};
 use crate::spectrum::Spectrum;
+use plot::PlotError;
+use summary::{summary_json, Summary};
 
 /// Failure to write outputs.
 #[derive(Debug, thiserror::Error)]
@@ -89,4 +98,56 @@ pub fn spectrum_csv(spectrum: &Spectrum, master_indices: &[(usize, usize)]) -> S
         ));
     }
     s
+}
+
+/// The typed results of a run, as the output layer receives them.
+pub struct Products<'a> {
+    /// Names of `[outputs] coordinates`.
+    pub coordinates: &'a [String],
+    /// Backbone curves.
+    pub backbone: Option<&'a [BackboneCurve]>,
+    /// Reduced transient.
+    pub transient: Option<&'a LiftedTransient>,
+    /// Everything `summary.json` reports (also the FRC, validation and report).
+    pub summary: Summary<'a>,
+}
+
+/// Every file of a run: `summary.json`, `spectrum.csv`, and the files of each
+/// answer present.
+pub fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
+    let s = &p.summary;
+    let mut out = OutputSet::default();
+    if let Some(b) = p.backbone {
+        out.add("backbone.csv", ssm::backbone_csv(b, p.coordinates));
+        out.add("backbone.svg", ssm::backbone_svg(b, p.coordinates)?);
+    }
+    if let Some(t) = p.transient {
+        out.add("rom_trajectory.csv", ssm::transient_csv(t, p.coordinates));
+    }
+    let steady = s.validation.and_then(|v| v.steady.as_ref());
+    if let Some(v) = s.validation {
+        if let Some(t) = &v.transient {
+            out.add("validation.csv", validation::transient_csv(t));
+            out.add("validation.svg", validation::transient_svg(t)?);
+        }
+        if let Some(r) = steady {
+            out.add("steady_state.csv", validation::steady_csv(r));
+        }
+    }
+    if let Some(f) = s.frc {
+        out.add("frc.csv", frc::frc_csv(f));
+        out.add("frc.svg", frc::frc_svg(f, steady)?);
+    }
+    if let Some(r) = s.report {
+        out.add("report.csv", report::csv(r));
+        out.add(
+            "report.md",
+            report::markdown(&s.system.name, s.system.n_states(), r),
+        );
+        out.add("report.svg", report::svg(r)?);
+    }
+    let pair_index: Vec<(usize, usize)> = s.masters.iter().map(|m| (m.pair, m.index)).collect();
+    out.add("spectrum.csv", spectrum_csv(s.spectrum, &pair_index));
+    out.add("summary.json", summary_json(s));
+    Ok(out)
 }

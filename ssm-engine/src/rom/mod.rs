@@ -1,6 +1,10 @@
-//! Answers read off the reduced-order model on the SSM: forced response curves
-//! of one pair ([`frc`]) and the continuation of several pairs
-//! ([`continuation`]).
+//! Answers read off the reduced-order model on the SSM: backbones, the
+//! invariance error and lifted transients ([`autonomous`]), forced response
+//! curves of one pair ([`frc`], [`forced_response`]) and of several pairs by
+//! continuation ([`continuation`], [`forced_multi`]).
 
+pub mod autonomous;
 pub mod continuation;
+pub mod forced_multi;
+pub mod forced_response;
 pub mod frc;

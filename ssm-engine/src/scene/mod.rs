@@ -1,40 +1,10 @@
-//! The scene format: a TOML file naming a model (plugin, model name, parameters)
-//! and what to compute. Unknown keys are rejected; every error names the file,
-//! the line and the key.
+//! The scene format: a TOML file naming a model (plugin, model name,
+//! parameters; or a reducer and its data) and what to compute. Unknown keys
+//! are rejected; every error names the file, the line and the key.
 //!
-//! ```toml
-//! [model]
-//! plugin = "spatial-oscillator"   # a name listed by `ssm-engine plugins`, or a path
-//! # name = "chain"                # which model, when a plugin offers several
-//! [model.params]                  # passed to the plugin (the paper's symbols)
-//! constraint = "cubic"
-//! [ssm]
-//! master_pairs = [1]              # 1-based mode pairs, slowest first
-//! order = 13                      # expansion order (non-resonance checks go up to it)
-//! normalization = "unit"          # or "mass", or { scale = 0.8306 }
-//! resonance_tol = 0.02            # relative distance counted as a (near) resonance
-//! [spectrum]
-//! method = "auto"                 # "dense" | "sparse" | "auto" (dense up to 1000 states)
-//! modes = 12                      # finite modes computed on the sparse path
-//! [outputs]
-//! coordinates = ["x1"]            # named outputs of the model
-//! [outputs.invariance_error]      # eq. (41)
-//! radii = [0.01, 0.1]
-//! orders = [3, 5, 7]
-//! [outputs.backbone]              # one master pair
-//! rho_max = 0.35
-//! orders = [3, 7, 13]
-//! [outputs.transient]             # p' = R(p) from (rho0, theta0), lifted by W
-//! rho0 = [0.35]
-//! theta0 = [0.5]
-//! t_end = 100.0
-//! [forcing]                       # forced response curves (one master pair)
-//! epsilon = [0.01, 0.02]          # one FRC each; the load shape is the model's Fext
-//! omega_range = [1.9, 2.1]
-//! orders = [3, 5, 7]              # one FRC each (default: [ssm] order)
-//! # resonance = [1], points = 200, rho_max = ...
-//! # nonautonomous_order = 4       # O(eps |p|^k) terms beyond the leading order
-//! ```
+//! The format, annotated ([`FORMAT`]: the one source of this text, also shown
+//! by `ssm-engine --help` and in the README; a test keeps them equal):
+#![doc = concat!("```toml\n", include_str!("format.toml"), "```")]
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -47,6 +17,10 @@ mod validate;
 
 pub use reduce::{DataSection, ReduceSection};
 pub use validate::{ReportSection, SteadyStart, SteadyStateSection, ValidateSection};
+
+/// The annotated scene format, every section and key with its default: the
+/// one source of the format's documentation (module docs, `--help`, README).
+pub const FORMAT: &str = include_str!("format.toml");
 
 /// A scene that cannot be used, with the place and the problem.
 #[derive(Debug, thiserror::Error)]

@@ -1,14 +1,21 @@
-//! Forced response of several master pairs (internal resonance) for the
-//! report: continuation of the rotating-frame reduced dynamics
-//! ([`crate::rom::continuation`]) with branch switching at branch points, and the
-//! physical amplitudes of each point rebuilt from `W(p(t)) + eps X0(Omega t)`.
-
-use serde_json::{json, Value};
+//! Forced response of several master pairs (internal resonance):
+//! continuation of the rotating-frame reduced dynamics
+//! ([`crate::rom::continuation`]) with branch switching at branch points, and
+//! the physical amplitudes of each point rebuilt from
+//! `W(p(t)) + eps X0(Omega t)`.
+//!
+//! # References
+//! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical
+//! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sect. 4.2
+//! (eq. 16, internal resonances), Fig. 15.
 
 use crate::model::system::{OutputMap, System};
-use crate::output::plot::Curve;
-use crate::results_frc::{assemble, csv_header, FrcError, FrcReport, FrcRow};
-use crate::rom::continuation::{Branch, LocatedKind, PolarTerm, RotatingFrame, Settings};
+use crate::rom::continuation::{
+    Branch, BranchPoint, LocatedKind, PolarTerm, RotatingFrame, Settings,
+};
+use crate::rom::forced_response::{
+    CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
+};
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::forced::ForcedSsm;
@@ -61,14 +68,14 @@ fn period_multiple(ratios: &[f64]) -> f64 {
 }
 
 /// FRCs of several pairs for every `(order, epsilon)` of `sec`.
-pub fn frc_multi(
+pub fn forced_response_multi(
     ssm: &SsmExpansion,
     sys: &System,
     masters: &[MasterMode],
     sec: &ForcingSection,
     outputs: &[&OutputMap],
     ratios: &[f64],
-) -> Result<FrcReport, FrcError> {
+) -> Result<ForcedResponse, FrcError> {
     if sec
         .nonautonomous_order
         .as_ref()
@@ -97,17 +104,12 @@ pub fn frc_multi(
         .map(|o| ssm.output_series(&o.weights))
         .collect();
     let periods = period_multiple(ratios);
-    let mut csv = csv_header(outputs, m);
     let mut rows = Vec::new();
     let mut curves = Vec::new();
-    let mut bifurcations = Vec::new();
-    let mut summaries = Vec::new();
-    let mut n_points = 0;
     let mut warnings = Vec::new();
-    for (ci, (&order, &eps)) in orders
+    for (&order, &eps) in orders
         .iter()
         .flat_map(|o| sec.epsilon.get_ref().iter().map(move |e| (o, e)))
-        .enumerate()
     {
         let (terms, dropped) = rotating_terms(ssm, ratios, order);
         if dropped > 0 {
@@ -135,6 +137,7 @@ pub fn frc_multi(
             .collect();
         let main = frame.start(range.0, guess, &settings)?;
         let mut branches: Vec<Branch> = vec![main];
+        let mut bifurcations = Vec::new();
         let mut switched = 0;
         let mut k = 0;
         while k < branches.len() && switched < MAX_SWITCHES {
@@ -160,12 +163,9 @@ pub fn frc_multi(
             }
             k += 1;
         }
-        let mut count = 0;
+        let first = rows.len();
         for (bi, br) in branches.iter().enumerate() {
-            let mut seg: Vec<(f64, f64)> = Vec::new();
-            // (point, plotted amplitude) of the branch, for bifurcation markers
-            let mut plotted: Vec<(&crate::rom::continuation::BranchPoint, f64)> = Vec::new();
-            let mut seg_stable = None;
+            let first_of_branch = rows.len();
             for p in br
                 .points
                 .iter()
@@ -192,22 +192,6 @@ pub fn frc_multi(
                         h1[oi] += y * C64::from_polar(1.0, -phi);
                     }
                 }
-                csv.push_str(&format!(
-                    "{order},{eps:e},{:.10e},{},{}",
-                    p.omega,
-                    u8::from(p.stable),
-                    bi + 1
-                ));
-                for l in &linf {
-                    csv.push_str(&format!(",{l:.10e}"));
-                }
-                for q in &p.q {
-                    csv.push_str(&format!(",{:.10e}", q.norm()));
-                }
-                for a in &h1 {
-                    csv.push_str(&format!(",{:.10e}", 2.0 * a.norm() / samples as f64));
-                }
-                csv.push('\n');
                 rows.push(FrcRow {
                     order,
                     epsilon: eps,
@@ -216,43 +200,23 @@ pub fn frc_multi(
                     stable: p.stable,
                     rho: p.q.iter().map(|q| q.norm_sqr()).sum::<f64>().sqrt(),
                     q: p.q.clone(),
-                    linf: linf.clone(),
-                });
-                count += 1;
-                let y = linf.first().copied().unwrap_or(p.q[0].norm());
-                if seg_stable.is_some_and(|st| st != p.stable) {
-                    let last = *seg.last().expect("non-empty segment");
-                    curves.push(Curve {
-                        label: String::new(),
-                        points: std::mem::take(&mut seg),
-                        dashed: seg_stable == Some(false),
-                        markers: Vec::new(),
-                        color: Some(ci),
-                    });
-                    seg.push(last);
-                }
-                seg_stable = Some(p.stable);
-                seg.push((p.omega, y));
-                plotted.push((p, y));
-            }
-            if !seg.is_empty() {
-                curves.push(Curve {
-                    label: if bi == 0 {
-                        format!("O({order}), eps = {eps}")
-                    } else {
-                        String::new()
-                    },
-                    points: seg,
-                    dashed: seg_stable == Some(false),
-                    markers: Vec::new(),
-                    color: Some(ci),
+                    pair_amplitudes: p.q.iter().map(|q| q.norm()).collect(),
+                    linf,
+                    h1: h1.iter().map(|a| 2.0 * a.norm() / samples as f64).collect(),
                 });
             }
+            let plotted: Vec<(&BranchPoint, f64)> = br
+                .points
+                .iter()
+                .filter(|p| p.omega >= range.0 && p.omega <= range.1)
+                .zip(&rows[first_of_branch..])
+                .map(|(p, r)| (p, r.plotted()))
+                .collect();
             for l in &br.located {
                 if l.at.omega < range.0 || l.at.omega > range.1 {
                     continue;
                 }
-                let dist = |p: &crate::rom::continuation::BranchPoint| {
+                let dist = |p: &BranchPoint| {
                     (p.omega - l.at.omega).abs()
                         + p.q
                             .iter()
@@ -260,49 +224,40 @@ pub fn frc_multi(
                             .map(|(a, b)| (a - b).norm())
                             .sum::<f64>()
                 };
-                let nearest = plotted
-                    .iter()
-                    .min_by(|a, b| dist(a.0).total_cmp(&dist(b.0)))
-                    .map(|&(_, y)| y);
-                if let (Some(y), Some(c)) = (nearest, curves.last_mut()) {
-                    c.markers.push((l.at.omega, y));
-                }
-                let kind = match l.kind {
-                    LocatedKind::BranchPoint => "BP",
-                    LocatedKind::Bifurcation(b) => b.label(),
-                };
-                bifurcations.push(json!({
-                    "kind": kind,
-                    "omega": l.at.omega,
-                    "epsilon": eps,
-                    "order": order,
-                    "branch": bi + 1,
-                    "rho": l.at.q.iter().map(|q| q.norm()).collect::<Vec<_>>(),
-                }));
+                bifurcations.push(FrcBifurcation {
+                    kind: match l.kind {
+                        LocatedKind::BranchPoint => "BP",
+                        LocatedKind::Bifurcation(b) => b.label(),
+                    },
+                    omega: l.at.omega,
+                    branch: bi + 1,
+                    rho: l.at.q.iter().map(|q| q.norm()).collect(),
+                    plotted: plotted
+                        .iter()
+                        .min_by(|a, b| dist(a.0).total_cmp(&dist(b.0)))
+                        .map(|&(_, y)| y),
+                });
             }
         }
-        n_points += count;
-        summaries.push(json!({
-            "order": order,
-            "epsilon": eps,
-            "points": count,
-            "branches": branches.len(),
-            "branch_switches": switched,
-            "continuation_steps": branches.iter().map(|b| b.points.len()).sum::<usize>(),
-        }));
+        curves.push(FrcCurve {
+            order,
+            epsilon: eps,
+            points: rows.len() - first,
+            branches: branches.len(),
+            bifurcations,
+            details: CurveDetails::Continuation {
+                branch_switches: switched,
+                continuation_steps: branches.iter().map(|b| b.points.len()).sum::<usize>(),
+            },
+        });
     }
-    assemble(
-        csv,
+    Ok(ForcedResponse {
+        outputs: outputs.iter().map(|o| o.name.clone()).collect(),
         rows,
         curves,
-        outputs,
-        json!({
-            "bifurcations": bifurcations,
-            "points": n_points,
-            "curves": summaries,
-            "resonance": ratios,
-            "forcing_on_master": s.iter().map(|v| json!({"re": v.re, "im": v.im})).collect::<Vec<Value>>(),
-            "warnings": warnings,
-        }),
-    )
+        resonance: ratios.to_vec(),
+        rho_max: None,
+        forcing_on_master: s,
+        warnings,
+    })
 }

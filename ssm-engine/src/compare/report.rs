@@ -1,24 +1,26 @@
 //! The speed-against-error report: for each expansion order, the time to build
 //! the reduced model and to answer with it (backbone, FRC, transient), its
 //! invariance error (eq. 41), and its error against the full-system reference
-//! of `[validate]`; written as `report.csv`, `report.md` and `report.svg`
-//! (time against error, one point per order, the full-system cost as lines).
+//! of `[validate]`, beside the full system's own cost.
+//!
+//! # References
+//! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical
+//! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sect. 5
+//! (computing times against the full system), eq. (41).
 
 use std::time::Instant;
 
-use serde_json::{json, Value};
+use toml::Spanned;
 
+use super::validation::{frc_error, Validation};
 use crate::model::system::{OutputMap, System};
-use crate::output::plot::{line_plot, Curve, PlotError, Scale};
-use crate::results_frc::{self, FrcError};
-use crate::results_validate::{frc_error, ValidationProducts};
+use crate::rom::forced_response::{forced_response, FrcError};
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar};
 use crate::ssm::rom::{integrate, RomError};
 use crate::ssm::{self, SsmError, SsmOptions};
 use crate::C64;
-use toml::Spanned;
 
 /// Why the report could not be produced.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -47,9 +49,6 @@ pub enum ReportError {
         /// What failed.
         source: FrcError,
     },
-    /// The plot failed.
-    #[error(transparent)]
-    Plot(#[from] PlotError),
 }
 
 /// One reduced model of the report.
@@ -90,7 +89,7 @@ pub struct ReportInputs<'a> {
     /// `[forcing]`, if any.
     pub forcing: Option<&'a ForcingSection>,
     /// The full-system references, if any.
-    pub validation: Option<&'a ValidationProducts>,
+    pub validation: Option<&'a Validation>,
     /// Initial reduced coordinates of the validation transient.
     pub p0: Option<Vec<C64>>,
     /// Relative tolerance of the reduced transients (the full system's).
@@ -100,7 +99,10 @@ pub struct ReportInputs<'a> {
 /// Computes the rows of the report.
 pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, ReportError> {
     let mut rows = Vec::with_capacity(inp.orders.len());
-    let transient = inp.validation.and_then(|v| v.transient.as_ref());
+    let transient = inp
+        .validation
+        .and_then(|v| v.transient.as_ref())
+        .map(|t| &t.result);
     let steady = inp.validation.and_then(|v| v.steady.as_ref());
     for &order in inp.orders {
         let t = Instant::now();
@@ -175,7 +177,7 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
                 sec.epsilon = Spanned::new(0..0, vec![r.epsilon]);
             }
             let t = Instant::now();
-            let rep = results_frc::frc(&ssm, sys, inp.masters, &sec, inp.outputs)
+            let rep = forced_response(&ssm, sys, inp.masters, &sec, inp.outputs)
                 .map_err(|source| ReportError::Frc { order, source })?;
             row.frc_s = Some(t.elapsed().as_secs_f64());
             if let Some(r) = steady {
@@ -194,187 +196,113 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
 }
 
 /// Full-system costs `(what, seconds)` of the references.
-pub fn full_costs(v: Option<&ValidationProducts>) -> Vec<(String, f64)> {
+pub fn full_costs(v: Option<&Validation>) -> Vec<FullCost> {
     let mut out = Vec::new();
     if let Some(v) = v {
         if let Some(t) = &v.transient {
-            out.push(("full transient".to_owned(), t.full_s));
+            out.push(FullCost {
+                kind: FullKind::Transient,
+                what: "full transient".to_owned(),
+                wall_s: t.result.full_s,
+            });
         }
         if let Some(s) = &v.steady {
-            out.push((
-                format!("full steady state, {} frequencies", s.points.len()),
-                s.wall_s,
-            ));
+            out.push(FullCost {
+                kind: FullKind::SteadyState,
+                what: format!("full steady state, {} frequencies", s.points.len()),
+                wall_s: s.wall_s,
+            });
         }
     }
     out
 }
 
-fn opt(v: Option<f64>) -> String {
-    v.map_or_else(String::new, |x| format!("{x:.6e}"))
+/// Kind of a full-system reference cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FullKind {
+    /// The transient of `[validate]`.
+    Transient,
+    /// The steady states of `[validate.steady_state]`.
+    SteadyState,
 }
 
-/// `report.csv`: `kind,order,ssm_s,backbone_s,transient_s,frc_s,invariance_error,invariance_rho,transient_error,frc_error`.
-pub fn csv(rows: &[ReportRow], full: &[(String, f64)]) -> String {
-    let mut s = String::from(
-        "kind,order,ssm_s,backbone_s,transient_s,frc_s,invariance_error,invariance_rho,transient_error,frc_error\n",
-    );
-    for r in rows {
-        s.push_str(&format!(
-            "rom,{},{:.6e},{},{},{},{},{},{},{}\n",
-            r.order,
-            r.ssm_s,
-            opt(r.backbone_s),
-            opt(r.transient_s),
-            opt(r.frc_s),
-            opt(r.invariance_error),
-            opt(r.invariance_rho),
-            opt(r.transient_error),
-            opt(r.frc_error)
-        ));
-    }
-    for (what, secs) in full {
-        let kind = if what.starts_with("full transient") {
-            "full_transient"
-        } else {
-            "full_steady_state"
-        };
-        let (tr, frc) = if kind == "full_transient" {
-            (format!("{secs:.6e}"), String::new())
-        } else {
-            (String::new(), format!("{secs:.6e}"))
-        };
-        s.push_str(&format!("{kind},,,,{tr},{frc},,,,\n"));
-    }
-    s
+/// What one full-system reference cost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FullCost {
+    /// Which reference.
+    pub kind: FullKind,
+    /// Description.
+    pub what: String,
+    /// Wall time.
+    pub wall_s: f64,
 }
 
-fn fmt_s(v: Option<f64>) -> String {
-    match v {
-        None => "-".into(),
-        Some(x) if x < 1e-3 => format!("{:.1} µs", x * 1e6),
-        Some(x) if x < 1.0 => format!("{:.2} ms", x * 1e3),
-        Some(x) => format!("{x:.2} s"),
+/// The reduced model's speed-up on the transient: the highest order with a
+/// transient, built and integrated, against the full integration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Speedup {
+    /// Expansion order.
+    pub order: usize,
+    /// SSM build plus reduced transient.
+    pub rom_s: f64,
+    /// Full transient.
+    pub full_s: f64,
+    /// `full_s / rom_s`.
+    pub ratio: f64,
+}
+
+/// The report: one row per order and the full-system costs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    /// One row per expansion order.
+    pub rows: Vec<ReportRow>,
+    /// The full-system references.
+    pub full: Vec<FullCost>,
+    /// The transient speed-up, if both sides ran.
+    pub speedup: Option<Speedup>,
+}
+
+impl ReportRow {
+    /// The error an order is plotted with: transient, else FRC, else invariance.
+    pub fn error(&self) -> Option<f64> {
+        self.transient_error
+            .or(self.frc_error)
+            .or(self.invariance_error)
+    }
+
+    /// Time to build the model and give every answer.
+    pub fn answer_s(&self) -> f64 {
+        self.ssm_s
+            + self.transient_s.unwrap_or(0.0)
+            + self.frc_s.unwrap_or(0.0)
+            + self.backbone_s.unwrap_or(0.0)
     }
 }
 
-fn fmt_e(v: Option<f64>) -> String {
-    v.map_or_else(|| "-".into(), |x| format!("{x:.2e}"))
-}
-
-/// `report.md`: a table a person reads.
-pub fn markdown(sys: &System, rows: &[ReportRow], full: &[(String, f64)]) -> String {
-    let mut s = format!(
-        "# Speed against error: {} ({} states)\n\n\
-         Times are wall-clock on this machine; errors are relative to the largest \
-         full-system value of each output (transient) or to the peak of the \
-         steady-state reference (FRC). The invariance error is eq. (41) at the \
-         amplitude of the comparison.\n\n\
-         | order | SSM build | backbone | transient | FRC | invariance error (rho) | transient error | FRC error |\n\
-         |---|---|---|---|---|---|---|---|\n",
-        sys.name,
-        sys.n_states()
-    );
-    for r in rows {
-        s.push_str(&format!(
-            "| O({}) | {} | {} | {} | {} | {} ({}) | {} | {} |\n",
-            r.order,
-            fmt_s(Some(r.ssm_s)),
-            fmt_s(r.backbone_s),
-            fmt_s(r.transient_s),
-            fmt_s(r.frc_s),
-            fmt_e(r.invariance_error),
-            r.invariance_rho.map_or("-".into(), |x| format!("{x:.3}")),
-            fmt_e(r.transient_error),
-            fmt_e(r.frc_error),
-        ));
-    }
-    if !full.is_empty() {
-        s.push_str("\nFull-system references (Radau IIA on the DAE):\n\n");
-        for (what, secs) in full {
-            s.push_str(&format!("- {what}: {}\n", fmt_s(Some(*secs))));
+/// The report of `inp`: its rows, the full-system costs and the speed-up.
+pub fn report(sys: &System, inp: &ReportInputs<'_>) -> Result<Report, ReportError> {
+    let rows = rows(sys, inp)?;
+    let full = full_costs(inp.validation);
+    let speedup = match (
+        rows.iter()
+            .filter(|r| r.transient_s.is_some())
+            .max_by_key(|r| r.order),
+        full.iter().find(|f| f.kind == FullKind::Transient),
+    ) {
+        (Some(best), Some(ft)) => {
+            let rom_s = best.ssm_s + best.transient_s.unwrap_or(0.0);
+            Some(Speedup {
+                order: best.order,
+                rom_s,
+                full_s: ft.wall_s,
+                ratio: ft.wall_s / rom_s.max(1e-12),
+            })
         }
-        if let (Some(best), Some((_, ft))) = (
-            rows.iter()
-                .filter(|r| r.transient_s.is_some())
-                .max_by_key(|r| r.order),
-            full.iter().find(|(w, _)| w.starts_with("full transient")),
-        ) {
-            let rom = best.ssm_s + best.transient_s.unwrap_or(0.0);
-            let ratio = ft / rom.max(1e-12);
-            s.push_str(&format!(
-                "\nO({}) (build + transient) takes {} against {} for the full transient: {}.\n",
-                best.order,
-                fmt_s(Some(rom)),
-                fmt_s(Some(*ft)),
-                if ratio >= 1.0 {
-                    format!("{ratio:.1}x faster")
-                } else {
-                    format!("{:.1}x slower (a small full model; the reduced model pays for its expansion)", 1.0 / ratio)
-                }
-            ));
-        }
-    }
-    s
-}
-
-/// `report.svg`: time to answer against error, one point per order.
-pub fn svg(rows: &[ReportRow], full: &[(String, f64)]) -> Result<String, PlotError> {
-    let error = |r: &ReportRow| r.transient_error.or(r.frc_error).or(r.invariance_error);
-    let time = |r: &ReportRow| {
-        r.ssm_s
-            + r.transient_s.unwrap_or(0.0)
-            + r.frc_s.unwrap_or(0.0)
-            + r.backbone_s.unwrap_or(0.0)
+        _ => None,
     };
-    let mut curves: Vec<Curve> = rows
-        .iter()
-        .filter_map(|r| error(r).map(|e| (r, e)))
-        .map(|(r, e)| Curve {
-            label: format!("O({})", r.order),
-            points: vec![(e, time(r))],
-            markers: vec![(e, time(r))],
-            ..Curve::default()
-        })
-        .collect();
-    let errs: Vec<f64> = rows.iter().filter_map(error).filter(|e| *e > 0.0).collect();
-    let (lo, hi) = (
-        errs.iter().copied().fold(f64::INFINITY, f64::min),
-        errs.iter().copied().fold(0.0, f64::max),
-    );
-    if lo.is_finite() {
-        for (what, secs) in full {
-            curves.push(Curve {
-                label: what.clone(),
-                points: vec![(lo / 2.0, *secs), (hi * 2.0, *secs)],
-                dashed: true,
-                ..Curve::default()
-            });
-        }
-    }
-    line_plot(
-        "time to answer against error (one point per order; dashed: full system)",
-        "error against the full system",
-        "seconds",
-        &curves,
-        Scale::LogLog,
-    )
-}
-
-/// The summary's `report`.
-pub fn json(rows: &[ReportRow], full: &[(String, f64)]) -> Value {
-    json!({
-        "rows": rows.iter().map(|r| json!({
-            "order": r.order,
-            "ssm_s": r.ssm_s,
-            "backbone_s": r.backbone_s,
-            "transient_s": r.transient_s,
-            "frc_s": r.frc_s,
-            "invariance_error": r.invariance_error,
-            "invariance_rho": r.invariance_rho,
-            "transient_error": r.transient_error,
-            "frc_error": r.frc_error,
-        })).collect::<Vec<_>>(),
-        "full_system": full.iter().map(|(w, s)| json!({"what": w, "wall_s": s})).collect::<Vec<_>>(),
+    Ok(Report {
+        rows,
+        full,
+        speedup,
     })
 }

@@ -1,0 +1,114 @@
+//! Writers of what is read off an SSM: the `ssm`, `polar` and
+//! `invariance_error` entries of `summary.json`, `backbone.csv`/`.svg` and
+//! `rom_trajectory.csv`. They format typed results and compute nothing.
+
+use serde_json::{json, Value};
+
+use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::rom::autonomous::{BackboneCurve, InvarianceEntry, LiftedTransient};
+use crate::ssm::analysis::Polar;
+use crate::ssm::{Dynamics, RTerm, SsmExpansion};
+
+/// `"ssm"`: order, dimension, resonant terms and reduced dynamics
+/// (coordinates `p1, conj p1, ...`, 1-based equation numbers).
+pub fn ssm_json(ssm: &SsmExpansion) -> Value {
+    let term = |t: &RTerm| {
+        json!({
+            "eq": t.coord + 1,
+            "exponents": ssm.set.exponents(t.index),
+            "re": t.coeff.re,
+            "im": t.coeff.im,
+        })
+    };
+    json!({
+        "order": ssm.order,
+        "dim": ssm.dim(),
+        "time": match ssm.dynamics {
+            Dynamics::Flow => json!("flow"),
+            Dynamics::Map { period } => json!({"map_period": period}),
+        },
+        "resonant_terms": ssm.nonlinear_terms().map(|t| json!({
+            "eq": t.coord + 1,
+            "exponents": ssm.set.exponents(t.index),
+        })).collect::<Vec<_>>(),
+        "reduced_dynamics": ssm.r.iter().map(term).collect::<Vec<_>>(),
+    })
+}
+
+/// `"polar"` of a two-dimensional SSM of a flow.
+pub fn polar_json(p: &Polar) -> Value {
+    json!([{ "pair": 1, "rho_dot": p.rho_dot(), "omega": p.omega() }])
+}
+
+/// `"invariance_error"`: one entry per order and radius.
+pub fn invariance_json(rows: &[InvarianceEntry]) -> Value {
+    rows.iter()
+        .map(|r| json!({"order": r.order, "radius": r.radius, "error": r.error}))
+        .collect()
+}
+
+/// `backbone.csv`: `order,rho,omega,<output>...`.
+pub fn backbone_csv(curves: &[BackboneCurve], outputs: &[String]) -> String {
+    let mut csv = String::from("order,rho,omega");
+    for o in outputs {
+        csv.push(',');
+        csv.push_str(o);
+    }
+    csv.push('\n');
+    for c in curves {
+        for p in &c.points {
+            csv.push_str(&format!("{},{:.10e},{:.10e}", c.order, p.rho, p.omega));
+            for a in &p.amplitudes {
+                csv.push_str(&format!(",{a:.10e}"));
+            }
+            csv.push('\n');
+        }
+    }
+    csv
+}
+
+/// `backbone.svg`: omega against the amplitude of the first output (or
+/// against `rho` without outputs), one curve per order.
+pub fn backbone_svg(curves: &[BackboneCurve], outputs: &[String]) -> Result<String, PlotError> {
+    let drawn: Vec<Curve> = curves
+        .iter()
+        .map(|c| Curve {
+            label: format!("O({})", c.order),
+            points: c
+                .points
+                .iter()
+                .map(|p| (p.amplitudes.first().copied().unwrap_or(p.rho), p.omega))
+                .collect(),
+            ..Curve::default()
+        })
+        .collect();
+    let x_label = outputs
+        .first()
+        .map_or_else(|| "rho".to_owned(), |o| format!("amplitude of {o}"));
+    line_plot("backbone", &x_label, "omega", &drawn, Scale::Linear)
+}
+
+/// `rom_trajectory.csv`: `t,<output>...,rho_1,theta_1,...`.
+pub fn transient_csv(tr: &LiftedTransient, outputs: &[String]) -> String {
+    let m = tr.polar.first().map_or(0, Vec::len);
+    let mut csv = String::from("t");
+    for o in outputs {
+        csv.push(',');
+        csv.push_str(o);
+    }
+    for i in 1..=m {
+        csv.push_str(&format!(",rho_{i},theta_{i}"));
+    }
+    csv.push('\n');
+    for ((t, values), polar) in tr.times.iter().zip(&tr.outputs).zip(&tr.polar) {
+        csv.push_str(&format!("{t:.10e}"));
+        for y in values {
+            csv.push_str(&format!(",{y:.10e}"));
+        }
+        for (rho, theta) in polar {
+            csv.push_str(&format!(",{rho:.10e},{theta:.10e}"));
+        }
+        csv.push('\n');
+    }
+    csv
+}

@@ -1,0 +1,168 @@
+//! `summary.json`: every typed result of a run, formatted; nothing is
+//! computed here.
+
+use serde_json::{json, Value};
+
+use super::{frc, report, ssm, validation};
+use crate::compare::report::Report;
+use crate::compare::validation::Validation;
+use crate::model::system::System;
+use crate::reduce::Reduction;
+use crate::rom::autonomous::InvarianceEntry;
+use crate::rom::forced_response::ForcedResponse;
+use crate::spectrum::{MasterMode, SpectralQuotients, Spectrum};
+use crate::ssm::analysis::Polar;
+use crate::ssm::SsmExpansion;
+
+/// Seconds spent per stage.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Timing {
+    /// Spectrum and master modes.
+    pub spectrum: f64,
+    /// Non-resonance checks (eqs. 53, 57).
+    pub resonance_check: f64,
+    /// The SSM.
+    pub ssm: f64,
+    /// Backbone, invariance error, reduced transient.
+    pub results: f64,
+    /// Forced response curves.
+    pub frc: f64,
+    /// Full-system references.
+    pub validation: f64,
+    /// Speed-against-error report.
+    pub report: f64,
+    /// The whole run.
+    pub total: f64,
+}
+
+/// The results a run hands to `summary.json`.
+pub struct Summary<'a> {
+    /// The model analysed.
+    pub system: &'a System,
+    /// Finite modes of the model (counted, or known from its structure).
+    pub n_finite_modes: usize,
+    /// The reduction that made the model, if any.
+    pub reduction: Option<&'a Reduction>,
+    /// The finite spectrum.
+    pub spectrum: &'a Spectrum,
+    /// Requested master pairs.
+    pub master_pairs: &'a [usize],
+    /// The master modes.
+    pub masters: &'a [MasterMode],
+    /// Spectral quotients (eqs. 54, 58).
+    pub quotients: &'a SpectralQuotients,
+    /// The SSM.
+    pub ssm: &'a SsmExpansion,
+    /// Polar form of a two-dimensional SSM of a flow.
+    pub polar: Option<&'a Polar>,
+    /// Invariance-error table.
+    pub invariance: Option<&'a [InvarianceEntry]>,
+    /// Steps of the reduced transient.
+    pub rom_steps: Option<usize>,
+    /// Forced response curves.
+    pub frc: Option<&'a ForcedResponse>,
+    /// Full-system comparisons.
+    pub validation: Option<&'a Validation>,
+    /// Speed-against-error report.
+    pub report: Option<&'a Report>,
+    /// Warnings of the run.
+    pub warnings: &'a [String],
+    /// Stage timings.
+    pub timing: Timing,
+}
+
+/// `summary.json`, pretty-printed.
+pub fn summary_json(s: &Summary<'_>) -> String {
+    let sys = s.system;
+    let t = &s.timing;
+    let lin = &s.ssm.timing.linear;
+    let value = json!({
+        "model": {
+            "plugin": sys.plugin,
+            "name": sys.name,
+            "n_states": sys.n_states(),
+            "n_finite_modes": s.n_finite_modes,
+        },
+        "reduction": s.reduction.map(reduction_json),
+        "recast": sys.recast.as_ref().map(|r| json!({
+            "n_original_states": r.n_original,
+            "equilibrium_shifted": r.equilibrium.iter().any(|&v| v != 0.0),
+            "auxiliaries": r.auxiliaries.iter().map(|a| json!({
+                "name": a.name,
+                "definition": a.definition,
+                "equation": if a.kind.is_differential() { "differential" } else { "algebraic" },
+            })).collect::<Vec<_>>(),
+        })),
+        "spectrum": s.spectrum.eigenvalues.iter().map(|l| json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
+        "spectrum_method": s.spectrum.method.as_str(),
+        "spectrum_complete": s.spectrum.complete,
+        "master_pairs": s.master_pairs,
+        "master_modes": s.masters.iter().map(|m| json!({
+            "pair": m.pair,
+            "lambda": {"re": m.lambda.re, "im": m.lambda.im},
+            "residual": m.residual,
+        })).collect::<Vec<_>>(),
+        "spectral_quotients": {
+            "relative": s.quotients.relative,
+            "absolute": s.quotients.absolute,
+            "complete": s.quotients.complete,
+        },
+        "ssm": ssm::ssm_json(s.ssm),
+        "polar": s.polar.map(ssm::polar_json),
+        "invariance_error": s.invariance.map(ssm::invariance_json),
+        "rom_steps": s.rom_steps,
+        "frc": s.frc.map(frc::frc_json),
+        "validation": s.validation.map(validation::validation_json),
+        "report": s.report.map(report::json),
+        "warnings": s.warnings,
+        "timing_s": {
+            "spectrum": t.spectrum,
+            "resonance_check": t.resonance_check,
+            "ssm": t.ssm,
+            "ssm_composition": s.ssm.timing.compose_s,
+            "ssm_factorization": lin.factor_s,
+            "ssm_solves": lin.solve_s,
+            "results": t.results,
+            "frc": t.frc,
+            "validation": t.validation,
+            "report": t.report,
+            "total": t.total,
+        },
+        "linear_algebra": {
+            "symbolic_factorizations": lin.symbolic,
+            "numeric_factorizations": lin.factorizations,
+            "solves": lin.solves,
+        },
+    });
+    serde_json::to_string_pretty(&value).expect("JSON values are serializable")
+}
+
+fn reduction_json(r: &Reduction) -> Value {
+    let diagnostics: serde_json::Map<String, Value> = r
+        .diagnostics
+        .iter()
+        .map(|d| {
+            let v = match (d.values.len(), d.text.is_empty()) {
+                (_, false) if d.values.is_empty() => json!(d.text.as_str()),
+                (1, true) => json!(d.values[0]),
+                (_, true) => json!(d.values.as_slice()),
+                _ => json!({"values": d.values.as_slice(), "text": d.text.as_str()}),
+            };
+            (d.name.to_string(), v)
+        })
+        .collect();
+    json!({
+        "plugin": r.plugin,
+        "reducer": r.reducer,
+        "n_input_states": r.n_input_states,
+        "n_trajectories": r.n_trajectories,
+        "n_reduced_states": r.n_reduced_states,
+        "lift": r.lift.as_ref().map(|l| json!({
+            "n_full_states": l.basis.nrows,
+            "n_reduced_states": l.basis.ncols,
+            "offset": !l.offset.is_empty(),
+        })),
+        "lifted_outputs": r.lifted_outputs,
+        "diagnostics": diagnostics,
+    })
+}

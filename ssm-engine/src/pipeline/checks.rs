@@ -1,0 +1,116 @@
+//! Checks of a scene against its model that the scene alone cannot make:
+//! named outputs and states exist, `[validate]` has a flow and a forcing to
+//! work with. Each failure is a scene error at the key's line.
+
+use super::error::JobError;
+use crate::model::system::{OutputMap, System};
+use crate::scene::{SceneFile, ValidateSection};
+
+/// The outputs of `[outputs] coordinates`, each checked to exist.
+pub fn coordinates<'a>(
+    scene: &SceneFile,
+    system: &'a System,
+) -> Result<Vec<&'a OutputMap>, JobError> {
+    let names = &scene.scene.outputs.coordinates;
+    names
+        .get_ref()
+        .iter()
+        .map(|name| {
+            system.output(name).ok_or_else(|| {
+                let known: Vec<&str> = system
+                    .outputs
+                    .iter()
+                    .map(|o| o.name.as_str())
+                    .take(40)
+                    .collect();
+                scene
+                    .invalid(
+                        names.span(),
+                        "outputs.coordinates",
+                        format!(
+                            "model '{}' has no output '{name}'; it has: {}",
+                            system.name,
+                            known.join(", ")
+                        ),
+                    )
+                    .into()
+            })
+        })
+        .collect()
+}
+
+/// The outputs compared by `[validate]` (its `outputs`, else `coordinates`),
+/// after checking that the model can be validated as the section asks.
+pub fn validation_outputs<'a>(
+    scene: &SceneFile,
+    system: &'a System,
+    vsec: &ValidateSection,
+    coordinates: &[&'a OutputMap],
+) -> Result<Vec<&'a OutputMap>, JobError> {
+    if let ssm_api::TimeKind::Map { .. } = system.time {
+        let at = scene.text.find("[validate").unwrap_or(0);
+        return Err(scene
+            .invalid(
+                at..at,
+                "validate",
+                format!(
+                    "model '{}' is a map; the full-system integrator needs a flow",
+                    system.name
+                ),
+            )
+            .into());
+    }
+    if let Some(ss) = &vsec.steady_state {
+        if system.forcing.is_empty() {
+            return Err(scene
+                .invalid(
+                    ss.epsilon.span(),
+                    "validate.steady_state",
+                    format!(
+                        "model '{}' has no forcing Fext to drive a steady state",
+                        system.name
+                    ),
+                )
+                .into());
+        }
+    }
+    for (table, key, kind) in [
+        (&vsec.x0, "validate.x0", ssm_api::StateKind::Displacement),
+        (&vsec.v0, "validate.v0", ssm_api::StateKind::Velocity),
+    ] {
+        let Some(t) = table else { continue };
+        for name in t.get_ref().keys() {
+            if !system
+                .states
+                .iter()
+                .any(|s| s.name.as_str() == name && s.kind == kind)
+            {
+                return Err(scene
+                    .invalid(
+                        t.span(),
+                        key,
+                        format!("model '{}' has no {kind:?} state '{name}'", system.name),
+                    )
+                    .into());
+            }
+        }
+    }
+    match &vsec.outputs {
+        Some(names) => names
+            .get_ref()
+            .iter()
+            .map(|n| {
+                system.output(n).ok_or_else(|| {
+                    scene
+                        .invalid(
+                            names.span(),
+                            "validate.outputs",
+                            format!("model '{}' has no output '{n}'", system.name),
+                        )
+                        .into()
+                })
+            })
+            .collect(),
+        None => Ok(coordinates.to_vec()),
+    }
+}

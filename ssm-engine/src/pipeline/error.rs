@@ -1,0 +1,76 @@
+//! What stops a run.
+
+use crate::compare::report::ReportError;
+use crate::compare::ValidateError;
+use crate::model::plugin::PluginLoadError;
+use crate::model::source::SourceError;
+use crate::model::system::ModelError;
+use crate::output::plot::PlotError;
+use crate::output::OutputError;
+use crate::reduce::scene::ReduceError;
+use crate::reduce::SignalsError;
+use crate::rom::autonomous::ResultError;
+use crate::rom::forced_response::FrcError;
+use crate::scene::SceneError;
+use crate::spectrum::SpectrumError;
+use crate::ssm::SsmError;
+
+/// Anything that stops a run; each variant says where.
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    /// The scene is malformed or inconsistent with the model.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// A plugin could not be loaded, or returned an error or panicked.
+    #[error(transparent)]
+    Plugin(#[from] PluginLoadError),
+    /// A `[data]` file cannot be used.
+    #[error("data: {0}")]
+    Signals(#[from] SignalsError),
+    /// The plugin's model is inconsistent.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The spectrum could not be computed.
+    #[error("spectrum: {0}")]
+    Spectrum(#[from] SpectrumError),
+    /// Outputs could not be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    /// The SSM could not be computed.
+    #[error("SSM: {0}")]
+    Ssm(#[from] SsmError),
+    /// A backbone, invariance error or reduced transient could not be produced.
+    #[error(transparent)]
+    Result(#[from] ResultError),
+    /// The forced response could not be produced.
+    #[error(transparent)]
+    Frc(#[from] FrcError),
+    /// A full-system reference failed.
+    #[error("validation: {0}")]
+    Validate(#[from] ValidateError),
+    /// The speed-against-error report failed.
+    #[error(transparent)]
+    Report(#[from] ReportError),
+    /// A plot could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+}
+
+impl From<SourceError> for JobError {
+    fn from(e: SourceError) -> Self {
+        match e {
+            SourceError::Scene(e) => Self::Scene(e),
+            SourceError::Plugin(e) => Self::Plugin(e),
+        }
+    }
+}
+
+impl From<ReduceError> for JobError {
+    fn from(e: ReduceError) -> Self {
+        match e {
+            ReduceError::Source(e) => e.into(),
+            ReduceError::Signals(e) => Self::Signals(e),
+            ReduceError::Model(e) => Self::Model(e),
+        }
+    }
+}

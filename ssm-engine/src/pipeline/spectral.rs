@@ -1,0 +1,143 @@
+//! The spectral stage of a run: the finite spectrum of the pencil with the
+//! scene's options (falling back to the sparse path where the dense one fails
+//! on a stiff pencil), the master modes, and the non-resonance checks.
+
+use std::time::Instant;
+
+use super::error::JobError;
+use crate::model::system::System;
+use crate::scene::{SceneFile, SpectrumMethod};
+use crate::spectrum::{
+    self, check_resonances, MasterMode, Method, ResonanceReport, Spectrum, SpectrumError,
+    SpectrumOptions,
+};
+use crate::ssm::Dynamics;
+
+/// What the spectral stage found.
+#[derive(Debug, Clone)]
+pub struct Spectral {
+    /// The finite spectrum (multipliers sorted for maps).
+    pub spectrum: Spectrum,
+    /// The master modes.
+    pub masters: Vec<MasterMode>,
+    /// Spectral quotients and (near) resonances.
+    pub resonances: ResonanceReport,
+    /// Finite modes of the model: counted, or from its mechanical structure
+    /// when only part of the spectrum was computed.
+    pub n_finite: usize,
+    /// Warnings (fallbacks, unexpected mode counts, resonances).
+    pub warnings: Vec<String>,
+    /// Seconds for spectrum and master modes.
+    pub spectrum_s: f64,
+    /// Seconds for the resonance checks.
+    pub resonance_s: f64,
+}
+
+/// Runs the spectral stage of `scene` on `system`.
+pub fn spectral(scene: &SceneFile, system: &System) -> Result<Spectral, JobError> {
+    let sc = &scene.scene;
+    let t_spec = Instant::now();
+    let mut warnings = Vec::new();
+    let pairs = sc.ssm.master_pairs.get_ref();
+    let max_pair = pairs.iter().copied().max().unwrap_or(1);
+    let opts = SpectrumOptions {
+        method: match sc.spectrum.method {
+            SpectrumMethod::Auto => None,
+            SpectrumMethod::Dense => Some(Method::Dense),
+            SpectrumMethod::Sparse => Some(Method::Sparse),
+        },
+        modes: sc
+            .spectrum
+            .modes
+            .as_ref()
+            .map_or(2 * max_pair + 10, |m| *m.get_ref())
+            .max(2 * max_pair),
+        shift: sc.spectrum.shift.unwrap_or(0.0),
+        normalization: sc.ssm.normalization,
+    };
+    let dynamics = Dynamics::from(system.time);
+    let (pencil_a, pencil_b) = system.spectral_pencil();
+    let mut spectrum = match spectrum::compute(pencil_a, pencil_b, &opts) {
+        // a stiff pencil (e.g. light pendulums on a heavy slider) can defeat the
+        // dense path's rank decisions; the sparse path needs only the slow modes
+        Err(e @ (SpectrumError::SingularPencil { .. } | SpectrumError::NoConvergence { .. }))
+            if opts.method.is_none() =>
+        {
+            let sparse = SpectrumOptions {
+                method: Some(Method::Sparse),
+                ..opts.clone()
+            };
+            let sp = spectrum::compute(pencil_a, pencil_b, &sparse).map_err(|_| e.clone())?;
+            warnings.push(format!(
+                "dense spectrum failed ({e}); the sparse path was used instead (set [spectrum] method = \"sparse\" to skip the attempt)"
+            ));
+            sp
+        }
+        r => r?,
+    };
+    if let Dynamics::Map { .. } = dynamics {
+        spectrum::sort_multipliers(&mut spectrum.eigenvalues);
+    }
+    let n_original = system.n_states() - system.n_auxiliary();
+    let mechanical_layout = system
+        .mechanical
+        .as_ref()
+        .filter(|m| n_original == 2 * m.n_dof + m.n_constraints);
+    if let (true, Some(mech)) = (spectrum.complete, mechanical_layout) {
+        let expected = 2 * (mech.n_dof - mech.n_constraints.min(mech.n_dof));
+        if spectrum.eigenvalues.len() != expected {
+            warnings.push(format!(
+                "found {} finite eigenvalues where a mechanical system with {} dofs and {} constraints has {expected}: check that M is non-singular and G0 has full rank",
+                spectrum.eigenvalues.len(),
+                mech.n_dof,
+                mech.n_constraints
+            ));
+        }
+    }
+    let n_finite = match (mechanical_layout, spectrum.complete) {
+        (Some(m), false) => 2 * (m.n_dof - m.n_constraints.min(m.n_dof)),
+        _ => spectrum.eigenvalues.len(),
+    };
+    let masters = spectrum::master_modes(system, &spectrum, pairs, opts.normalization).map_err(
+        |e| match e {
+            SpectrumError::PairOutOfRange { .. } => JobError::Scene(scene.invalid(
+                sc.ssm.master_pairs.span(),
+                "ssm.master_pairs",
+                e.to_string(),
+            )),
+            other => JobError::Spectrum(other),
+        },
+    )?;
+    let spectrum_s = t_spec.elapsed().as_secs_f64();
+    let master_indices: Vec<usize> = masters.iter().map(|m| m.index).collect();
+    let rates = match dynamics {
+        Dynamics::Flow => spectrum.eigenvalues.clone(),
+        Dynamics::Map { period } => spectrum::multipliers_to_rates(&spectrum.eigenvalues, period),
+    };
+    let t_res = Instant::now();
+    let resonances = check_resonances(
+        &rates,
+        &master_indices,
+        *sc.ssm.order.get_ref(),
+        *sc.ssm.resonance_tol.get_ref(),
+        spectrum.complete,
+    );
+    let resonance_s = t_res.elapsed().as_secs_f64();
+    warnings.extend(resonances.warnings.iter().cloned());
+    if !spectrum.complete {
+        warnings.push(format!(
+            "sparse path: {} finite modes nearest sigma = {} were computed; resonance checks and spectral quotients cover only those",
+            spectrum.eigenvalues.len(),
+            opts.shift
+        ));
+    }
+    Ok(Spectral {
+        spectrum,
+        masters,
+        resonances,
+        n_finite,
+        warnings,
+        spectrum_s,
+        resonance_s,
+    })
+}

@@ -1,0 +1,140 @@
+//! A scene's `[reduce]`: the reducer found in its plugin, its needs checked
+//! against the scene, its input assembled from `[model]` and `[data]`, and
+//! the reduced model validated with its outputs lifted.
+
+use super::{lift_outputs, read_signals, Reduction, SignalsError};
+use crate::model::plugin::{PluginLoadError, Registry};
+use crate::model::source::{params_toml, plugin_error, resolve, SourceError};
+use crate::model::system::{ModelError, System};
+use crate::scene::{ReduceSection, SceneError, SceneFile};
+
+/// Why a reduced model could not be had.
+#[derive(Debug, thiserror::Error)]
+pub enum ReduceError {
+    /// The scene or the reducer's plugin failed.
+    #[error(transparent)]
+    Source(#[from] SourceError),
+    /// A `[data]` file cannot be used.
+    #[error("data: {0}")]
+    Signals(#[from] SignalsError),
+    /// The reduced model is inconsistent.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}
+
+impl From<SceneError> for ReduceError {
+    fn from(e: SceneError) -> Self {
+        Self::Source(SourceError::Scene(e))
+    }
+}
+
+/// The model the reducer of `[reduce]` makes from the full model `full`
+/// (plugin name and model of `[model]`, if any) and/or the `[data]` signals,
+/// validated into a [`System`].
+pub fn reduce_scene(
+    scene: &SceneFile,
+    red: &ReduceSection,
+    full: Option<(String, ssm_api::Model)>,
+    registry: &mut Registry,
+) -> Result<(System, Reduction), ReduceError> {
+    let sc = &scene.scene;
+    let plugin = resolve(scene, registry, &red.plugin, "reduce.plugin")?;
+    let listed = match plugin.reducers() {
+        None => {
+            return Err(scene
+                .invalid(
+                    red.plugin.span(),
+                    "reduce.plugin",
+                    PluginLoadError::NoReducers {
+                        plugin: plugin.name().to_owned(),
+                    }
+                    .to_string(),
+                )
+                .into());
+        }
+        Some(list) => list.map_err(SourceError::Plugin)?,
+    };
+    let wanted = red.reducer.get_ref();
+    let info = listed
+        .iter()
+        .find(|r| r.name.as_str() == wanted)
+        .ok_or_else(|| {
+            let names: Vec<&str> = listed.iter().map(|r| r.name.as_str()).collect();
+            scene.invalid(
+                red.reducer.span(),
+                "reduce.reducer",
+                format!(
+                    "plugin '{}' has no reducer '{wanted}'; it offers: {}",
+                    plugin.name(),
+                    if names.is_empty() {
+                        "none".to_owned()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            )
+        })?;
+    if info.needs.model() && full.is_none() {
+        return Err(scene
+            .invalid(
+                red.reducer.span(),
+                "reduce.reducer",
+                format!("reducer '{wanted}' needs a model: add a [model] section"),
+            )
+            .into());
+    }
+    if info.needs.signals() && sc.data.is_none() {
+        return Err(scene
+            .invalid(
+                red.reducer.span(),
+                "reduce.reducer",
+                format!("reducer '{wanted}' needs sampled signals: add a [data] section"),
+            )
+            .into());
+    }
+    let signals = sc
+        .data
+        .as_ref()
+        .map(|d| {
+            let files: Vec<_> = d
+                .files
+                .get_ref()
+                .iter()
+                .map(|f| scene.relative(f))
+                .collect();
+            read_signals(&files, d.columns.as_ref().map(|c| c.get_ref().as_slice()))
+        })
+        .transpose()?;
+    let n_trajectories = signals.as_ref().map_or(0, |s| s.trajectories.len());
+    let (full_plugin, full_model) = full.unzip();
+    let input = ssm_api::ReducerInput {
+        model: full_model.into(),
+        signals: signals.into(),
+    };
+    let params = params_toml(scene, &red.params, "reduce.params")?;
+    let reduced = plugin
+        .reduce(wanted, &params, &input)
+        .map_err(|e| plugin_error(scene, e, "reduce.params"))?;
+    let mut model = reduced.model;
+    let lift = reduced.lift.into_option();
+    let lifted_outputs = match (&lift, input.model.as_ref().into_option()) {
+        (Some(l), Some(full)) => lift_outputs(&mut model, full, l),
+        _ => Vec::new(),
+    };
+    let origin = match full_plugin {
+        Some(p) => format!("{} via {}", p, plugin.name()),
+        None => plugin.name().to_owned(),
+    };
+    let system = System::from_model(&origin, model)?;
+    let reduction = Reduction {
+        plugin: plugin.name().to_owned(),
+        reducer: wanted.clone(),
+        n_input_states: input.model.as_ref().into_option().map(|m| m.n_states()),
+        n_trajectories,
+        n_reduced_states: system.n_states(),
+        lift,
+        diagnostics: reduced.diagnostics.into_iter().collect(),
+        lifted_outputs,
+    };
+    Ok((system, reduction))
+}

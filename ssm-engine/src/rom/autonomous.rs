@@ -1,0 +1,220 @@
+//! Answers of the autonomous reduced model: backbone curves, the invariance
+//! error table, and reduced transients lifted to physical outputs.
+//!
+//! # References
+//! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical
+//! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023): backbone
+//! curves from the polar form of the reduced dynamics (Sect. 3.3), the
+//! invariance error eq. (41), reduced transients (Figs. 4, 10, 14).
+
+use crate::model::system::{OutputMap, System};
+use crate::scene::{BackboneSection, InvarianceErrorSection, TransientSection};
+use crate::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar, PolarError};
+use crate::ssm::rom::{integrate, RomError};
+use crate::ssm::SsmExpansion;
+use crate::C64;
+
+/// Why a backbone, invariance table or transient could not be produced.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ResultError {
+    /// No polar form.
+    #[error("backbone: {0}")]
+    Polar(#[from] PolarError),
+    /// Reduced-model integration failed.
+    #[error(transparent)]
+    Rom(#[from] RomError),
+    /// A computed value is not finite.
+    #[error("{what}: non-finite value at {place}; the expansion diverges there (lower rho_max or the order)")]
+    NonFinite {
+        /// Which output.
+        what: String,
+        /// Where.
+        place: String,
+    },
+}
+
+/// One point of a backbone curve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BackbonePoint {
+    /// Polar amplitude `rho` of the master pair.
+    pub rho: f64,
+    /// Instantaneous frequency `omega(rho)`.
+    pub omega: f64,
+    /// Amplitude of each requested output.
+    pub amplitudes: Vec<f64>,
+}
+
+/// A backbone curve of one expansion order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BackboneCurve {
+    /// Expansion order.
+    pub order: usize,
+    /// Points from `rho = 0` to `rho_max`.
+    pub points: Vec<BackbonePoint>,
+}
+
+/// Backbone curves of `sec` (one per order) on `points` amplitudes in
+/// `[0, rho_max]`; the amplitudes of `outputs` are read off `W`.
+pub fn backbone(
+    ssm: &SsmExpansion,
+    sec: &BackboneSection,
+    outputs: &[&OutputMap],
+) -> Result<Vec<BackboneCurve>, ResultError> {
+    let p = polar(ssm)?;
+    let orders = sec
+        .orders
+        .as_ref()
+        .map_or_else(|| vec![ssm.order], |o| o.get_ref().clone());
+    let series: Vec<Vec<C64>> = outputs
+        .iter()
+        .map(|o| ssm.output_series(&o.weights))
+        .collect();
+    let n = *sec.points.get_ref();
+    let rho_max = *sec.rho_max.get_ref();
+    let mut curves = Vec::with_capacity(orders.len());
+    for &order in &orders {
+        let mut points = Vec::with_capacity(n);
+        for i in 0..n {
+            let rho = rho_max * i as f64 / (n - 1) as f64;
+            let omega = backbone_frequency(ssm, &p, rho, order);
+            let amplitudes: Vec<f64> = series
+                .iter()
+                .map(|s| amplitude(ssm, s, rho, order))
+                .collect();
+            if !omega.is_finite() || amplitudes.iter().any(|a| !a.is_finite()) {
+                return Err(ResultError::NonFinite {
+                    what: "backbone".into(),
+                    place: format!("order {order}, rho = {rho}"),
+                });
+            }
+            points.push(BackbonePoint {
+                rho,
+                omega,
+                amplitudes,
+            });
+        }
+        curves.push(BackboneCurve { order, points });
+    }
+    Ok(curves)
+}
+
+/// One entry of the invariance-error table.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InvarianceEntry {
+    /// Expansion order.
+    pub order: usize,
+    /// Radius of the sampled torus.
+    pub radius: f64,
+    /// Eq. (41) there.
+    pub error: f64,
+}
+
+/// Eq. (41) for every requested order and radius of `sec`.
+pub fn invariance_table(
+    ssm: &SsmExpansion,
+    sys: &System,
+    sec: &InvarianceErrorSection,
+) -> Result<Vec<InvarianceEntry>, ResultError> {
+    let mut rows = Vec::new();
+    for &order in sec.orders.get_ref() {
+        for &radius in sec.radii.get_ref() {
+            let error = invariance_error(
+                ssm,
+                sys,
+                order,
+                radius,
+                *sec.n_alpha.get_ref(),
+                *sec.n_theta.get_ref(),
+            );
+            if !error.is_finite() {
+                return Err(ResultError::NonFinite {
+                    what: "invariance error".into(),
+                    place: format!("order {order}, radius {radius}"),
+                });
+            }
+            rows.push(InvarianceEntry {
+                order,
+                radius,
+                error,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// The reduced coordinates `p = (q_1, conj q_1, q_2, ...)` with
+/// `q_j = rho_j e^{i theta_j}`.
+pub fn polar_point(rho: &[f64], theta: &[f64]) -> Vec<C64> {
+    rho.iter()
+        .zip(theta)
+        .flat_map(|(&r, &t)| {
+            let q = C64::from_polar(r, t);
+            [q, q.conj()]
+        })
+        .collect()
+}
+
+/// A reduced transient lifted to physical outputs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiftedTransient {
+    /// Sample times.
+    pub times: Vec<f64>,
+    /// Per sample: each output's value `Re (W(p(t)))` in the output's weights.
+    pub outputs: Vec<Vec<f64>>,
+    /// Per sample: `(rho_j, theta_j)` of each master pair.
+    pub polar: Vec<Vec<(f64, f64)>>,
+    /// Accepted steps of the reduced integration.
+    pub steps: usize,
+}
+
+/// The reduced model of `sec` integrated from `(rho0, theta0)` and lifted by `W`.
+pub fn transient(
+    ssm: &SsmExpansion,
+    sec: &TransientSection,
+    outputs: &[&OutputMap],
+) -> Result<LiftedTransient, ResultError> {
+    let order = sec.order.as_ref().map_or(ssm.order, |o| *o.get_ref());
+    let m = ssm.dim() / 2;
+    let theta0 = sec
+        .theta0
+        .as_ref()
+        .map_or_else(|| vec![0.0; m], |t| t.get_ref().clone());
+    let p0 = polar_point(sec.rho0.get_ref(), &theta0);
+    let tr = integrate(
+        ssm,
+        order,
+        &p0,
+        *sec.t_end.get_ref(),
+        *sec.samples.get_ref(),
+        *sec.rtol.get_ref(),
+    )?;
+    let series: Vec<Vec<C64>> = outputs
+        .iter()
+        .map(|o| ssm.output_series(&o.weights))
+        .collect();
+    let end = ssm.set.of_order(order).end;
+    let mut values = Vec::with_capacity(tr.times.len());
+    let mut polar = Vec::with_capacity(tr.times.len());
+    for (t, p) in tr.times.iter().zip(&tr.states) {
+        let mono = ssm.set.monomials(p, order);
+        let mut row = Vec::with_capacity(series.len());
+        for s in &series {
+            let y: C64 = (0..end).map(|i| s[i] * mono[i]).sum();
+            if !y.re.is_finite() {
+                return Err(ResultError::NonFinite {
+                    what: "reduced-model trajectory".into(),
+                    place: format!("t = {t}"),
+                });
+            }
+            row.push(y.re);
+        }
+        values.push(row);
+        polar.push((0..m).map(|i| (p[2 * i].norm(), p[2 * i].arg())).collect());
+    }
+    Ok(LiftedTransient {
+        times: tr.times,
+        outputs: values,
+        polar,
+        steps: tr.steps,
+    })
+}
