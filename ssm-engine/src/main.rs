@@ -1,5 +1,6 @@
 //! `ssm-engine`: run a scene, or list plugins.
 
+use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -17,7 +18,9 @@ const SCENE_HELP: &str = concat!(
 OUTPUTS (in --out DIR, default ./out/<scene file stem>): summary.json, spectrum.csv,
 backbone.csv/.svg, rom_trajectory.csv, frc.csv/.svg, validation.csv/.svg,
 steady_state.csv (also drawn into frc.svg), report.csv/.md/.svg (as requested).
-Files are written to temporary names and renamed; a failed run writes nothing.
+The new result set replaces the old one as a whole (a fresh private directory swapped in
+with one rename): never a mix, never stale files; a failed run changes nothing. A non-empty
+directory that is not a result set is never replaced.
 
 PLUGINS are found from --plugin PATH, from SSM_PLUGIN_PATH (':'-separated files or
 directories), and from the directory of this binary."
@@ -61,71 +64,106 @@ enum Command {
     },
 }
 
-struct Spinner(ProgressBar);
+/// Progress of a run: a spinner on a terminal, else one line per stage on
+/// stderr (so logs of long runs show where the time goes).
+enum Spinner {
+    Bar(ProgressBar),
+    Lines(std::time::Instant),
+}
 
 impl Progress for Spinner {
     fn stage(&self, name: &str) {
-        self.0.set_message(name.to_owned());
+        match self {
+            Spinner::Bar(bar) => bar.set_message(name.to_owned()),
+            Spinner::Lines(t0) => eprintln!("[{:8.2} s] {name}", t0.elapsed().as_secs_f64()),
+        }
+    }
+}
+
+impl Spinner {
+    fn finish(&self) {
+        if let Spinner::Bar(bar) = self {
+            bar.finish_and_clear();
+        }
     }
 }
 
 fn spinner() -> Spinner {
     let interactive = std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
     if !interactive {
-        return Spinner(ProgressBar::hidden());
+        return Spinner::Lines(std::time::Instant::now());
     }
     let bar = ProgressBar::new_spinner();
     bar.set_style(
         ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"),
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(100));
-    Spinner(bar)
+    Spinner::Bar(bar)
 }
 
-fn list_plugins(registry: &Registry) -> anyhow::Result<()> {
+/// The listing of `ssm-engine plugins`.
+fn plugin_listing(registry: &Registry) -> Result<String, std::fmt::Error> {
+    let mut s = String::new();
     if registry.plugins.is_empty() {
-        println!("no plugins found (pass --plugin PATH or set SSM_PLUGIN_PATH)");
+        writeln!(
+            s,
+            "no plugins found (pass --plugin PATH or set SSM_PLUGIN_PATH)"
+        )?;
     }
     for (path, p) in &registry.plugins {
-        println!("{} {} ({})", p.name(), p.version(), path.display());
-        println!("  {}", p.description());
+        writeln!(s, "{} {} ({})", p.name(), p.version(), path.display())?;
+        writeln!(s, "  {}", p.description())?;
         match p.models() {
             Ok(models) => {
                 for m in models {
-                    println!("  model '{}': {}", m.name, m.description);
+                    writeln!(s, "  model '{}': {}", m.name, m.description)?;
                     for par in m.params.iter() {
-                        println!(
+                        writeln!(
+                            s,
                             "    {:<12} = {:<10} [{}] {}",
                             par.name, par.default, par.kind, par.description
-                        );
+                        )?;
                     }
                 }
             }
-            Err(e) => println!("  cannot list models: {e}"),
+            Err(e) => writeln!(s, "  cannot list models: {e}")?,
         }
         match p.reducers() {
-            None => println!("  (built against ssm-api 1.0: no reducers)"),
+            None => writeln!(s, "  (built against ssm-api 1.0: no reducers)")?,
             Some(Ok(reducers)) => {
                 for r in reducers {
-                    println!(
+                    writeln!(
+                        s,
                         "  reducer '{}' (needs {:?}): {}",
                         r.name, r.needs, r.description
-                    );
+                    )?;
                     for par in r.params.iter() {
-                        println!(
+                        writeln!(
+                            s,
                             "    {:<12} = {:<10} [{}] {}",
                             par.name, par.default, par.kind, par.description
-                        );
+                        )?;
                     }
                 }
             }
-            Some(Err(e)) => println!("  cannot list reducers: {e}"),
+            Some(Err(e)) => writeln!(s, "  cannot list reducers: {e}")?,
         }
     }
     for e in &registry.rejected {
-        println!("not loadable: {e}");
+        writeln!(s, "not loadable: {e}")?;
     }
-    Ok(())
+    Ok(s)
+}
+
+/// Prints the plugin listing; a closed pipe (`ssm-engine plugins | head -1`)
+/// ends the listing quietly.
+fn list_plugins(registry: &Registry) -> anyhow::Result<()> {
+    use std::io::Write;
+    let text = plugin_listing(registry)?;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -146,7 +184,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     }
     let progress = spinner();
     let result = pipeline::run(&scene, &mut registry, &progress);
-    progress.0.finish_and_clear();
+    progress.finish();
     let result = result?;
     let out = out.unwrap_or_else(|| pipeline::default_out_dir(&scene));
     result.outputs.write(&out)?;

@@ -94,7 +94,7 @@ pub enum SimError {
         state: String,
     },
     /// The step budget ran out.
-    #[error("full-system integration: {steps} steps reached at t = {t:.6} before t_end = {t_end}; raise max_steps or loosen the tolerance")]
+    #[error("full-system integration: the step budget of {steps} steps ran out at t = {t:.6} before t_end = {t_end}: shorten [validate] t_end (or max_periods), loosen rtol/atol, or check the model for a fast or unbounded motion")]
     TooManySteps {
         /// Time reached.
         t: f64,

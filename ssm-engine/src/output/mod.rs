@@ -3,6 +3,7 @@
 //! [`OutputSet`] that holds them in memory until they are written to the
 //! output directory.
 
+mod files;
 pub mod frc;
 pub mod plot;
 pub mod report;
@@ -10,70 +11,11 @@ pub mod ssm;
 pub mod summary;
 pub mod validation;
 
-use std::path::{Path, PathBuf};
-
 use crate::rom::autonomous::{BackboneCurve, LiftedTransient};
 use crate::spectrum::Spectrum;
+pub use files::{OutputError, OutputSet, MARKER};
 use plot::PlotError;
 use summary::{summary_json, Summary};
-
-/// Failure to write outputs.
-#[derive(Debug, thiserror::Error)]
-#[error("cannot write {path}: {source}")]
-pub struct OutputError {
-    /// The file or directory.
-    pub path: PathBuf,
-    /// The I/O error.
-    pub source: std::io::Error,
-}
-
-/// The files of one run, written together by [`OutputSet::write`].
-#[derive(Debug, Default, Clone)]
-pub struct OutputSet {
-    /// `(file name, contents)`.
-    pub files: Vec<(String, Vec<u8>)>,
-}
-
-impl OutputSet {
-    /// Adds a file.
-    pub fn add(&mut self, name: &str, contents: impl Into<Vec<u8>>) {
-        self.files.push((name.to_owned(), contents.into()));
-    }
-
-    /// The contents of `name`, if present.
-    pub fn get(&self, name: &str) -> Option<&[u8]> {
-        self.files
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, c)| c.as_slice())
-    }
-
-    /// Writes every file into `dir` (created if needed): each to
-    /// `.<name>.tmp` first, then all renamed into place.
-    pub fn write(&self, dir: &Path) -> Result<(), OutputError> {
-        let err = |path: &Path| {
-            let path = path.to_owned();
-            move |source| OutputError { path, source }
-        };
-        std::fs::create_dir_all(dir).map_err(err(dir))?;
-        let mut staged = Vec::with_capacity(self.files.len());
-        for (name, contents) in &self.files {
-            let tmp = dir.join(format!(".{name}.tmp"));
-            if let Err(e) = std::fs::write(&tmp, contents) {
-                for (t, _) in &staged {
-                    let _ = std::fs::remove_file(t);
-                }
-                let _ = std::fs::remove_file(&tmp);
-                return Err(err(&tmp)(e));
-            }
-            staged.push((tmp, dir.join(name)));
-        }
-        for (tmp, fin) in &staged {
-            std::fs::rename(tmp, fin).map_err(err(fin))?;
-        }
-        Ok(())
-    }
-}
 
 /// `spectrum.csv`: one finite eigenvalue a row with its frequency, damping
 /// ratio and master-pair membership.

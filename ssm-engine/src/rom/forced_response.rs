@@ -36,6 +36,16 @@ pub enum FrcError {
     /// What the FRC path does not cover.
     #[error("FRC: {0}")]
     Unsupported(String),
+    /// A curve has no point in the frequency range.
+    #[error("FRC O({order}), eps = {epsilon}: no response found in the frequency range with amplitudes up to rho_max = {rho_max:e}; every forcing frequency has one, so the amplitude grid missed them: set [forcing] rho_max near the expected peak amplitude (or raise points)")]
+    Empty {
+        /// Expansion order.
+        order: usize,
+        /// Forcing amplitude.
+        epsilon: f64,
+        /// Largest amplitude searched.
+        rho_max: f64,
+    },
     /// The continuation could not start.
     #[error("FRC: {0}")]
     Continuation(#[from] crate::rom::continuation::ContinuationError),
@@ -263,6 +273,13 @@ pub fn forced_response(
             ));
         }
         let f = one_pair_frc(&pb, rho_max, points, range);
+        if f.points.is_empty() {
+            return Err(FrcError::Empty {
+                order,
+                epsilon: eps,
+                rho_max,
+            });
+        }
         let first = rows.len();
         for p in &f.points {
             let mut linf = Vec::with_capacity(outputs.len());

@@ -22,6 +22,75 @@ pub use validate::{ReportSection, SteadyStart, SteadyStateSection, ValidateSecti
 /// one source of the format's documentation (module docs, `--help`, README).
 pub const FORMAT: &str = include_str!("format.toml");
 
+/// A number or a list of numbers in a scene.
+enum NumberOrList {
+    Number(f64),
+    List(Vec<f64>),
+}
+
+impl<'de> Deserialize<'de> for NumberOrList {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = NumberOrList;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or a list of numbers")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Self::Value, E> {
+                Ok(NumberOrList::Number(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Self::Value, E> {
+                Ok(NumberOrList::Number(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Self::Value, E> {
+                Ok(NumberOrList::Number(v as f64))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut v = Vec::new();
+                while let Some(x) = a.next_element::<f64>()? {
+                    v.push(x);
+                }
+                Ok(NumberOrList::List(v))
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+impl NumberOrList {
+    fn into_vec(self) -> Vec<f64> {
+        match self {
+            Self::Number(x) => vec![x],
+            Self::List(v) => v,
+        }
+    }
+}
+
+/// A key that takes a list and also accepts a single number (`epsilon = 0.6`
+/// for `epsilon = [0.6]`).
+fn number_or_list<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Spanned<Vec<f64>>, D::Error> {
+    let s = Spanned::<NumberOrList>::deserialize(d)?;
+    let span = s.span();
+    Ok(Spanned::new(span, s.into_inner().into_vec()))
+}
+
+/// A key that takes one number and also accepts a list of one (`epsilon =
+/// [0.6]` for `epsilon = 0.6`).
+fn number_or_single<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Spanned<f64>, D::Error> {
+    let s = Spanned::<NumberOrList>::deserialize(d)?;
+    let span = s.span();
+    match s.into_inner().into_vec()[..] {
+        [x] => Ok(Spanned::new(span, x)),
+        ref v => Err(serde::de::Error::custom(format!(
+            "expected one number (or a list of one), found a list of {}; one steady-state epsilon per scene",
+            v.len()
+        ))),
+    }
+}
+
 /// A scene that cannot be used, with the place and the problem.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -95,7 +164,8 @@ pub struct Scene {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ForcingSection {
-    /// Forcing amplitudes, one FRC each.
+    /// Forcing amplitudes, one FRC each (a number or a list).
+    #[serde(deserialize_with = "number_or_list")]
     pub epsilon: Spanned<Vec<f64>>,
     /// `[Omega_min, Omega_max]`.
     pub omega_range: Spanned<Vec<f64>>,

@@ -53,7 +53,8 @@ pub struct ValidateSection {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SteadyStateSection {
-    /// Forcing amplitude.
+    /// Forcing amplitude (a number, or a list of one).
+    #[serde(deserialize_with = "super::number_or_single")]
     pub epsilon: Spanned<f64>,
     /// Forcing frequencies (or `omega_range` and `points`).
     #[serde(default)]

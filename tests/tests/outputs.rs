@@ -1,0 +1,154 @@
+//! The result set of a run is replaced as a whole (`OutputSet::write`):
+//! stale files of an earlier scene disappear, planted links are never
+//! followed, a directory that is not a result set is never replaced, a failure
+//! while writing keeps the old set, and concurrent writers leave one complete
+//! set. Reference: the guarantees stated in `ssm-engine/src/output/files.rs`.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::Path;
+
+use ssm_engine::output::{OutputSet, MARKER};
+use ssm_tests::tmp_dir;
+
+fn set(tag: &str, names: &[&str]) -> OutputSet {
+    let mut s = OutputSet::default();
+    for n in names {
+        s.add(n, format!("{tag}:{n}"));
+    }
+    s
+}
+
+/// File name -> contents of `dir` (the marker left out).
+fn contents(dir: &Path) -> BTreeMap<String, String> {
+    fs::read_dir(dir)
+        .expect("output directory")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| n != MARKER)
+        .map(|n| {
+            let c = fs::read_to_string(dir.join(&n)).unwrap_or_default();
+            (n, c)
+        })
+        .collect()
+}
+
+/// Entries of `parent` other than `keep` (left-over staging directories).
+fn leftovers(parent: &Path, keep: &[&str]) -> Vec<String> {
+    fs::read_dir(parent)
+        .expect("parent")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| !keep.contains(&n.as_str()))
+        .collect()
+}
+
+#[test]
+fn stale_files_of_an_earlier_scene_are_gone() {
+    let root = tmp_dir("outputs-stale");
+    let out = root.join("out");
+    set("A", &["summary.json", "frc.csv"]).write(&out).unwrap();
+    set("B", &["summary.json", "spectrum.csv"])
+        .write(&out)
+        .unwrap();
+    let c = contents(&out);
+    assert_eq!(
+        c.keys().collect::<Vec<_>>(),
+        ["spectrum.csv", "summary.json"],
+        "{c:?}"
+    );
+    assert!(c.values().all(|v| v.starts_with("B:")));
+    assert!(out.join(MARKER).is_file());
+    assert_eq!(leftovers(&root, &["out"]), Vec::<String>::new());
+}
+
+#[cfg(unix)]
+#[test]
+fn planted_links_are_never_followed() {
+    let root = tmp_dir("outputs-links");
+    let out = root.join("out");
+    fs::create_dir_all(&root).unwrap();
+    let victim = root.join("victim.txt");
+    fs::write(&victim, "precious").unwrap();
+    set("A", &["summary.json"]).write(&out).unwrap();
+    // links at the old fixed temporary names and at a result name
+    for name in [".summary.json.tmp", ".frc.csv.tmp", "frc.csv"] {
+        std::os::unix::fs::symlink(&victim, out.join(name)).unwrap();
+    }
+    set("B", &["summary.json", "frc.csv"]).write(&out).unwrap();
+    assert_eq!(fs::read_to_string(&victim).unwrap(), "precious");
+    let c = contents(&out);
+    assert_eq!(c.len(), 2, "{c:?}");
+    assert!(c.values().all(|v| v.starts_with("B:")));
+    assert!(!fs::symlink_metadata(out.join("frc.csv"))
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    // --out itself a link: refused, the target untouched
+    let elsewhere = root.join("elsewhere");
+    fs::create_dir(&elsewhere).unwrap();
+    fs::write(elsewhere.join("notes.txt"), "mine").unwrap();
+    let link = root.join("linked-out");
+    std::os::unix::fs::symlink(&elsewhere, &link).unwrap();
+    let e = set("C", &["summary.json"]).write(&link).unwrap_err();
+    assert!(e.to_string().contains("symbolic link"), "{e}");
+    assert_eq!(contents(&elsewhere).len(), 1);
+}
+
+#[test]
+fn a_directory_that_is_not_a_result_set_is_not_replaced() {
+    let root = tmp_dir("outputs-foreign");
+    let out = root.join("thesis");
+    fs::create_dir_all(&out).unwrap();
+    fs::write(out.join("chapter1.tex"), "text").unwrap();
+    let e = set("A", &["summary.json"]).write(&out).unwrap_err();
+    assert!(e.to_string().contains("no ssm-engine result set"), "{e}");
+    assert_eq!(
+        fs::read_to_string(out.join("chapter1.tex")).unwrap(),
+        "text"
+    );
+    assert_eq!(leftovers(&root, &["thesis"]), Vec::<String>::new());
+}
+
+#[test]
+fn a_failure_while_writing_keeps_the_old_set() {
+    let root = tmp_dir("outputs-failure");
+    let out = root.join("out");
+    set("A", &["summary.json", "frc.csv"]).write(&out).unwrap();
+    // the third file cannot be created (name longer than the file system allows)
+    let long = "x".repeat(300);
+    let e = set("B", &["summary.json", "spectrum.csv", &long])
+        .write(&out)
+        .unwrap_err();
+    assert!(e.to_string().contains("cannot write"), "{e}");
+    let c = contents(&out);
+    assert_eq!(c.keys().collect::<Vec<_>>(), ["frc.csv", "summary.json"]);
+    assert!(c.values().all(|v| v.starts_with("A:")));
+    assert_eq!(leftovers(&root, &["out"]), Vec::<String>::new());
+}
+
+#[test]
+fn concurrent_writers_leave_one_complete_set() {
+    let root = tmp_dir("outputs-concurrent");
+    let out = root.join("out");
+    let writers: Vec<_> = [
+        ("A", ["summary.json", "frc.csv"]),
+        ("B", ["summary.json", "backbone.csv"]),
+    ]
+    .into_iter()
+    .map(|(tag, names)| {
+        let out = out.clone();
+        std::thread::spawn(move || {
+            for _ in 0..50 {
+                set(tag, &names).write(&out).expect("every write succeeds");
+            }
+        })
+    })
+    .collect();
+    for w in writers {
+        w.join().expect("writer");
+    }
+    let c = contents(&out);
+    assert_eq!(c.len(), 2, "{c:?}");
+    let tag = &c["summary.json"][..2];
+    assert!(c.values().all(|v| v.starts_with(tag)), "mixed sets: {c:?}");
+    assert_eq!(leftovers(&root, &["out"]), Vec::<String>::new());
+}
