@@ -76,11 +76,39 @@ fn an_frc_without_points_is_an_error_that_names_rho_max() {
             r.frc.map_or(0, |f| f.rows.len())
         ),
     }
-    // with rho_max near the peak (eps f / (2 zeta omega^2) = 5e4 for the
-    // linear response) the same scene answers
-    let text = duffing_frc("1e-7", "0.01") + "rho_max = 2.0\n";
-    let r = run_scene_text(&text).expect("rho_max given");
-    assert!(!r.frc.expect("FRC").rows.is_empty());
+    // with rho_max above the response in range the same scene answers, and
+    // its peak (at Omega = 1.1, on the resonant branch of the hardening
+    // oscillator) is the one-harmonic balance of x'' + x + x^3 = eps cos(Omega t),
+    // zeta -> 0: 3/4 a^3 + (1 - Omega^2) a = eps. Tolerance 1 %: the balance
+    // neglects the third harmonic, of relative size about a^2/32 = 1 % here;
+    // the SSM is taken at O(13), where O(9) to O(13) changes the peak by 0.3 %.
+    let text = duffing_frc("1e-7", "0.01").replace("order = 5", "order = 13") + "rho_max = 0.5\n";
+    let frc = run_scene_text(&text)
+        .expect("rho_max given")
+        .frc
+        .expect("FRC");
+    let peak = frc
+        .rows
+        .iter()
+        .max_by(|a, b| a.h1[0].total_cmp(&b.h1[0]))
+        .expect("points");
+    assert!((peak.omega - 1.1).abs() < 1e-9, "peak at {}", peak.omega);
+    let hb = |a: f64| 0.75 * a.powi(3) + (1.0 - 1.21) * a - 0.01;
+    let (mut lo, mut hi) = (0.3, 1.0);
+    for _ in 0..100 {
+        let m = 0.5 * (lo + hi);
+        if hb(lo) * hb(m) <= 0.0 {
+            hi = m;
+        } else {
+            lo = m;
+        }
+    }
+    let rel = (peak.h1[0] - lo).abs() / lo;
+    assert!(
+        rel < 0.01,
+        "peak {} against harmonic balance {lo}: {rel:.2e}",
+        peak.h1[0]
+    );
 }
 
 /// `ssm-engine plugins | head -1`: the reader goes away; the listing ends
