@@ -269,6 +269,11 @@ pub fn oscillator_published_polar(constraint: &str) -> ([&'static str; 7], [&'st
 /// `mu_2 = 0.7 e^{1.1 i}`, and quadratic and cubic couplings (sampling period
 /// 0.1). Used against Theorem 6.3 of Szalai, Ehrhardt & Haller (2017).
 pub fn cubic_map() -> System {
+    System::from_model("catalogue", cubic_map_model()).expect("valid map model")
+}
+
+/// The plugin data of [`cubic_map`], for tests that corrupt it.
+pub fn cubic_map_model() -> ssm_api::Model {
     use ssm_api::reexports::abi_stable::std_types::{ROption, RString, RVec};
     use ssm_api::{
         Model, MotionKind, Output, PolyVector, SparseMatrix, StateInfo, StateKind, TimeKind, Weight,
@@ -311,7 +316,7 @@ pub fn cubic_map() -> System {
             .into(),
         })
         .collect();
-    let model = Model {
+    Model {
         name: "cubic-map".into(),
         a,
         b: SparseMatrix::diagonal(&[1.0; 4]),
@@ -323,8 +328,7 @@ pub fn cubic_map() -> System {
         mechanical: ROption::RNone,
         expressions: ssm_api::ExprVector::zeros(4, 4),
         equilibrium: RVec::new(),
-    };
-    System::from_model("catalogue", model).expect("valid map model")
+    }
 }
 
 /// The spectrum of a map, sorted by `ln |mu|` (slowest first).

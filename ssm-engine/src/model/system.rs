@@ -67,6 +67,30 @@ pub enum ModelError {
         /// What is wrong.
         source: crate::model::layout::LayoutError,
     },
+    /// A monomial lists a variable with exponent 0.
+    #[error("model '{model}': {what}, equation {eq}, lists variable {var} with power 0; list only variables with a power of at least 1")]
+    ZeroPower {
+        /// Model name.
+        model: String,
+        /// Which part.
+        what: String,
+        /// 0-based equation.
+        eq: usize,
+        /// 0-based variable.
+        var: usize,
+    },
+    /// A monomial's total degree is beyond [`MAX_DEGREE`].
+    #[error("model '{model}': {what}, equation {eq}, has a monomial of degree {degree}; the engine accepts degrees up to {MAX_DEGREE}")]
+    HighDegree {
+        /// Model name.
+        model: String,
+        /// Which part.
+        what: String,
+        /// 0-based equation.
+        eq: usize,
+        /// The total degree.
+        degree: u64,
+    },
     /// The nonlinearity has a constant or linear term.
     #[error("model '{model}': F, equation {eq}, has a term of degree {degree}; F must start at degree 2 (linear terms belong in A)")]
     LowDegree {
@@ -78,6 +102,11 @@ pub enum ModelError {
         degree: u32,
     },
 }
+
+/// Largest total degree of a monomial of `F` or of the forcing. Mechanical
+/// nonlinearities are of low degree (the recast yields at most 3); the limit
+/// keeps a corrupt exponent from asking for gigabytes of series storage.
+pub const MAX_DEGREE: u64 = 64;
 
 /// A named output `sum_k w_k z[s_k]`.
 #[derive(Debug, Clone, PartialEq)]
@@ -131,13 +160,11 @@ impl System {
     /// Validates a plugin's model and converts its matrices to compressed form.
     pub fn from_model(plugin: &str, m: ssm_api::Model) -> Result<Self, ModelError> {
         let model = m.name.to_string();
-        let m = crate::model::layout::canonicalize(m).map_err(|source| ModelError::Layout {
-            model: model.clone(),
-            source,
-        })?;
         let n = m.states.len();
-        let a = to_csc(&model, "A", &m.a, n, n)?;
-        let b = to_csc(&model, "B", &m.b, n, n)?;
+        // Indices, exponents and values are checked before the layout permutes
+        // them, so that no part of the conversion ever sees a bad index.
+        check_matrix(&model, "A", &m.a, n, n)?;
+        check_matrix(&model, "B", &m.b, n, n)?;
         check_poly(&model, "F", &m.nonlinearity, n)?;
         if let Some(t) = m.nonlinearity.terms.iter().find(|t| t.degree() < 2) {
             return Err(ModelError::LowDegree {
@@ -167,6 +194,20 @@ impl System {
                 });
             }
         }
+        if !m.expressions.is_empty() {
+            recast::ExprGraph::validate(&m.expressions, n).map_err(|source| {
+                ModelError::Recast {
+                    model: model.clone(),
+                    source,
+                }
+            })?;
+        }
+        let m = crate::model::layout::canonicalize(m).map_err(|source| ModelError::Layout {
+            model: model.clone(),
+            source,
+        })?;
+        let a = to_csc(&model, "A", &m.a, n, n)?;
+        let b = to_csc(&model, "B", &m.b, n, n)?;
         let mut names = std::collections::HashSet::new();
         for s in m.states.iter() {
             if !names.insert(s.name.as_str()) {
@@ -345,6 +386,23 @@ fn to_csc(
     nrows: usize,
     ncols: usize,
 ) -> Result<SparseColMat<usize, f64>, ModelError> {
+    check_matrix(model, what, m, nrows, ncols)?;
+    let trip: Vec<_> = m.iter().map(|(r, c, v)| Triplet::new(r, c, v)).collect();
+    SparseColMat::try_new_from_triplets(nrows, ncols, &trip).map_err(|e| ModelError::Shape {
+        model: model.to_owned(),
+        what: format!("matrix {what}"),
+        found: format!("{e:?}"),
+        expected: "a valid sparse matrix".into(),
+    })
+}
+
+fn check_matrix(
+    model: &str,
+    what: &str,
+    m: &ssm_api::SparseMatrix,
+    nrows: usize,
+    ncols: usize,
+) -> Result<(), ModelError> {
     if m.nrows as usize != nrows || m.ncols as usize != ncols {
         return Err(ModelError::Shape {
             model: model.to_owned(),
@@ -353,7 +411,6 @@ fn to_csc(
             expected: format!("{nrows}x{ncols}"),
         });
     }
-    let mut trip = Vec::with_capacity(m.entries.len());
     for t in m.entries.iter() {
         let (r, c) = (t.row as usize, t.col as usize);
         if r >= nrows || c >= ncols {
@@ -371,14 +428,8 @@ fn to_csc(
                 value: t.value,
             });
         }
-        trip.push(Triplet::new(r, c, t.value));
     }
-    SparseColMat::try_new_from_triplets(nrows, ncols, &trip).map_err(|e| ModelError::Shape {
-        model: model.to_owned(),
-        what: format!("matrix {what}"),
-        found: format!("{e:?}"),
-        expected: "a valid sparse matrix".into(),
-    })
+    Ok(())
 }
 
 fn check_poly(model: &str, what: &str, p: &PolyVector, n: usize) -> Result<(), ModelError> {
@@ -412,6 +463,24 @@ fn check_poly(model: &str, what: &str, p: &PolyVector, n: usize) -> Result<(), M
                 model: model.to_owned(),
                 what: format!("{what}, equation {}", t.eq),
                 value: t.coeff,
+            });
+        }
+        if let Some(v) = t.factors.iter().find(|v| v.power == 0) {
+            return Err(ModelError::ZeroPower {
+                model: model.to_owned(),
+                what: what.to_owned(),
+                eq: t.eq as usize,
+                var: v.var as usize,
+            });
+        }
+        // summed in u64: u32 powers cannot wrap around there
+        let degree: u64 = t.factors.iter().map(|v| u64::from(v.power)).sum();
+        if degree > MAX_DEGREE {
+            return Err(ModelError::HighDegree {
+                model: model.to_owned(),
+                what: what.to_owned(),
+                eq: t.eq as usize,
+                degree,
             });
         }
     }

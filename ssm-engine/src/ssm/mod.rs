@@ -82,6 +82,10 @@ pub struct SsmOptions {
     pub resonance_tol: f64,
 }
 
+/// Right-hand sides beyond this size are taken as an overflow of the
+/// expansion (a few more orders would reach infinity).
+const OVERFLOW: f64 = 1e250;
+
 /// Why an SSM could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SsmError {
@@ -109,6 +113,16 @@ pub enum SsmError {
         exponents: Vec<u16>,
         /// Cause.
         source: HomologicalError,
+    },
+    /// The expansion coefficients outgrow floating point: the radius of
+    /// convergence in this normalization is far below 1, so `|W_k|` grows
+    /// like `radius^-k` until it overflows.
+    #[error("order {order}: the expansion coefficients reach {size:.1e} and overflow floating point (the SSM's radius of convergence is far below 1 in this normalization); lower [ssm] order below {order}, or normalize the master modes to a larger scale")]
+    Overflow {
+        /// Order at which the right-hand side left the floating-point range.
+        order: usize,
+        /// Largest right-hand-side entry found.
+        size: f64,
     },
     /// The master modes are unusable.
     #[error("master modes: {0}")]
@@ -322,6 +336,10 @@ pub fn compute(
                 rhs.iter_mut().zip(&bc).for_each(|(x, y)| *x -= y);
             }
             compose_s += tc.elapsed().as_secs_f64();
+            let size = rhs.iter().map(|c| c.norm()).fold(0.0, f64::max);
+            if size.is_nan() || size >= OVERFLOW {
+                return Err(SsmError::Overflow { order: k, size });
+            }
             let big = lambda_of(dynamics, &lambda, &e);
             for &ev in others {
                 let distance = (big - ev).norm() / ev.norm().max(f64::MIN_POSITIVE);
