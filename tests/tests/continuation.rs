@@ -100,6 +100,7 @@ fn one_to_two_branch_points_match_the_closed_form() {
         h_max: 0.002 * w2,
         h_min: 1e-9,
         max_steps: 4000,
+        max_amplitude: None,
     };
     let q2 = -f / (lam2 - C64::new(0.0, range.0));
     let main = frame
@@ -164,4 +165,21 @@ fn one_to_two_branch_points_match_the_closed_form() {
         rejoins,
         "the secondary branch does not reach the second branch point"
     );
+    // with [forcing] rho_max below that peak the branch stops where |q1|
+    // passes it, and says so
+    let bounded = Settings {
+        max_amplitude: Some(0.5 * peak),
+        ..settings
+    };
+    let stopped = frame.switch(bps[0], &bounded);
+    assert!(stopped.iter().any(|b| b.reached_max_amplitude));
+    for b in &stopped {
+        let inside = &b.points[..b.points.len() - 1];
+        assert!(
+            inside
+                .iter()
+                .all(|p| p.q.iter().all(|q| q.norm() <= 0.5 * peak)),
+            "a point beyond max_amplitude before the last"
+        );
+    }
 }

@@ -94,6 +94,8 @@ pub struct ReportInputs<'a> {
     pub p0: Option<Vec<C64>>,
     /// Relative tolerance of the reduced transients (the full system's).
     pub rtol: f64,
+    /// Accuracy target of the forced response curves (`[ssm] tolerance`).
+    pub tolerance: f64,
 }
 
 /// Computes the rows of the report.
@@ -177,7 +179,7 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
                 sec.epsilon = Spanned::new(0..0, vec![r.epsilon]);
             }
             let t = Instant::now();
-            let rep = forced_response(&ssm, sys, inp.masters, &sec, inp.outputs)
+            let rep = forced_response(&ssm, sys, inp.masters, &sec, inp.outputs, inp.tolerance)
                 .map_err(|source| ReportError::Frc { order, source })?;
             row.frc_s = Some(t.elapsed().as_secs_f64());
             if let Some(r) = steady {

@@ -63,7 +63,16 @@ fn curves(f: &ForcedResponse) -> Vec<Curve> {
                 label: if labelled {
                     String::new()
                 } else {
-                    format!("O({}), eps = {}", c.order, c.epsilon)
+                    format!(
+                        "O({}), eps = {}{}",
+                        c.order,
+                        c.epsilon,
+                        if c.untrusted {
+                            "  UNTRUSTED: error estimate above [ssm] tolerance"
+                        } else {
+                            ""
+                        }
+                    )
                 },
                 points: seg,
                 dashed: !st,
@@ -147,14 +156,18 @@ pub fn frc_json(f: &ForcedResponse) -> Value {
                 "epsilon": c.epsilon,
                 "points": c.points,
                 "branches": c.branches,
+                "untrusted": c.untrusted,
             });
             match &c.details {
                 CurveDetails::OnePair {
                     rho_peak,
                     invariance_error_at_peak,
                     residual_eq60_at_peak,
+                    error_estimate,
                     nonautonomous_order,
                 } => {
+                    v["error_estimate"] =
+                        json!(error_estimate.is_finite().then_some(error_estimate));
                     v["rho_peak"] = json!(rho_peak);
                     v["invariance_error_at_peak"] = json!(invariance_error_at_peak);
                     v["residual_eq60_at_peak"] = json!(residual_eq60_at_peak);

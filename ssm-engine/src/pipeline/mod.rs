@@ -8,6 +8,7 @@
 //! its scene section in [`crate::scene`], its writer in [`crate::output`], and
 //! one call in [`run`].
 
+pub mod budget;
 mod checks;
 mod error;
 mod spectral;
@@ -139,10 +140,13 @@ pub fn run(
     let (system, reduction) = obtain_model(scene, registry)?;
     let coordinates = checks::coordinates(scene, &system)?;
 
+    let limits = budget::Limits::of_machine();
+    budget::check_spectrum(scene, &system, &limits)?;
     progress.stage("spectrum");
     let sp = spectral::spectral(scene, &system)?;
     timing.spectrum = sp.spectrum_s;
     timing.resonance_check = sp.resonance_s;
+    budget::check(scene, &system, &sp.masters, &limits)?;
 
     progress.stage("SSM");
     let t = Instant::now();
@@ -165,7 +169,14 @@ pub fn run(
         .as_ref()
         .map(|sec| {
             progress.stage("forced response curves");
-            forced_response(&expansion, &system, &sp.masters, sec, &coordinates)
+            forced_response(
+                &expansion,
+                &system,
+                &sp.masters,
+                sec,
+                &coordinates,
+                *sc.ssm.tolerance.get_ref(),
+            )
         })
         .transpose()?;
     timing.frc = t.elapsed().as_secs_f64();
@@ -208,6 +219,7 @@ pub fn run(
                     .and_then(|v| v.transient.as_ref())
                     .map(|t| t.result.p0.clone()),
                 rtol: sc.validate.as_ref().map_or(1e-8, |v| *v.rtol.get_ref()),
+                tolerance: *sc.ssm.tolerance.get_ref(),
             };
             Some(report(&system, &inputs)?)
         }
@@ -215,6 +227,10 @@ pub fn run(
     };
     timing.report = t.elapsed().as_secs_f64();
 
+    let mut warnings = sp.warnings.clone();
+    if let Some(f) = &frc {
+        warnings.extend(f.warnings.iter().cloned());
+    }
     progress.stage("writing outputs");
     let polar_form = (expansion.dynamics == Dynamics::Flow)
         .then(|| polar(&expansion).ok())
@@ -241,7 +257,7 @@ pub fn run(
             frc: frc.as_ref(),
             validation: checked.as_ref(),
             report: speed.as_ref(),
-            warnings: &sp.warnings,
+            warnings: &warnings,
             timing,
         },
     })?;
@@ -253,7 +269,7 @@ pub fn run(
         frc,
         validation: checked,
         report: speed,
-        warnings: sp.warnings,
+        warnings,
         outputs,
     })
 }

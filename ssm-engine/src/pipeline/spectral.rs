@@ -12,6 +12,7 @@ use crate::spectrum::{
     SpectrumOptions,
 };
 use crate::ssm::Dynamics;
+use crate::C64;
 
 /// What the spectral stage found.
 #[derive(Debug, Clone)]
@@ -110,6 +111,11 @@ pub fn spectral(scene: &SceneFile, system: &System) -> Result<Spectral, JobError
     )?;
     let spectrum_s = t_spec.elapsed().as_secs_f64();
     let master_indices: Vec<usize> = masters.iter().map(|m| m.index).collect();
+    warnings.extend(repeated_masters(
+        &spectrum.eigenvalues,
+        &masters,
+        *sc.ssm.resonance_tol.get_ref(),
+    ));
     let rates = match dynamics {
         Dynamics::Flow => spectrum.eigenvalues.clone(),
         Dynamics::Map { period } => spectrum::multipliers_to_rates(&spectrum.eigenvalues, period),
@@ -140,4 +146,36 @@ pub fn spectral(scene: &SceneFile, system: &System) -> Result<Spectral, JobError
         spectrum_s,
         resonance_s,
     })
+}
+
+/// A warning for each master eigenvalue that is repeated (to within the
+/// relative `tol`) elsewhere in the spectrum: a 1:1 resonance at order 1,
+/// which the checks of eq. (57) (orders 2 and up) do not see. Outside the
+/// master subspace it leaves the SSM without a unique spectral subspace;
+/// inside it, the master eigenvectors are one arbitrary basis of the
+/// eigenspace.
+fn repeated_masters(eigenvalues: &[C64], masters: &[MasterMode], tol: f64) -> Vec<String> {
+    let mut warnings = Vec::new();
+    for (k, m) in masters.iter().enumerate() {
+        for (j, &ev) in eigenvalues.iter().enumerate() {
+            let distance = (ev - m.lambda).norm() / m.lambda.norm().max(f64::MIN_POSITIVE);
+            if j == m.index || distance > tol {
+                continue;
+            }
+            match masters.iter().position(|o| o.index == j) {
+                Some(o) if o > k => warnings.push(format!(
+                    "master pairs {} and {} share the eigenvalue {:.6} (relative distance {distance:.1e}): their modes are one arbitrary basis of a repeated eigenspace, and the reduced dynamics keep the 1:1 coupling",
+                    m.pair, masters[o].pair, m.lambda
+                )),
+                Some(_) => {}
+                None => warnings.push(format!(
+                    "master pair {}: lambda = {:.6} is repeated by eigenvalue {} = {ev:.6} outside the master subspace (relative distance {distance:.1e}): the SSM is not unique there; add that mode's pair to [ssm] master_pairs",
+                    m.pair,
+                    m.lambda,
+                    j + 1
+                )),
+            }
+        }
+    }
+    warnings
 }

@@ -107,6 +107,9 @@ pub struct Branch {
     pub points: Vec<BranchPoint>,
     /// Located bifurcations.
     pub located: Vec<Located>,
+    /// The branch was stopped where a pair amplitude passed
+    /// [`Settings::max_amplitude`].
+    pub reached_max_amplitude: bool,
 }
 
 /// Settings of the continuation.
@@ -120,6 +123,9 @@ pub struct Settings {
     pub h_min: f64,
     /// Largest number of steps.
     pub max_steps: usize,
+    /// The branch stops where some `|q_j|` exceeds this (the amplitude up to
+    /// which the expansion is trusted, `[forcing] rho_max`).
+    pub max_amplitude: Option<f64>,
 }
 
 impl RotatingFrame {
@@ -300,6 +306,7 @@ impl RotatingFrame {
         let mut located = Vec::new();
         let (mut det, mut bp, mut unst, _) = self.tests(&u, &t);
         let u_first = u.clone();
+        let mut reached_max_amplitude = false;
         for step in 0..s.max_steps {
             let pred: Vec<f64> = u.iter().zip(&t).map(|(a, b)| a + h * b).collect();
             let Some((un, iters)) = self.correct(&pred, &t) else {
@@ -354,6 +361,12 @@ impl RotatingFrame {
             if u[n] < s.omega_range.0 || u[n] > s.omega_range.1 {
                 break;
             }
+            if let Some(r) = s.max_amplitude {
+                if (0..n / 2).any(|j| u[2 * j].hypot(u[2 * j + 1]) > r) {
+                    reached_max_amplitude = true;
+                    break;
+                }
+            }
             // a closed branch (isola, or the loop of a secondary branch) is done
             // when it comes back to where it started
             let back = u
@@ -369,7 +382,11 @@ impl RotatingFrame {
                 h = (h * 1.3).min(s.h_max);
             }
         }
-        Branch { points, located }
+        Branch {
+            points,
+            located,
+            reached_max_amplitude,
+        }
     }
 
     /// The branch through the fixed point found at `omega_start` (from the

@@ -128,6 +128,7 @@ pub fn forced_response_multi(
             h_max: 2e-3 * scale.max(range.1 - range.0),
             h_min: 1e-10 * scale,
             max_steps: 20 * *sec.points.get_ref(),
+            max_amplitude: sec.rho_max.as_ref().map(|r| *r.get_ref()),
         };
         let guess: Vec<f64> = (0..m)
             .flat_map(|j| {
@@ -165,6 +166,14 @@ pub fn forced_response_multi(
         }
         let first = rows.len();
         for (bi, br) in branches.iter().enumerate() {
+            if let (true, Some(last)) = (br.reached_max_amplitude, br.points.last()) {
+                warnings.push(format!(
+                    "O({order}), eps = {eps}: branch {} was stopped at Omega = {:.6}, where a pair amplitude passed [forcing] rho_max = {}; beyond it the expansion is not trusted",
+                    bi + 1,
+                    last.omega,
+                    sec.rho_max.as_ref().map_or(f64::INFINITY, |r| *r.get_ref()),
+                ));
+            }
             let first_of_branch = rows.len();
             for p in br
                 .points
@@ -245,6 +254,7 @@ pub fn forced_response_multi(
             points: rows.len() - first,
             branches: branches.len(),
             bifurcations,
+            untrusted: false,
             details: CurveDetails::Continuation {
                 branch_switches: switched,
                 continuation_steps: branches.iter().map(|b| b.points.len()).sum::<usize>(),

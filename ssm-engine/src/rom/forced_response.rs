@@ -10,17 +10,11 @@
 //! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sect. 4,
 //! eqs. (16), (41), (60), Figs. 5-6.
 
-use std::collections::HashMap;
-
 use crate::model::system::{OutputMap, System};
-use crate::poly::MultiIndexSet;
-use crate::rom::frc::{
-    chebyshev_interpolate, one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair,
-};
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
-use crate::ssm::analysis::{invariance_error, polar, PolarError};
-use crate::ssm::forced::{ForcedError, ForcedSsm};
+use crate::ssm::analysis::PolarError;
+use crate::ssm::forced::ForcedError;
 use crate::ssm::{Dynamics, SsmExpansion};
 use crate::C64;
 
@@ -113,6 +107,10 @@ pub enum CurveDetails {
         invariance_error_at_peak: Option<f64>,
         /// Largest eq. (60) residual along the peak's periodic orbit.
         residual_eq60_at_peak: Option<f64>,
+        /// Estimated relative error of the response amplitude: the largest
+        /// resonant part `|u^* r|` of that residual over the resonant load
+        /// `eps |u^* Fext|` (NaN or infinite when the expansion diverged).
+        error_estimate: f64,
         /// Order of the non-autonomous terms used.
         nonautonomous_order: usize,
     },
@@ -140,6 +138,8 @@ pub struct FrcCurve {
     pub bifurcations: Vec<FrcBifurcation>,
     /// Method-specific figures.
     pub details: CurveDetails,
+    /// The curve's error estimate exceeds the accuracy target.
+    pub untrusted: bool,
 }
 
 /// Everything `[forcing]` produced.
@@ -185,23 +185,15 @@ pub fn auto_ratios(masters: &[MasterMode], omega: f64) -> Vec<f64> {
         .collect()
 }
 
-/// Exact non-autonomous data at the Chebyshev nodes in `Omega`.
-struct NaTable {
-    /// `(sigma, tau)` per node.
-    coeffs: Vec<(Vec<C64>, Vec<C64>)>,
-    /// Per node: the outputs' `x_k`, output after output, over `set`.
-    xs: Vec<Vec<C64>>,
-    /// Multi-indices of the expansion.
-    set: MultiIndexSet,
-}
-
-/// FRCs for every `(order, epsilon)` of `sec`, with the amplitudes of `outputs`.
+/// FRCs for every `(order, epsilon)` of `sec`, with the amplitudes of
+/// `outputs`; one pair's curves are checked against the relative `tolerance`.
 pub fn forced_response(
     ssm: &SsmExpansion,
     sys: &System,
     masters: &[MasterMode],
     sec: &ForcingSection,
     outputs: &[&OutputMap],
+    tolerance: f64,
 ) -> Result<ForcedResponse, FrcError> {
     if let Dynamics::Map { .. } = ssm.dynamics {
         return Err(FrcError::Unsupported(
@@ -224,216 +216,7 @@ pub fn forced_response(
             ratios[0]
         )));
     }
-    let mut forced = ForcedSsm::new(sys, masters, &ratios)?;
-    let s = forced.at(0.5 * (range.0 + range.1))?.resonant_forcing(0);
-    if s.norm() == 0.0 {
-        return Err(FrcError::Unsupported(
-            "the forcing does not reach the master mode (u^* F = 0): no resonant response".into(),
-        ));
-    }
-    let pol = polar(ssm)?;
-    let eps_list = sec.epsilon.get_ref();
-    let orders = sec
-        .orders
-        .as_ref()
-        .map_or(vec![ssm.order], |o| o.get_ref().clone());
-    let eps_max = eps_list.iter().copied().fold(0.0, f64::max);
-    let rho_max = sec.rho_max.as_ref().map_or_else(
-        || 3.0 * eps_max * s.norm() / masters[0].lambda.re.abs().max(1e-300),
-        |r| *r.get_ref(),
-    );
-    let points = *sec.points.get_ref();
-    let series: Vec<Vec<C64>> = outputs
-        .iter()
-        .map(|o| ssm.output_series(&o.weights))
-        .collect();
-    let k_na = sec.nonautonomous_order.as_ref().map_or(0, |k| *k.get_ref());
-    if k_na > 0 && (sys.forcing.len() != 1 || sys.forcing[0].multiple != 1.0) {
-        return Err(FrcError::Unsupported(
-            "nonautonomous_order > 0 needs a single forcing harmonic at Omega".into(),
-        ));
-    }
-    let width = range.1 - range.0;
-    let nodes = ForcedCoefficients::nodes(range.0 - 0.1 * width, range.1 + 0.1 * width, 17);
-    let tables = nonautonomous_tables(&mut forced, ssm, sys, outputs, &orders, k_na, &nodes)?;
-    let mut rows = Vec::new();
-    let mut curves = Vec::new();
-    for (&order, &eps) in orders
-        .iter()
-        .flat_map(|o| eps_list.iter().map(move |e| (o, e)))
-    {
-        let k_eff = k_na.min(order.saturating_sub(1));
-        let table = tables.get(&k_eff);
-        let mut pb = OnePair::new(&pol, order, eps * s);
-        if let Some(t) = table {
-            pb = pb.with_forced(ForcedCoefficients::new(
-                nodes.clone(),
-                t.coeffs.clone(),
-                eps,
-            ));
-        }
-        let f = one_pair_frc(&pb, rho_max, points, range);
-        if f.points.is_empty() {
-            return Err(FrcError::Empty {
-                order,
-                epsilon: eps,
-                rho_max,
-            });
-        }
-        let first = rows.len();
-        for p in &f.points {
-            let mut linf = Vec::with_capacity(outputs.len());
-            let mut h1 = Vec::with_capacity(outputs.len());
-            match table {
-                Some(t) => {
-                    let x = chebyshev_interpolate(&nodes, &t.xs, p.omega);
-                    let len = t.set.len();
-                    for (oi, ser) in series.iter().enumerate() {
-                        let xo = &x[oi * len..(oi + 1) * len];
-                        let part = |q: C64, phi: f64| {
-                            let mono = t.set.monomials(&[q, q.conj()], t.set.max_order());
-                            let v: C64 = xo.iter().zip(&mono).map(|(a, b)| a * b).sum();
-                            2.0 * eps * (v * C64::from_polar(1.0, phi)).re
-                        };
-                        let (l, a) = response_amplitudes(ssm, ser, order, p, &part);
-                        linf.push(l);
-                        h1.push(a);
-                    }
-                }
-                None => {
-                    let x0 = forced.at(p.omega)?;
-                    for (o, ser) in outputs.iter().zip(&series) {
-                        let part = |_: C64, phi: f64| eps * x0.output_at(&o.weights, phi);
-                        let (l, a) = response_amplitudes(ssm, ser, order, p, &part);
-                        linf.push(l);
-                        h1.push(a);
-                    }
-                }
-            }
-            if linf.iter().chain(&h1).any(|v| !v.is_finite()) {
-                return Err(FrcError::Unsupported(format!(
-                    "O({order}), eps = {eps}: non-finite response amplitude at rho = {}: the expansion diverges there; lower [forcing] rho_max",
-                    p.rho
-                )));
-            }
-            rows.push(FrcRow {
-                order,
-                epsilon: eps,
-                omega: p.omega,
-                branch: p.branch,
-                stable: p.stable,
-                rho: p.rho,
-                q: vec![C64::from_polar(p.rho, p.theta)],
-                pair_amplitudes: vec![p.rho],
-                linf,
-                h1,
-            });
-        }
-        let curve_rows = &rows[first..];
-        // the error figure beside the answer: eq. (41) at the largest amplitude
-        let rho_peak = f.points.iter().map(|p| p.rho).fold(0.0, f64::max);
-        let err = (rho_peak > 0.0).then(|| invariance_error(ssm, sys, order, rho_peak, 2, 30));
-        // and the residual of eq. (60) along the peak's periodic orbit (Fig. 6)
-        let peak = f.points.iter().max_by(|a, b| a.rho.total_cmp(&b.rho));
-        let res60 = match peak {
-            Some(pk) => {
-                let na = forced.expansion(ssm, sys, pk.omega, k_eff)?;
-                (0..64)
-                    .map(|k| {
-                        let phi = 2.0 * std::f64::consts::PI * f64::from(k) / 64.0;
-                        let q = C64::from_polar(pk.rho, pk.theta + phi);
-                        let r = na.residual(ssm, sys, eps, &[q, q.conj()], phi, order);
-                        r.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt()
-                    })
-                    .fold(0.0, f64::max)
-            }
-            None => 0.0,
-        };
-        let bifurcations = f
-            .bifurcations
-            .iter()
-            .map(|b| FrcBifurcation {
-                kind: b.kind.label(),
-                omega: b.omega,
-                branch: b.branch,
-                rho: vec![b.rho],
-                plotted: curve_rows
-                    .iter()
-                    .filter(|r| r.branch == b.branch)
-                    .min_by(|x, y| (x.rho - b.rho).abs().total_cmp(&(y.rho - b.rho).abs()))
-                    .map(FrcRow::plotted),
-            })
-            .collect();
-        curves.push(FrcCurve {
-            order,
-            epsilon: eps,
-            points: f.points.len(),
-            branches: f.points.iter().map(|p| p.branch).max().unwrap_or(0),
-            bifurcations,
-            details: CurveDetails::OnePair {
-                rho_peak,
-                invariance_error_at_peak: err.filter(|e| e.is_finite()),
-                residual_eq60_at_peak: res60.is_finite().then_some(res60),
-                nonautonomous_order: k_eff,
-            },
-        });
-    }
-    Ok(ForcedResponse {
-        outputs: outputs.iter().map(|o| o.name.clone()).collect(),
-        rows,
-        curves,
-        resonance: ratios,
-        rho_max: Some(rho_max),
-        forcing_on_master: vec![s],
-        warnings: Vec::new(),
-    })
-}
-
-/// Higher-order non-autonomous terms: exact expansions at the Chebyshev nodes
-/// in `Omega`, interpolated in between (sigma, tau and the outputs' X), one
-/// table per effective order `min(K, order - 1)`.
-fn nonautonomous_tables(
-    forced: &mut ForcedSsm,
-    ssm: &SsmExpansion,
-    sys: &System,
-    outputs: &[&OutputMap],
-    orders: &[usize],
-    k_na: usize,
-    nodes: &[f64],
-) -> Result<HashMap<usize, NaTable>, FrcError> {
-    let mut tables = HashMap::new();
-    for &order in orders {
-        let k_eff = k_na.min(order.saturating_sub(1));
-        if k_eff == 0 || tables.contains_key(&k_eff) {
-            continue;
-        }
-        let mut coeffs = Vec::with_capacity(nodes.len());
-        let mut xs = Vec::with_capacity(nodes.len());
-        let mut set = None;
-        for &w in nodes {
-            let na = forced.expansion(ssm, sys, w, k_eff)?;
-            coeffs.push(na.rotating_frame_coefficients());
-            let h = &na.harmonics[0];
-            xs.push(
-                outputs
-                    .iter()
-                    .flat_map(|o| {
-                        h.x.iter()
-                            .map(|xk| o.weights.iter().map(|&(s, wt)| xk[s] * wt).sum::<C64>())
-                            .collect::<Vec<_>>()
-                    })
-                    .collect::<Vec<C64>>(),
-            );
-            set = Some(na.set);
-        }
-        tables.insert(
-            k_eff,
-            NaTable {
-                coeffs,
-                xs,
-                set: set.expect("at least one node"),
-            },
-        );
-    }
-    Ok(tables)
+    crate::rom::forced_one_pair::forced_response_one_pair(
+        ssm, sys, masters, sec, outputs, ratios, tolerance,
+    )
 }

@@ -593,6 +593,7 @@ mod tests {
             h_max: 2e-3,
             h_min: 1e-12,
             max_steps: 20_000,
+            max_amplitude: None,
         };
         let q = C64::new(0.0, 0.02) / (lambda - C64::new(0.0, 0.5));
         let br = frame.start(0.5, vec![q.re, q.im], &settings).unwrap();

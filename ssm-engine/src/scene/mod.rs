@@ -285,6 +285,10 @@ pub struct SsmSection {
     /// below which a combination counts as a (near) resonance.
     #[serde(default = "default_resonance_tol")]
     pub resonance_tol: Spanned<f64>,
+    /// Accuracy target: the relative error an answer may have before it is
+    /// flagged (and up to which the non-autonomous order is raised).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: Spanned<f64>,
 }
 
 fn default_master_pairs() -> Spanned<Vec<usize>> {
@@ -296,6 +300,9 @@ fn default_order() -> Spanned<usize> {
 fn default_resonance_tol() -> Spanned<f64> {
     Spanned::new(0..0, 0.02)
 }
+fn default_tolerance() -> Spanned<f64> {
+    Spanned::new(0..0, 0.01)
+}
 
 impl Default for SsmSection {
     fn default() -> Self {
@@ -304,6 +311,7 @@ impl Default for SsmSection {
             order: default_order(),
             normalization: Normalization::Unit,
             resonance_tol: default_resonance_tol(),
+            tolerance: default_tolerance(),
         }
     }
 }
@@ -527,6 +535,14 @@ impl SceneFile {
                 format!("must lie in (0, 1), found {tol}"),
             ));
         }
+        let tol = *ssm.tolerance.get_ref();
+        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
+            return Err(self.invalid(
+                ssm.tolerance.span(),
+                "ssm.tolerance",
+                format!("must lie in (0, 1) (a relative error, 0.01 = 1 %), found {tol}"),
+            ));
+        }
         self.check_model_source()?;
         self.check_outputs()?;
         self.check_forcing()?;
@@ -689,6 +705,16 @@ impl SceneFile {
             self.check_positive(&tr.t_end, "outputs.transient.t_end")?;
             self.check_at_least(&tr.samples, 2, "outputs.transient.samples")?;
             self.check_positive(&tr.rtol, "outputs.transient.rtol")?;
+            if *tr.rtol.get_ref() >= 1e-2 {
+                return Err(self.invalid(
+                    tr.rtol.span(),
+                    "outputs.transient.rtol",
+                    format!(
+                        "must be below 1e-2 (found {}): a looser tolerance lets the step size grow past the oscillation and the transient is wrong",
+                        tr.rtol.get_ref()
+                    ),
+                ));
+            }
             if let Some(o) = &tr.order {
                 self.check_orders(
                     &Spanned::new(o.span(), vec![*o.get_ref()]),

@@ -1,0 +1,437 @@
+//! Work and memory of a scene's requests, estimated before any of it starts.
+//!
+//! Every request whose cost grows with a scene value (the expansion order,
+//! numbers of points and samples, integration times, period counts, the size
+//! of a dense pencil) is costed here from the model's size and spectrum. A
+//! request that would not finish within [`Limits`] is refused with a scene
+//! error at its key, naming the estimate, the limit and what to change,
+//! instead of hanging, exhausting memory or overflowing an allocation.
+//!
+//! The estimates count elementary operations from the size of each algorithm
+//! (multi-indices, series products, sparse solves, integration steps) and
+//! convert them with a rate measured on a 2-core machine ([`OPS_PER_SECOND`]).
+//! They are meant to separate "seconds to minutes" from "days", not to
+//! predict run times: a factor of a few either way is expected.
+
+use std::ops::Range;
+
+use super::error::JobError;
+use crate::model::system::System;
+use crate::scene::SceneFile;
+use crate::spectrum::{MasterMode, DENSE_LIMIT};
+use crate::ssm::Dynamics;
+
+/// Elementary operations per second assumed by the estimates (complex
+/// multiply-adds and sparse-solve entries on one core of a 2-core machine,
+/// conservatively rounded down from the SSM and Radau timings of the zoo).
+pub const OPS_PER_SECOND: f64 = 2e8;
+
+/// Integration steps per period assumed for adaptive integrators at the
+/// tolerances scenes use (the Radau IIA runs of the zoo take 40-60, DOPRI5
+/// on the reduced model 20-40).
+const STEPS_PER_PERIOD: f64 = 60.0;
+
+/// Environment variable that raises (or lowers) the time limit, in minutes.
+pub const TIME_LIMIT_VAR: &str = "SSM_TIME_LIMIT_MINUTES";
+
+/// What one run may use.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Estimated seconds of work.
+    pub seconds: f64,
+    /// Bytes of memory.
+    pub bytes: f64,
+}
+
+impl Limits {
+    /// One hour (or `SSM_TIME_LIMIT_MINUTES`), and three quarters of the
+    /// memory available now (`MemAvailable` of `/proc/meminfo`; 8 GiB where
+    /// it cannot be read).
+    pub fn of_machine() -> Self {
+        let minutes = std::env::var(TIME_LIMIT_VAR)
+            .ok()
+            .and_then(|v| v.trim().parse::<f64>().ok())
+            .filter(|m| m.is_finite() && *m > 0.0)
+            .unwrap_or(60.0);
+        let available = std::fs::read_to_string("/proc/meminfo")
+            .ok()
+            .and_then(|s| {
+                s.lines()
+                    .find(|l| l.starts_with("MemAvailable:"))
+                    .and_then(|l| l.split_whitespace().nth(1))
+                    .and_then(|kb| kb.parse::<f64>().ok())
+            })
+            .map_or(8.0 * GIB, |kb| kb * 1024.0);
+        Self {
+            seconds: minutes * 60.0,
+            bytes: 0.75 * available,
+        }
+    }
+}
+
+const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
+
+/// The cost of one request.
+struct Cost {
+    ops: f64,
+    bytes: f64,
+}
+
+/// `C(n + k, k)` in floating point (no overflow for any scene value).
+fn binomial(n: usize, k: usize) -> f64 {
+    (1..=k).fold(1.0, |acc, i| acc * (n + i) as f64 / i as f64)
+}
+
+/// Multi-indices of degree `0..=order` in `nvar` variables.
+fn multi_indices(nvar: usize, order: usize) -> f64 {
+    binomial(nvar, order)
+}
+
+/// Sizes of the model the costs depend on.
+struct Sizes {
+    states: f64,
+    /// Entries of `A` and `B`.
+    nnz: f64,
+    /// Factors of all monomials of `F` (a bound on the composition's nodes).
+    factors: f64,
+}
+
+impl Sizes {
+    fn of(system: &System) -> Self {
+        let factors: u64 = system
+            .nonlinearity
+            .terms
+            .iter()
+            .map(|t| t.factors.iter().map(|f| u64::from(f.power)).sum::<u64>())
+            .sum();
+        Self {
+            states: system.n_states() as f64,
+            nnz: (system.a.compute_nnz() + system.b.compute_nnz()) as f64,
+            factors: factors as f64,
+        }
+    }
+
+    /// One sparse factorization and solve of the pencil's size.
+    fn sparse_solve(&self) -> f64 {
+        50.0 * (self.nnz + self.states)
+    }
+}
+
+/// The refusal of a request at `span` of `key`.
+fn refuse(
+    scene: &SceneFile,
+    span: Range<usize>,
+    key: &str,
+    what: String,
+    cost: &Cost,
+    limits: &Limits,
+    advice: &str,
+) -> JobError {
+    let secs = cost.ops / OPS_PER_SECOND;
+    scene
+        .invalid(
+            span,
+            key,
+            format!(
+                "{what} needs about {} and {} of memory; this machine allows {} ({TIME_LIMIT_VAR}) and {}: {advice}",
+                duration(secs),
+                bytes(cost.bytes),
+                duration(limits.seconds),
+                bytes(limits.bytes),
+            ),
+        )
+        .into()
+}
+
+fn duration(s: f64) -> String {
+    if s < 1.0 {
+        format!("{s:.1e} s")
+    } else if s < 120.0 {
+        format!("{s:.0} s")
+    } else if s < 7200.0 {
+        format!("{:.0} min", s / 60.0)
+    } else if s < 172_800.0 {
+        format!("{:.0} h", s / 3600.0)
+    } else {
+        format!("{:.1e} days", s / 86_400.0)
+    }
+}
+
+fn bytes(b: f64) -> String {
+    if b < 1e9 {
+        format!("{:.1} MB", b / 1e6)
+    } else if b < 1e12 {
+        format!("{:.1} GB", b / 1e9)
+    } else {
+        format!("{:.1e} GB", b / 1e9)
+    }
+}
+
+fn within(cost: &Cost, limits: &Limits) -> bool {
+    cost.ops / OPS_PER_SECOND <= limits.seconds && cost.bytes <= limits.bytes
+}
+
+/// The dense spectrum: a QZ iteration on the `N x N` pencil, about `70 N^3`
+/// operations on 6 dense complex matrices.
+pub fn check_spectrum(scene: &SceneFile, system: &System, limits: &Limits) -> Result<(), JobError> {
+    use crate::scene::SpectrumMethod;
+    let n = system.n_states() as f64;
+    let dense = match scene.scene.spectrum.method {
+        SpectrumMethod::Dense => true,
+        SpectrumMethod::Auto => system.n_states() <= DENSE_LIMIT,
+        SpectrumMethod::Sparse => false,
+    };
+    let cost = Cost {
+        ops: 70.0 * n.powi(3),
+        bytes: 6.0 * 16.0 * n * n,
+    };
+    if dense && !within(&cost, limits) {
+        let at = scene.text.find("[spectrum]").unwrap_or(0);
+        return Err(refuse(
+            scene,
+            at..at,
+            "spectrum.method",
+            format!("the dense spectrum of {n} states"),
+            &cost,
+            limits,
+            "use method = \"sparse\" with the modes you need",
+        ));
+    }
+    Ok(())
+}
+
+/// The SSM to `order` with `pairs` master pairs: the composition `F(W)`
+/// (series products over pairs of multi-indices, eq. 55), one sparse solve
+/// per multi-index, and the storage of `W` and of the composition's series;
+/// twice that with a forcing (the non-autonomous SSM, eq. 60).
+fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
+    let nvar = 2 * pairs;
+    let n_idx = multi_indices(nvar, order);
+    let products = binomial(2 * nvar, order);
+    let once = Cost {
+        ops: 4.0 * sizes.factors * products + 0.5 * n_idx * sizes.sparse_solve(),
+        // the series product table holds one 8-byte entry per product
+        bytes: 16.0 * n_idx * (2.0 * sizes.states + sizes.factors + nvar as f64) + 8.0 * products,
+    };
+    if forced {
+        Cost {
+            ops: 2.0 * once.ops,
+            bytes: 2.0 * once.bytes,
+        }
+    } else {
+        once
+    }
+}
+
+/// Checks every request of `scene` against `limits`, once the model and its
+/// master modes are known and before the SSM is computed.
+pub fn check(
+    scene: &SceneFile,
+    system: &System,
+    masters: &[MasterMode],
+    limits: &Limits,
+) -> Result<(), JobError> {
+    let sc = &scene.scene;
+    let sizes = Sizes::of(system);
+    let pairs = masters.len().max(1);
+    let nvar = 2 * pairs;
+    let order = *sc.ssm.order.get_ref();
+    let forced = sc.forcing.is_some() || sc.validate.is_some();
+    let mut ssm = ssm_cost(&sizes, pairs, order, forced);
+    if sc.report.is_some() {
+        // the report rebuilds the SSM at each of its orders (at most `order`)
+        ssm.ops *= order as f64;
+    }
+    if !within(&ssm, limits) {
+        return Err(refuse(
+            scene,
+            sc.ssm.order.span(),
+            "ssm.order",
+            format!(
+                "an SSM of order {order} with {pairs} master pair(s) of a {}-state model",
+                sizes.states
+            ),
+            &ssm,
+            limits,
+            "lower the order",
+        ));
+    }
+    let n_idx = multi_indices(nvar, order);
+    let omega = masters
+        .iter()
+        .map(|m| m.lambda.norm())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let periods = |t_end: f64| match system.time {
+        ssm_api::TimeKind::Map { period } => t_end / period.max(f64::MIN_POSITIVE),
+        ssm_api::TimeKind::Flow => t_end * omega / (2.0 * std::f64::consts::PI),
+    };
+    let steps = |t_end: f64| match Dynamics::from(system.time) {
+        Dynamics::Map { .. } => periods(t_end),
+        Dynamics::Flow => periods(t_end) * STEPS_PER_PERIOD,
+    };
+    let out = &sc.outputs;
+    let coords = out.coordinates.get_ref().len() as f64;
+    if let Some(ie) = &out.invariance_error {
+        let points = (*ie.n_alpha.get_ref() as f64).powi(pairs as i32 - 1)
+            * (*ie.n_theta.get_ref() as f64).powi(pairs as i32);
+        let evaluations = points * (ie.radii.get_ref().len() * ie.orders.get_ref().len()) as f64;
+        let cost = Cost {
+            ops: evaluations * (4.0 * n_idx * sizes.states + 4.0 * sizes.factors),
+            bytes: points * (16.0 * nvar as f64 + 64.0),
+        };
+        if !within(&cost, limits) {
+            return Err(refuse(
+                scene,
+                ie.n_theta.span(),
+                "outputs.invariance_error.n_theta",
+                format!("the invariance error on {points:.1e} points per radius and order (n_alpha^(pairs-1) n_theta^pairs with {pairs} pairs)"),
+                &cost,
+                limits,
+                "lower n_alpha and n_theta",
+            ));
+        }
+    }
+    if let Some(bb) = &out.backbone {
+        let points = *bb.points.get_ref() as f64;
+        let orders = bb.orders.as_ref().map_or(1, |o| o.get_ref().len()) as f64;
+        let cost = Cost {
+            ops: points * orders * 4.0 * n_idx * (coords + 1.0),
+            bytes: points * orders * 8.0 * (coords + 6.0),
+        };
+        if !within(&cost, limits) {
+            return Err(refuse(
+                scene,
+                bb.points.span(),
+                "outputs.backbone.points",
+                format!("a backbone of {points:.1e} points"),
+                &cost,
+                limits,
+                "lower the number of points",
+            ));
+        }
+    }
+    if let Some(tr) = &out.transient {
+        let t_end = *tr.t_end.get_ref();
+        let n = steps(t_end);
+        let samples = *tr.samples.get_ref() as f64;
+        let stored = match system.time {
+            ssm_api::TimeKind::Map { .. } => n.max(samples),
+            ssm_api::TimeKind::Flow => samples,
+        };
+        let cost = Cost {
+            ops: n * 7.0 * 4.0 * n_idx.min(1e3) * nvar as f64 + stored * 4.0 * n_idx * coords,
+            bytes: stored * (16.0 * nvar as f64 + 8.0 * coords + 96.0),
+        };
+        if !within(&cost, limits) {
+            let (span, key, what) = if n * 1e3 > stored {
+                (
+                    tr.t_end.span(),
+                    "outputs.transient.t_end",
+                    format!("a reduced transient over {:.1e} periods", periods(t_end)),
+                )
+            } else {
+                (
+                    tr.samples.span(),
+                    "outputs.transient.samples",
+                    format!("a reduced transient of {samples:.1e} samples"),
+                )
+            };
+            return Err(refuse(
+                scene,
+                span,
+                key,
+                what,
+                &cost,
+                limits,
+                "shorten the transient or take fewer samples",
+            ));
+        }
+    }
+    if let Some(f) = &sc.forcing {
+        let points = *f.points.get_ref() as f64;
+        let curves =
+            (f.epsilon.get_ref().len() * f.orders.as_ref().map_or(1, |o| o.get_ref().len())) as f64;
+        // one pair: amplitude roots per frequency; several: continuation steps
+        // (up to 20 per point), each a Newton solve of the reduced equations
+        let per_point = if pairs == 1 {
+            4.0 * n_idx * 64.0
+        } else {
+            20.0 * 8.0 * (4.0 * n_idx * nvar as f64 + (nvar as f64).powi(3))
+        };
+        let cost = Cost {
+            ops: curves * points * per_point,
+            bytes: curves * points * 8.0 * (16.0 + 4.0 * nvar as f64 + coords),
+        };
+        if !within(&cost, limits) {
+            return Err(refuse(
+                scene,
+                f.points.span(),
+                "forcing.points",
+                format!("{curves} forced response curve(s) of {points:.1e} points"),
+                &cost,
+                limits,
+                "lower the number of points",
+            ));
+        }
+    }
+    if let Some(v) = &sc.validate {
+        let step = sizes.sparse_solve();
+        if let Some(t_end) = &v.t_end {
+            let n = steps(*t_end.get_ref());
+            let samples = *v.samples.get_ref() as f64;
+            let cost = Cost {
+                ops: n * step,
+                bytes: samples * 8.0 * (3.0 * sizes.states + 4.0 * coords),
+            };
+            if !within(&cost, limits) {
+                let (span, key) = if n * step > samples * sizes.states * 1e3 {
+                    (t_end.span(), "validate.t_end")
+                } else {
+                    (v.samples.span(), "validate.samples")
+                };
+                return Err(refuse(
+                    scene,
+                    span,
+                    key,
+                    format!(
+                        "the full-system transient over {:.1e} periods with {samples:.1e} samples",
+                        periods(*t_end.get_ref())
+                    ),
+                    &cost,
+                    limits,
+                    "shorten [validate] t_end or take fewer samples",
+                ));
+            }
+        }
+        if let Some(ss) = &v.steady_state {
+            let freqs = ss
+                .omega
+                .as_ref()
+                .map_or(*ss.points.get_ref(), |o| o.get_ref().len()) as f64;
+            let periods =
+                *ss.max_periods.get_ref() as f64 * *ss.max_period_multiple.get_ref() as f64;
+            let per_period = STEPS_PER_PERIOD.max(*ss.samples_per_period.get_ref() as f64);
+            // frequencies run in parallel on the machine's cores
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+            let cost = Cost {
+                ops: freqs * periods * per_period * step / cores,
+                bytes: freqs * (8.0 * sizes.states * per_period + 1e3),
+            };
+            if !within(&cost, limits) {
+                return Err(refuse(
+                    scene,
+                    ss.max_periods.span(),
+                    "validate.steady_state.max_periods",
+                    format!(
+                        "steady states at {freqs:.0} frequencies over up to {periods:.1e} periods each"
+                    ),
+                    &cost,
+                    limits,
+                    "lower max_periods (or the number of frequencies)",
+                ));
+            }
+        }
+    }
+    Ok(())
+}

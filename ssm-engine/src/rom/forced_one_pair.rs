@@ -1,0 +1,458 @@
+//! Forced response curves of one master pair at primary resonance, from the
+//! rotating-frame fixed points of the periodic SSM (eqs. 19-20, 60), with an
+//! error estimate per curve and the non-autonomous order chosen to meet the
+//! scene's accuracy target.
+//!
+//! The estimate of a curve is the larger of two figures: the modal residual
+//! of eq. (60) along the peak's periodic orbit, converted into a relative
+//! amplitude error ([`amplitude_error`]), and the change of the peak from
+//! the previous non-autonomous order tried. The first is reliable once the
+//! `O(eps |p|^k)` terms are in; the second catches what the first misses
+//! at the leading order (the output map's missing `eps p` terms).
+//!
+//! # References
+//! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical
+//! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sect. 4,
+//! eqs. (16), (19)-(20), (41), (60), Figs. 5-6.
+
+use std::collections::HashMap;
+
+use crate::model::system::{OutputMap, System};
+use crate::poly::MultiIndexSet;
+use crate::rom::forced_response::{
+    CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
+};
+use crate::rom::frc::{
+    chebyshev_interpolate, one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair,
+};
+use crate::scene::ForcingSection;
+use crate::spectrum::MasterMode;
+use crate::ssm::analysis::{invariance_error, polar, Polar};
+use crate::ssm::forced::ForcedSsm;
+use crate::ssm::SsmExpansion;
+use crate::C64;
+
+/// Exact non-autonomous data at the Chebyshev nodes in `Omega`.
+struct NaTable {
+    /// `(sigma, tau)` per node.
+    coeffs: Vec<(Vec<C64>, Vec<C64>)>,
+    /// Per node: the outputs' `x_k`, output after output, over `set`.
+    xs: Vec<Vec<C64>>,
+    /// Multi-indices of the expansion.
+    set: MultiIndexSet,
+}
+
+/// One non-autonomous order tried for a curve.
+struct Attempt {
+    k: usize,
+    rows: Vec<FrcRow>,
+    curve: FrcCurve,
+    peak: f64,
+    estimate: f64,
+}
+
+/// What every curve of one pair shares.
+struct Context<'a> {
+    ssm: &'a SsmExpansion,
+    sys: &'a System,
+    masters: &'a [MasterMode],
+    outputs: &'a [&'a OutputMap],
+    forced: ForcedSsm<'a>,
+    pol: Polar,
+    s: C64,
+    rho_max: f64,
+    points: usize,
+    range: (f64, f64),
+    series: Vec<Vec<C64>>,
+    nodes: Vec<f64>,
+    /// Non-autonomous tables by order, made when first needed.
+    tables: HashMap<usize, NaTable>,
+}
+
+fn percent(x: f64) -> String {
+    if x.is_finite() {
+        format!("{:.2} %", 100.0 * x)
+    } else {
+        "(diverged)".into()
+    }
+}
+
+/// FRCs of one master pair for every `(order, epsilon)` of `sec`, each with
+/// the non-autonomous order of the scene or, without one, the lowest that
+/// meets `tolerance`.
+pub fn forced_response_one_pair(
+    ssm: &SsmExpansion,
+    sys: &System,
+    masters: &[MasterMode],
+    sec: &ForcingSection,
+    outputs: &[&OutputMap],
+    ratios: Vec<f64>,
+    tolerance: f64,
+) -> Result<ForcedResponse, FrcError> {
+    let range = (sec.omega_range.get_ref()[0], sec.omega_range.get_ref()[1]);
+    let mut forced = ForcedSsm::new(sys, masters, &ratios)?;
+    let s = forced.at(0.5 * (range.0 + range.1))?.resonant_forcing(0);
+    if s.norm() == 0.0 {
+        return Err(FrcError::Unsupported(
+            "the forcing does not reach the master mode (u^* F = 0): no resonant response".into(),
+        ));
+    }
+    let pol = polar(ssm)?;
+    let eps_list = sec.epsilon.get_ref();
+    let orders = sec
+        .orders
+        .as_ref()
+        .map_or(vec![ssm.order], |o| o.get_ref().clone());
+    let eps_max = eps_list.iter().copied().fold(0.0, f64::max);
+    let rho_max = sec.rho_max.as_ref().map_or_else(
+        || 3.0 * eps_max * s.norm() / masters[0].lambda.re.abs().max(1e-300),
+        |r| *r.get_ref(),
+    );
+    let points = *sec.points.get_ref();
+    let series: Vec<Vec<C64>> = outputs
+        .iter()
+        .map(|o| ssm.output_series(&o.weights))
+        .collect();
+    let single_harmonic = sys.forcing.len() == 1 && sys.forcing[0].multiple == 1.0;
+    let k_na = sec.nonautonomous_order.as_ref().map(|k| *k.get_ref());
+    if k_na.is_some_and(|k| k > 0) && !single_harmonic {
+        return Err(FrcError::Unsupported(
+            "nonautonomous_order > 0 needs a single forcing harmonic at Omega".into(),
+        ));
+    }
+    let width = range.1 - range.0;
+    let mut ctx = Context {
+        ssm,
+        sys,
+        masters,
+        outputs,
+        forced,
+        pol,
+        s,
+        rho_max,
+        points,
+        range,
+        series,
+        nodes: ForcedCoefficients::nodes(range.0 - 0.1 * width, range.1 + 0.1 * width, 17),
+        tables: HashMap::new(),
+    };
+    let mut rows = Vec::new();
+    let mut curves = Vec::new();
+    let mut warnings = Vec::new();
+    for (&order, &eps) in orders
+        .iter()
+        .flat_map(|o| eps_list.iter().map(move |e| (o, e)))
+    {
+        let top = order.saturating_sub(1);
+        // the non-autonomous orders tried: the scene's (and the next, for the
+        // change), or 0, 2, 4, .. up to order - 1 until the estimate meets
+        // the tolerance (a force with several harmonics has the leading
+        // order only)
+        let ladder: Vec<usize> = match k_na {
+            Some(k) => vec![k.min(top), (k + 2).min(top)],
+            None if single_harmonic => (0..=top).step_by(2).chain([top]).collect(),
+            None => vec![0],
+        };
+        let mut tried: Vec<Attempt> = Vec::new();
+        let mut chosen = None;
+        for &k in &ladder {
+            if tried.last().is_some_and(|a| a.k == k) {
+                continue;
+            }
+            let (r, c, modal) = ctx.curve(order, eps, k)?;
+            let peak = r.iter().map(FrcRow::plotted).fold(0.0, f64::max);
+            let mut estimate = modal;
+            if let Some(prev) = tried.last_mut() {
+                // the change of the peak bounds the previous rung's error, and
+                // conservatively this one's
+                let change = (prev.peak - peak).abs() / peak.max(f64::MIN_POSITIVE);
+                prev.estimate = prev.estimate.max(change);
+                estimate = estimate.max(change);
+            }
+            tried.push(Attempt {
+                k,
+                rows: r,
+                curve: c,
+                peak,
+                estimate,
+            });
+            if k_na.is_none() && tried.len() > 1 && estimate <= tolerance {
+                chosen = Some(tried.len() - 1);
+                break;
+            }
+        }
+        let pick = match (k_na, chosen) {
+            (Some(_), _) => 0,
+            (None, Some(i)) => i,
+            (None, None) => tried
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1.estimate.total_cmp(&b.1.estimate))
+                .map_or(0, |(i, _)| i),
+        };
+        let best = tried.swap_remove(pick);
+        let untrusted = best.estimate.is_nan() || best.estimate > tolerance;
+        if untrusted {
+            warnings.push(format!(
+                "O({order}), eps = {eps}: the estimated error of the response, {}, exceeds the accuracy target {} ([ssm] tolerance) with non-autonomous order {}; do not trust this curve: {}",
+                percent(best.estimate),
+                percent(tolerance),
+                best.k,
+                if k_na.is_some_and(|k| k < top) {
+                    "raise [forcing] nonautonomous_order (or leave it out to let the engine choose)"
+                } else {
+                    "raise the expansion order, or lower the forcing (the response may lie beyond the SSM's convergence radius)"
+                }
+            ));
+        }
+        let mut curve = best.curve;
+        curve.untrusted = untrusted;
+        if let CurveDetails::OnePair { error_estimate, .. } = &mut curve.details {
+            *error_estimate = best.estimate;
+        }
+        rows.extend(best.rows);
+        curves.push(curve);
+    }
+    Ok(ForcedResponse {
+        outputs: outputs.iter().map(|o| o.name.clone()).collect(),
+        rows,
+        curves,
+        resonance: ratios,
+        rho_max: Some(rho_max),
+        forcing_on_master: vec![s],
+        warnings,
+    })
+}
+
+impl Context<'_> {
+    /// The curve at `order`, `eps` with non-autonomous order `k_eff`, and the
+    /// modal-residual estimate of its relative error.
+    fn curve(
+        &mut self,
+        order: usize,
+        eps: f64,
+        k_eff: usize,
+    ) -> Result<(Vec<FrcRow>, FrcCurve, f64), FrcError> {
+        if k_eff > 0 && !self.tables.contains_key(&k_eff) {
+            let t = nonautonomous_table(
+                &mut self.forced,
+                self.ssm,
+                self.sys,
+                self.outputs,
+                k_eff,
+                &self.nodes,
+            )?;
+            self.tables.insert(k_eff, t);
+        }
+        let (ssm, sys, masters, outputs) = (self.ssm, self.sys, self.masters, self.outputs);
+        let (s, rho_max, points, range) = (self.s, self.rho_max, self.points, self.range);
+        let (series, nodes, pol) = (&self.series, &self.nodes, &self.pol);
+        let forced = &mut self.forced;
+        let tables = &self.tables;
+        let mut rows = Vec::new();
+        let table = tables.get(&k_eff);
+        let mut pb = OnePair::new(pol, order, eps * s);
+        if let Some(t) = table {
+            pb = pb.with_forced(ForcedCoefficients::new(
+                nodes.clone(),
+                t.coeffs.clone(),
+                eps,
+            ));
+        }
+        let f = one_pair_frc(&pb, rho_max, points, range);
+        if f.points.is_empty() {
+            return Err(FrcError::Empty {
+                order,
+                epsilon: eps,
+                rho_max,
+            });
+        }
+        for p in &f.points {
+            let mut linf = Vec::with_capacity(outputs.len());
+            let mut h1 = Vec::with_capacity(outputs.len());
+            match table {
+                Some(t) => {
+                    let x = chebyshev_interpolate(nodes, &t.xs, p.omega);
+                    let len = t.set.len();
+                    for (oi, ser) in series.iter().enumerate() {
+                        let xo = &x[oi * len..(oi + 1) * len];
+                        let part = |q: C64, phi: f64| {
+                            let mono = t.set.monomials(&[q, q.conj()], t.set.max_order());
+                            let v: C64 = xo.iter().zip(&mono).map(|(a, b)| a * b).sum();
+                            2.0 * eps * (v * C64::from_polar(1.0, phi)).re
+                        };
+                        let (l, a) = response_amplitudes(ssm, ser, order, p, &part);
+                        linf.push(l);
+                        h1.push(a);
+                    }
+                }
+                None => {
+                    let x0 = forced.at(p.omega)?;
+                    for (o, ser) in outputs.iter().zip(series) {
+                        let part = |_: C64, phi: f64| eps * x0.output_at(&o.weights, phi);
+                        let (l, a) = response_amplitudes(ssm, ser, order, p, &part);
+                        linf.push(l);
+                        h1.push(a);
+                    }
+                }
+            }
+            if linf.iter().chain(&h1).any(|v| !v.is_finite()) {
+                return Err(FrcError::Unsupported(format!(
+                "O({order}), eps = {eps}: non-finite response amplitude at rho = {}: the expansion diverges there; lower [forcing] rho_max",
+                p.rho
+            )));
+            }
+            rows.push(FrcRow {
+                order,
+                epsilon: eps,
+                omega: p.omega,
+                branch: p.branch,
+                stable: p.stable,
+                rho: p.rho,
+                q: vec![C64::from_polar(p.rho, p.theta)],
+                pair_amplitudes: vec![p.rho],
+                linf,
+                h1,
+            });
+        }
+        let curve_rows = &rows[..];
+        // the error figure beside the answer: eq. (41) at the largest amplitude
+        let rho_peak = f.points.iter().map(|p| p.rho).fold(0.0, f64::max);
+        let err = (rho_peak > 0.0).then(|| invariance_error(ssm, sys, order, rho_peak, 2, 30));
+        // and the residual of eq. (60) along the peak's periodic orbit (Fig. 6)
+        let peak = f.points.iter().max_by(|a, b| a.rho.total_cmp(&b.rho));
+        let (res60, error_estimate) = match peak {
+            Some(pk) => {
+                let na = forced.expansion(ssm, sys, pk.omega, k_eff)?;
+                let mut res60 = 0.0f64;
+                let mut modal = Vec::with_capacity(ORBIT_SAMPLES);
+                for k in 0..ORBIT_SAMPLES {
+                    let phi = 2.0 * std::f64::consts::PI * k as f64 / ORBIT_SAMPLES as f64;
+                    let q = C64::from_polar(pk.rho, pk.theta + phi);
+                    let r = na.residual(ssm, sys, eps, &[q, q.conj()], phi, order);
+                    res60 = res60.max(r.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt());
+                    modal.push(
+                        masters[0]
+                            .left
+                            .iter()
+                            .zip(&r)
+                            .map(|(u, x)| u.conj() * x)
+                            .sum(),
+                    );
+                }
+                let lambda = masters[0].lambda;
+                (
+                    res60,
+                    amplitude_error(&modal, eps * s.norm(), pk.rho, lambda),
+                )
+            }
+            None => (0.0, 0.0),
+        };
+        let bifurcations = f
+            .bifurcations
+            .iter()
+            .map(|b| FrcBifurcation {
+                kind: b.kind.label(),
+                omega: b.omega,
+                branch: b.branch,
+                rho: vec![b.rho],
+                plotted: curve_rows
+                    .iter()
+                    .filter(|r| r.branch == b.branch)
+                    .min_by(|x, y| (x.rho - b.rho).abs().total_cmp(&(y.rho - b.rho).abs()))
+                    .map(FrcRow::plotted),
+            })
+            .collect();
+        let curve = FrcCurve {
+            order,
+            epsilon: eps,
+            points: f.points.len(),
+            branches: f.points.iter().map(|p| p.branch).max().unwrap_or(0),
+            bifurcations,
+            untrusted: false,
+            details: CurveDetails::OnePair {
+                rho_peak,
+                invariance_error_at_peak: err.filter(|e| e.is_finite()),
+                residual_eq60_at_peak: res60.is_finite().then_some(res60),
+                error_estimate,
+                nonautonomous_order: k_eff,
+            },
+        };
+        Ok((rows, curve, error_estimate))
+    }
+}
+
+/// Samples of the peak's periodic orbit for the eq. (60) residual.
+const ORBIT_SAMPLES: usize = 64;
+
+/// Relative error of the response amplitude at the peak, estimated from the
+/// modal residual `u^* r(phi)` of eq. (60) sampled along the periodic orbit.
+///
+/// The residual acts on the master mode as an extra load. Its harmonic
+/// co-rotating with `q` (the resonant one) is amplified exactly like the
+/// resonant load `eps |u^* Fext|`, so it changes the amplitude by the ratio of
+/// the two; each other harmonic `j` is detuned by about `|j - 1| |lambda|` and
+/// changes it by `|c_j| / (|j - 1| |lambda| rho)`.
+fn amplitude_error(modal: &[C64], resonant_load: f64, rho: f64, lambda: C64) -> f64 {
+    let n = modal.len();
+    let mut error = 0.0;
+    for j in 0..n {
+        // harmonic j of the orbit (j > n/2 are the negative ones)
+        let c: C64 = modal
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                r * C64::from_polar(1.0, -2.0 * std::f64::consts::PI * (j * k) as f64 / n as f64)
+            })
+            .sum::<C64>()
+            / n as f64;
+        let harmonic = if j <= n / 2 {
+            j as f64
+        } else {
+            j as f64 - n as f64
+        };
+        error += if j == 1 {
+            c.norm() / resonant_load
+        } else {
+            c.norm() / ((harmonic - 1.0).abs() * lambda.norm() * rho)
+        };
+    }
+    error
+}
+
+/// Higher-order non-autonomous terms of order `k`: exact expansions at the
+/// Chebyshev nodes in `Omega`, interpolated in between (sigma, tau and the
+/// outputs' X).
+fn nonautonomous_table(
+    forced: &mut ForcedSsm,
+    ssm: &SsmExpansion,
+    sys: &System,
+    outputs: &[&OutputMap],
+    k: usize,
+    nodes: &[f64],
+) -> Result<NaTable, FrcError> {
+    let mut coeffs = Vec::with_capacity(nodes.len());
+    let mut xs = Vec::with_capacity(nodes.len());
+    let mut set = None;
+    for &w in nodes {
+        let na = forced.expansion(ssm, sys, w, k)?;
+        coeffs.push(na.rotating_frame_coefficients());
+        let h = &na.harmonics[0];
+        xs.push(
+            outputs
+                .iter()
+                .flat_map(|o| {
+                    h.x.iter()
+                        .map(|xk| o.weights.iter().map(|&(s, wt)| xk[s] * wt).sum::<C64>())
+                        .collect::<Vec<_>>()
+                })
+                .collect::<Vec<C64>>(),
+        );
+        set = Some(na.set);
+    }
+    Ok(NaTable {
+        coeffs,
+        xs,
+        set: set.expect("at least one node"),
+    })
+}
