@@ -219,3 +219,39 @@ fn fig5_curves_carry_error_estimates_against_the_accuracy_target() {
     };
     assert!(error_estimate > 0.05 && c.untrusted, "{error_estimate}");
 }
+
+/// The error estimate against an independent reference: the first-order
+/// harmonic balance of `x'' + 2 zeta x' + x + x^3 = eps cos(Omega t)`, whose
+/// peak is `Omega^2 = 1 + 3/4 A^2`, `2 zeta Omega A = eps`. With zeta = 0.002
+/// and eps = 1.24e-3 the peak amplitude is A = 0.3; the balance neglects terms
+/// of relative size about `(3/4 A^2)^2 / 32 = 1.4e-4` plus the third harmonic
+/// (absent from the first-harmonic amplitude compared here), so `HB_ERROR =
+/// 1e-3` bounds the reference's own error. At every order the estimate must
+/// not be optimistic (true error <= estimate + HB_ERROR) nor vacuous (at most
+/// 30 times the true error, or 30 HB_ERROR when that is larger).
+#[test]
+fn the_error_estimate_brackets_the_error_against_harmonic_balance() {
+    const HB_ERROR: f64 = 1e-3;
+    let (zeta, eps) = (0.002f64, 1.24e-3f64);
+    let mut a = eps / (2.0 * zeta);
+    for _ in 0..200 {
+        a = eps / (2.0 * zeta * (1.0 + 0.75 * a * a).sqrt());
+    }
+    for order in [3, 5, 7] {
+        let text = format!(
+            "[model]\nplugin = \"duffing\"\n[model.params]\nzeta = {zeta}\n[ssm]\norder = {order}\n[outputs]\ncoordinates = [\"x\"]\n[forcing]\nepsilon = {eps}\nomega_range = [0.95, 1.1]\npoints = 400\nrho_max = 1.0\nnonautonomous_order = 0\n"
+        );
+        let frc = run_scene_text(&text).expect("runs").frc.expect("FRC");
+        let peak = frc.rows.iter().map(|r| r.h1[0]).fold(0.0, f64::max);
+        let error = (peak - a).abs() / a;
+        let CurveDetails::OnePair { error_estimate, .. } = frc.curves[0].details else {
+            panic!("one pair")
+        };
+        eprintln!("O({order}): peak {peak:.6} against {a:.6}: error {error:.2e}, estimate {error_estimate:.2e}");
+        assert!(error <= error_estimate + HB_ERROR, "O({order}): optimistic");
+        assert!(
+            error_estimate <= 30.0 * error.max(HB_ERROR),
+            "O({order}): vacuous"
+        );
+    }
+}

@@ -4,8 +4,8 @@
 //! scene's accuracy target.
 //!
 //! The estimate of a curve is the larger of two figures: the modal residual
-//! of eq. (60) along the peak's periodic orbit, converted into a relative
-//! amplitude error ([`amplitude_error`]), and the change of the peak from
+//! of eq. (60) along the peak's periodic orbit, converted into relative
+//! changes of damping and frequency ([`amplitude_error`]), and the change of the peak from
 //! the previous non-autonomous order tried. The first is reliable once the
 //! `O(eps |p|^k)` terms are in; the second catches what the first misses
 //! at the leading order (the output map's missing `eps p` terms).
@@ -343,7 +343,7 @@ impl Context<'_> {
                 let lambda = masters[0].lambda;
                 (
                     res60,
-                    amplitude_error(&modal, eps * s.norm(), pk.rho, lambda),
+                    amplitude_error(&modal, C64::from_polar(pk.rho, pk.theta), lambda),
                 )
             }
             None => (0.0, 0.0),
@@ -385,15 +385,18 @@ impl Context<'_> {
 /// Samples of the peak's periodic orbit for the eq. (60) residual.
 const ORBIT_SAMPLES: usize = 64;
 
-/// Relative error of the response amplitude at the peak, estimated from the
-/// modal residual `u^* r(phi)` of eq. (60) sampled along the periodic orbit.
+/// Relative error of the response at the peak, estimated from the modal
+/// residual `u^* r(phi)` of eq. (60) sampled along the periodic orbit through
+/// `q0` (at `phi = 0`).
 ///
-/// The residual acts on the master mode as an extra load. Its harmonic
-/// co-rotating with `q` (the resonant one) is amplified exactly like the
-/// resonant load `eps |u^* Fext|`, so it changes the amplitude by the ratio of
-/// the two; each other harmonic `j` is detuned by about `|j - 1| |lambda|` and
-/// changes it by `|c_j| / (|j - 1| |lambda| rho)`.
-fn amplitude_error(modal: &[C64], resonant_load: f64, rho: f64, lambda: C64) -> f64 {
+/// The residual acts on the master mode as an extra term of the reduced
+/// dynamics. Its harmonic co-rotating with `q`, `c_1 = kappa q0`, perturbs the
+/// eigenvalue by `kappa`: `Re kappa / Re lambda` is the relative change of the
+/// damping, hence of the resonant amplitude, and `Im kappa / Im lambda` the
+/// relative shift of the frequency (of the backbone). Each other harmonic `j`
+/// is detuned by about `|j - 1| |lambda|` and changes the response by
+/// `|c_j| / (|j - 1| |lambda| |q0|)`.
+fn amplitude_error(modal: &[C64], q0: C64, lambda: C64) -> f64 {
     let n = modal.len();
     let mut error = 0.0;
     for j in 0..n {
@@ -412,9 +415,10 @@ fn amplitude_error(modal: &[C64], resonant_load: f64, rho: f64, lambda: C64) -> 
             j as f64 - n as f64
         };
         error += if j == 1 {
-            c.norm() / resonant_load
+            let kappa = c / q0;
+            kappa.re.abs() / lambda.re.abs() + kappa.im.abs() / lambda.im.abs()
         } else {
-            c.norm() / ((harmonic - 1.0).abs() * lambda.norm() * rho)
+            c.norm() / ((harmonic - 1.0).abs() * lambda.norm() * q0.norm())
         };
     }
     error
