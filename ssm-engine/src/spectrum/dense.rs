@@ -17,6 +17,20 @@
 //! `(|lambda_slowest| / |lambda_fastest|)^nu > RANK_TOL`, i.e. four decades of
 //! frequency for an index-3 DAE and twelve for an ODE. Larger spreads belong to
 //! the sparse path, which never needs the fast modes.
+//!
+//! Rank decisions are not invariant under a change of units: in `T` of a
+//! mechanical pencil the position rows scale with `1/omega^2` against the
+//! velocity rows, so at `omega = 3e7` (or `3e-8`) the singular values of an
+//! undamped oscillator's `T` spread over thirty decades and one of them falls
+//! below any relative threshold. `T` is therefore balanced first (a diagonal
+//! similarity by powers of two, which changes neither eigenvalues nor
+//! nilpotent structure and is exact in floating point), after which both
+//! singular values of that oscillator are `1/omega`.
+//!
+//! # References
+//! - B. N. Parlett, C. Reinsch, Balancing a matrix for calculation of
+//!   eigenvalues and eigenvectors, Numer. Math. 13 (1969) 293-304 (the
+//!   balancing sweep, as in LAPACK `dgebal` without its permutation step).
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::SparseColMatRef;
@@ -30,6 +44,49 @@ pub const RANK_TOL: f64 = 1e-12;
 
 /// Largest index of a pencil this path accepts.
 const MAX_INDEX: usize = 6;
+
+/// Balances `t` in place by a diagonal similarity `D^{-1} T D` with powers of
+/// two (Parlett-Reinsch): each off-diagonal row and column norm pair is made
+/// equal to within a factor of two. Rows or columns that are zero off the
+/// diagonal (nilpotent parts, decoupled states) are left alone.
+fn balance(t: &mut Mat<f64>) {
+    const RADIX: f64 = 2.0;
+    const MAX_SWEEPS: usize = 200;
+    let n = t.nrows();
+    for _ in 0..MAX_SWEEPS {
+        let mut converged = true;
+        for i in 0..n {
+            let (mut c, mut r) = (0.0, 0.0);
+            for j in (0..n).filter(|&j| j != i) {
+                c += t[(j, i)].abs();
+                r += t[(i, j)].abs();
+            }
+            if c == 0.0 || r == 0.0 {
+                continue;
+            }
+            let s = c + r;
+            let mut f = 1.0;
+            while c < r / RADIX && f < 1e150 {
+                c *= RADIX * RADIX;
+                f *= RADIX;
+            }
+            while c >= r * RADIX && f > 1e-150 {
+                c /= RADIX * RADIX;
+                f /= RADIX;
+            }
+            if (c + r) / f < 0.95 * s {
+                converged = false;
+                for j in 0..n {
+                    t[(i, j)] /= f;
+                    t[(j, i)] *= f;
+                }
+            }
+        }
+        if converged {
+            break;
+        }
+    }
+}
 
 fn numerical_rank(m: &Mat<f64>) -> Result<(usize, Mat<f64>), SpectrumError> {
     let svd = m
@@ -64,6 +121,7 @@ pub fn finite_eigenvalues(
             detail: "B = 0: the model has no dynamics".into(),
         });
     }
+    balance(&mut t);
     let (mut rank, mut q) = numerical_rank(&t)?;
     let mut power = t.clone();
     let mut stable = false;

@@ -209,7 +209,7 @@ impl<'a> Homological<'a> {
                 mat.as_ref(),
             )
             .map_err(|e| HomologicalError::Singular {
-                detail: format!("sparse LU of Lambda B - A at Lambda = {sigma:.6} failed: {e:?}"),
+                detail: format!("sparse LU of Lambda B - A at Lambda = {sigma:.4e} failed: {e:?}"),
             })?;
             self.stats.factorizations += 1;
             self.stats.factor_s += t.elapsed().as_secs_f64();
@@ -275,7 +275,7 @@ impl<'a> Homological<'a> {
         let zero_g = vec![C64::new(0.0, 0.0); r];
         let (mut w, mut coeffs) = block_solve(rhs, &zero_g).ok_or_else(|| {
             singular(format!(
-                "the bordered system at Lambda = {lambda:.6} has a singular Schur complement (a resonant master eigenvalue is not simple)"
+                "the bordered system at Lambda = {lambda:.4e} has a singular Schur complement (a resonant master eigenvalue is not simple)"
             ))
         })?;
         let mut rel = f64::INFINITY;
@@ -302,19 +302,20 @@ impl<'a> Homological<'a> {
         let finite = |v: &[C64]| v.iter().all(|c| c.re.is_finite() && c.im.is_finite());
         if !finite(&w) || !finite(&coeffs) || !rel.is_finite() {
             return Err(singular(format!(
-                "the solve at Lambda = {lambda:.6} produced non-finite values"
+                "the solve at Lambda = {lambda:.4e} produced non-finite values"
             )));
         }
         if rel > 1e-6 {
             return Err(singular(format!(
-                "relative residual {rel:.2e} of the bordered system at Lambda = {lambda:.6} after refinement: the matrix is numerically singular"
+                "relative residual {rel:.2e} of the bordered system at Lambda = {lambda:.4e} after refinement: the matrix is numerically singular"
             )));
         }
         Ok((w, coeffs))
     }
 
     /// Residual `(h - M w - B V r, -U^* B w)` of the bordered system and the
-    /// scale `||h|| + ||M w|| + ||B V r||` it is measured against.
+    /// scale `||h|| + ||M w|| + ||B V r|| + ||U^* B|| ||w||` it is measured
+    /// against.
     fn residual(
         &self,
         lambda: C64,
@@ -336,7 +337,18 @@ impl<'a> Homological<'a> {
                 rhs[i] - v
             })
             .collect();
-        let res_g: Vec<C64> = set.iter().map(|&c| -dot(&self.ub[c], w)).collect();
+        // each border row `u^* B w = 0` is measured against `||u^* B|| ||w||`,
+        // its own backward-error scale: `u` carries the units of `1/v`, which
+        // differ from those of `h` by powers of the frequency
+        let w_norm = w.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
+        let res_g: Vec<C64> = set
+            .iter()
+            .map(|&c| {
+                let ub_norm = self.ub[c].iter().map(|x| x.norm_sqr()).sum::<f64>().sqrt();
+                scale2 += (ub_norm * w_norm).powi(2);
+                -dot(&self.ub[c], w)
+            })
+            .collect();
         (res_h, res_g, scale2.sqrt())
     }
 }
