@@ -41,23 +41,60 @@ fn listed_parameters_carry_the_papers_defaults() {
     assert_eq!(get("f1"), "1");
 }
 
+/// A real plugin (the duffing plugin as released with ssm-api 0.2.0, built
+/// against that API's frozen source) is refused in one line naming both
+/// versions, not with abi_stable's layout report.
 #[test]
 fn plugin_built_against_another_api_version_is_refused_naming_both() {
-    let err = Plugin::load(&plugin_path("ssm-fixture-old-api")).unwrap_err();
+    let err = Plugin::load(&plugin_path("ssm-fixture-api-0-2")).unwrap_err();
     match &err {
         PluginLoadError::VersionMismatch {
             found, expected, ..
         } => {
-            assert_eq!(found, "0.0.9");
+            assert_eq!(found, "0.2.0");
             assert_eq!(expected, ssm_api::API_VERSION);
         }
         other => panic!("expected a version mismatch, got {other}"),
     }
     let msg = err.to_string();
     assert!(
-        msg.contains("0.0.9") && msg.contains(ssm_api::API_VERSION),
+        msg.contains("0.2.0") && msg.contains(ssm_api::API_VERSION) && msg.contains("rebuild"),
         "{msg}"
     );
+    assert_eq!(msg.lines().count(), 1, "{msg}");
+}
+
+/// Files that are not plugins get one line saying so: a shared library
+/// without the plugin symbol (the C math library) and a text file.
+#[test]
+fn files_that_are_not_plugins_are_refused_in_one_line() {
+    let libm = [
+        "/lib/x86_64-linux-gnu/libm.so.6",
+        "/usr/lib/x86_64-linux-gnu/libm.so.6",
+        "/lib64/libm.so.6",
+    ]
+    .into_iter()
+    .map(std::path::PathBuf::from)
+    .find(|p| p.exists());
+    let dir = ssm_tests::tmp_dir("not-a-plugin");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = dir.join("notes.so");
+    std::fs::write(&text, "not a library").unwrap();
+    for (path, says) in libm
+        .map(|p| (p, "exports no"))
+        .into_iter()
+        .chain([(text, "cannot be opened as a shared library")])
+    {
+        let err = Plugin::load(&path).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            matches!(err, PluginLoadError::NotAPlugin { .. }) && msg.contains(says),
+            "{}: {msg}",
+            path.display()
+        );
+        assert_eq!(msg.lines().count(), 1, "{msg}");
+        assert!(!msg.contains("Could load"), "{msg}");
+    }
 }
 
 #[test]

@@ -208,16 +208,17 @@ fn panicking_plugin_exits_nonzero_and_writes_nothing() {
 fn old_api_plugin_is_refused_by_the_binary() {
     let o = Command::new(engine_binary())
         .arg("--plugin")
-        .arg(plugin_path("ssm-fixture-old-api"))
+        .arg(plugin_path("ssm-fixture-api-0-2"))
         .arg("plugins")
         .output()
         .unwrap();
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("0.0.9") && err.contains(ssm_api::API_VERSION),
+        err.contains("0.2.0") && err.contains(ssm_api::API_VERSION),
         "{err}"
     );
+    assert!(err.lines().count() <= 2, "{err}");
 }
 
 #[test]

@@ -36,8 +36,29 @@ pub enum PluginLoadError {
         /// Version of this engine's API.
         expected: String,
     },
-    /// The library is not a loadable ssm plugin (not a shared library, no root
-    /// module, incompatible layout).
+    /// The library's API version is compatible but its root-module layout is
+    /// not the engine's (a plugin built against a modified `ssm-api`).
+    #[error("plugin {path} was built against an ssm-api {found} whose layout differs from this engine's ssm-api {expected} ({difference}): rebuild the plugin against ssm-api {expected}")]
+    LayoutMismatch {
+        /// The library.
+        path: PathBuf,
+        /// Version the plugin was built against.
+        found: String,
+        /// Version of this engine's API.
+        expected: String,
+        /// The last lines of abi_stable's layout report, where it names the
+        /// first type that differs.
+        difference: String,
+    },
+    /// The file is not a shared library exporting an ssm plugin.
+    #[error("{path} is not an ssm plugin: {detail}")]
+    NotAPlugin {
+        /// The file.
+        path: PathBuf,
+        /// What is missing.
+        detail: String,
+    },
+    /// The library could not be loaded for another reason.
     #[error("cannot load plugin {path}: {detail}")]
     Invalid {
         /// The library.
@@ -98,11 +119,10 @@ impl Plugin {
                 path: path.to_owned(),
             });
         }
-        let invalid = |e: LibraryError| PluginLoadError::Invalid {
-            path: path.to_owned(),
-            detail: short_detail(&e.to_string()),
-        };
-        let header = lib_header_from_path(path).map_err(invalid)?;
+        // dlopen searches the library path for a name without a slash: always
+        // hand it the file itself
+        let file = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+        let header = lib_header_from_path(&file).map_err(|e| load_error(path, e))?;
         // every layout is checked in full by abi_stable; an older 1.x plugin
         // fails the current layout (its root module has fewer fields) and
         // passes its own
@@ -111,17 +131,17 @@ impl Plugin {
             Err(LibraryError::AbiInstability(current)) => {
                 match header.init_root_module::<ssm_api::v1_0::SsmPluginRef>() {
                     Ok(m) => RootModule::V1_0(m),
-                    Err(_) => return Err(invalid(LibraryError::AbiInstability(current))),
+                    Err(_) => {
+                        return Err(PluginLoadError::LayoutMismatch {
+                            path: path.to_owned(),
+                            found: header.version_strings().version.to_string(),
+                            expected: API_VERSION.to_owned(),
+                            difference: last_lines(&current.to_string(), 3),
+                        })
+                    }
                 }
             }
-            Err(LibraryError::IncompatibleVersionNumber { actual_version, .. }) => {
-                return Err(PluginLoadError::VersionMismatch {
-                    path: path.to_owned(),
-                    found: actual_version.to_string(),
-                    expected: API_VERSION.to_owned(),
-                })
-            }
-            Err(e) => return Err(invalid(e)),
+            Err(e) => return Err(load_error(path, e)),
         };
         Ok(Self { module })
     }
@@ -287,21 +307,58 @@ impl Registry {
     }
 }
 
-/// The head of a loader error: abi_stable explains a layout mismatch type by
-/// type over hundreds of lines; its last lines name the difference.
-fn short_detail(detail: &str) -> String {
-    const KEEP: usize = 8;
-    let lines: Vec<&str> = detail.lines().filter(|l| !l.trim().is_empty()).collect();
-    if lines.len() <= 2 * KEEP {
-        return lines.join("\n");
+/// A short, typed account of a loader error: abi_stable's own texts run to
+/// thousands of lines for a layout report and say "Could load symbol" for a
+/// symbol it could not load.
+fn load_error(path: &Path, e: LibraryError) -> PluginLoadError {
+    let path = path.to_owned();
+    match e {
+        LibraryError::IncompatibleVersionNumber { actual_version, .. } => {
+            PluginLoadError::VersionMismatch {
+                path,
+                found: actual_version.to_string(),
+                expected: API_VERSION.to_owned(),
+            }
+        }
+        LibraryError::OpenError { err, .. } => PluginLoadError::NotAPlugin {
+            path,
+            detail: format!("it cannot be opened as a shared library ({err})"),
+        },
+        LibraryError::GetSymbolError { symbol, .. } => PluginLoadError::NotAPlugin {
+            path,
+            detail: format!(
+                "it exports no `{}` (a plugin declares itself with ssm_api::declare_plugin!)",
+                String::from_utf8_lossy(&symbol).trim_end_matches('\0')
+            ),
+        },
+        LibraryError::InvalidAbiHeader(_) | LibraryError::InvalidCAbi { .. } => {
+            PluginLoadError::Invalid {
+                path,
+                detail: format!(
+                    "it was built with an incompatible abi_stable or Rust C ABI: rebuild it against ssm-api {API_VERSION}"
+                ),
+            }
+        }
+        other => PluginLoadError::Invalid {
+            path,
+            detail: last_lines(&other.to_string(), 6),
+        },
     }
-    format!(
-        "{}\n  ... ({} lines of abi_stable's layout report left out) ...\n{}\nThe plugin was most likely built against another ssm-api: rebuild it against ssm-api {}",
-        lines[..KEEP].join("\n"),
-        lines.len() - 2 * KEEP,
-        lines[lines.len() - KEEP..].join("\n"),
-        API_VERSION
-    )
+}
+
+/// The last `n` non-empty lines of `text`, joined by "; ".
+fn last_lines(text: &str, n: usize) -> String {
+    let lines: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    let start = lines.len().saturating_sub(n);
+    let mut out = lines[start..].join("; ");
+    if start > 0 {
+        out.insert_str(0, "...; ");
+    }
+    out
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {
