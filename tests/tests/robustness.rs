@@ -127,3 +127,111 @@ fn plugin_listing_into_a_closed_pipe_does_not_panic() {
     assert!(!err.contains("panicked"), "{err}");
     assert!(o.status.success(), "exit {:?}: {err}", o.status);
 }
+
+/// A plugin's complaint about a parameter is reported at the parameter's line
+/// also in a nested table, an inline table and under a quoted key (it was
+/// line 0 for the first two).
+#[test]
+fn parameter_errors_name_their_line_in_nested_and_inline_tables() {
+    let cases = [
+        (
+            "[model]\nplugin = \"duffing\"\n[ssm]\norder = 3\n[model.params.deep]\nx = 1\n",
+            5,
+            "model.params.deep",
+        ),
+        (
+            "[model]\nplugin = \"duffing\"\nparams = { zeta = 0.01, bogus = 2 }\n[ssm]\norder = 3\n",
+            3,
+            "model.params.bogus",
+        ),
+        (
+            "[model]\nplugin = \"duffing\"\n[model.params]\nzeta = 0.01\n\"bogus\" = 2\n[ssm]\norder = 3\n",
+            5,
+            "model.params.bogus",
+        ),
+    ];
+    for (text, line, key) in cases {
+        let (l, msg) = scene_error(text);
+        assert_eq!((l, msg.starts_with(key)), (line, true), "{msg}\n{text}");
+    }
+}
+
+/// Names become CSV column headers: a comma, a quote or a line break in a
+/// state or output name is refused at the model boundary, naming the name.
+#[test]
+fn names_that_would_break_csv_columns_are_refused() {
+    use ssm_engine::model::system::{ModelError, System};
+    for bad in ["x,y", "say \"x\"", "x\ny", " "] {
+        let mut m = ssm_tests::cubic_map_model();
+        m.outputs[1].name = bad.into();
+        match System::from_model("catalogue", m) {
+            Err(e @ ModelError::BadName { .. }) => {
+                assert!(e.to_string().contains(&format!("{bad:?}")), "{e}")
+            }
+            other => panic!("{bad:?}: expected BadName, got {other:?}"),
+        }
+        let mut m = ssm_tests::cubic_map_model();
+        m.states[0].name = bad.into();
+        assert!(
+            matches!(
+                System::from_model("catalogue", m),
+                Err(ModelError::BadName { what: "state", .. })
+            ),
+            "{bad:?}"
+        );
+    }
+}
+
+/// A relative plugin path in a scene is read from the scene's folder (like
+/// every other path of a scene), whatever the working directory; a missing one
+/// is a scene error at its key; `summary.json` records the library, its name
+/// and version.
+#[test]
+fn plugin_paths_in_scenes_are_relative_to_the_scene_and_recorded() {
+    let dir = ssm_tests::tmp_dir("relative-plugin");
+    let sub = dir.join("scenes");
+    std::fs::create_dir_all(&sub).unwrap();
+    let lib = dir.join("libmine.so");
+    std::fs::copy(ssm_tests::plugin_path("duffing"), &lib).unwrap();
+    let scene = sub.join("s.toml");
+    let text = "[model]\nplugin = \"../libmine.so\"\n[ssm]\norder = 3\n[outputs.backbone]\nrho_max = 0.1\npoints = 3\n";
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let o = Command::new(engine_binary())
+        .current_dir(std::env::temp_dir())
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let p = &summary["plugins"][0];
+    assert_eq!(p["name"], "duffing", "{summary}");
+    assert_eq!(p["version"], "0.1.0", "{summary}");
+    let file = std::path::PathBuf::from(p["file"].as_str().unwrap());
+    assert!(
+        file.is_absolute() && file.ends_with("libmine.so"),
+        "{file:?}"
+    );
+
+    std::fs::write(&scene, text.replace("../libmine.so", "./gone.so")).unwrap();
+    let o = Command::new(engine_binary())
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.join("out2"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("s.toml:2")
+            && err.contains("model.plugin")
+            && err.contains("gone.so")
+            && err.contains("scene's folder"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -276,3 +276,54 @@ fn spectrum_and_backbone_do_not_depend_on_units() {
         }
     }
 }
+
+/// Two copies of one constraint (`x1 = 0` twice) make the pencil singular at
+/// every shift: the error says so, names the likely causes, and does not send
+/// the user to the shift (the advice used to be "set [spectrum] shift"
+/// whatever the shift, with faer's `SymbolicSingular { index: .. }` beside it).
+#[test]
+fn redundant_constraints_are_named_not_blamed_on_the_shift() {
+    use ssm_api::{Constraints, MechanicalSystem, PolyVector, SparseMatrix};
+    let mut m = MechanicalSystem::new("redundant", &["x1", "x2"]);
+    m.mass = SparseMatrix::diagonal(&[1.0, 1.0]);
+    m.damping = SparseMatrix::diagonal(&[0.02, 0.02]);
+    m.stiffness = SparseMatrix::diagonal(&[1.0, 2.0]);
+    let mut g = PolyVector::zeros(2, 2);
+    g.push(0, 1.0, &[(0, 1)]);
+    g.push(1, 1.0, &[(0, 1)]);
+    m.constraints = Some(Constraints::polynomial(g));
+    let sys = System::from_model("catalogue", m.into_model().unwrap()).unwrap();
+    for method in [Method::Dense, Method::Sparse] {
+        let err =
+            spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(Some(method), 2)).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            matches!(err, spectrum::SpectrumError::SingularPencil { .. })
+                && msg.contains("redundant constraints")
+                && msg.contains("cannot help")
+                && !msg.contains("SymbolicSingular"),
+            "{method:?}: {msg}"
+        );
+    }
+}
+
+/// A shift that is an eigenvalue (0 for an oscillator without stiffness) is
+/// told apart from a singular pencil, and the error names a shift at which
+/// `A - sigma B` is regular (not the one that failed).
+#[test]
+fn a_shift_on_an_eigenvalue_gets_a_working_shift_suggested() {
+    let sys = system("duffing", "", "omega = 0.0");
+    for method in [Method::Dense, Method::Sparse] {
+        let err =
+            spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts(Some(method), 1)).unwrap_err();
+        let spectrum::SpectrumError::SingularShift {
+            shift, suggestion, ..
+        } = err
+        else {
+            panic!("{method:?}: expected a singular shift, got {err}");
+        };
+        assert_eq!(shift, 0.0);
+        let s = suggestion.expect("a regular shift is named");
+        assert!(s != 0.0 && spectrum::sparse::is_regular_at(sys.a.as_ref(), sys.b.as_ref(), s));
+    }
+}

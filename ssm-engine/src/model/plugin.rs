@@ -236,6 +236,18 @@ impl Plugin {
     }
 }
 
+/// Which plugin library a run used: recorded in `summary.json` so that a
+/// result names the code that produced it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PluginOrigin {
+    /// Plugin name.
+    pub name: String,
+    /// Plugin version.
+    pub version: String,
+    /// The library file, absolute.
+    pub file: PathBuf,
+}
+
 /// Where plugins are searched for, and what was found there.
 #[derive(Debug, Default)]
 pub struct Registry {
@@ -244,6 +256,7 @@ pub struct Registry {
     /// Libraries found by directory search that could not be loaded.
     pub rejected: Vec<PluginLoadError>,
     searched: Vec<String>,
+    used: Vec<PluginOrigin>,
 }
 
 impl Registry {
@@ -289,22 +302,49 @@ impl Registry {
         }
     }
 
-    /// The plugin named `name`, or loaded from `name` if it is a path to a file.
+    /// The plugin named `name`, or loaded from `name` if it is a path to a
+    /// file; the plugin is recorded as used (see [`Registry::take_used`]).
     pub fn resolve(&mut self, name: &str) -> Result<Plugin, PluginLoadError> {
-        if let Some((_, p)) = self.plugins.iter().find(|(_, p)| p.name() == name) {
-            return Ok(*p);
+        let found = match self.plugins.iter().find(|(_, p)| p.name() == name) {
+            Some((path, p)) => (path.clone(), *p),
+            None if is_path(name) => {
+                let path = PathBuf::from(name);
+                let plugin = Plugin::load(&path)?;
+                self.add(path.clone(), plugin);
+                (path, plugin)
+            }
+            None => {
+                return Err(PluginLoadError::NotFound {
+                    name: name.to_owned(),
+                    searched: self.searched.join(", "),
+                })
+            }
+        };
+        let (path, plugin) = found;
+        let origin = PluginOrigin {
+            name: plugin.name().to_owned(),
+            version: plugin.version().to_owned(),
+            file: std::path::absolute(&path).unwrap_or(path),
+        };
+        if !self.used.contains(&origin) {
+            self.used.push(origin);
         }
-        let as_path = Path::new(name);
-        if name.contains(std::path::MAIN_SEPARATOR) || name.ends_with(".so") {
-            let plugin = Plugin::load(as_path)?;
-            self.add(as_path.to_owned(), plugin);
-            return Ok(plugin);
-        }
-        Err(PluginLoadError::NotFound {
-            name: name.to_owned(),
-            searched: self.searched.join(", "),
-        })
+        Ok(plugin)
     }
+
+    /// The plugins [`Registry::resolve`] has handed out since the last call,
+    /// in order.
+    pub fn take_used(&mut self) -> Vec<PluginOrigin> {
+        std::mem::take(&mut self.used)
+    }
+}
+
+/// True when a plugin reference names a file rather than a plugin.
+pub fn is_path(name: &str) -> bool {
+    name.contains(std::path::MAIN_SEPARATOR)
+        || Path::new(name)
+            .extension()
+            .is_some_and(|e| matches!(e.to_str(), Some("so" | "dylib" | "dll")))
 }
 
 /// A short, typed account of a loader error: abi_stable's own texts run to

@@ -2,10 +2,12 @@
 //! table passed as TOML, and the plugin's errors mapped back to the scene's
 //! lines.
 
+use std::path::Path;
+
 use toml::Spanned;
 
-use super::plugin::{Plugin, PluginLoadError, Registry};
-use crate::scene::{ModelSection, SceneError, SceneFile};
+use super::plugin::{is_path, Plugin, PluginLoadError, Registry};
+use crate::scene::{line_of, ModelSection, SceneError, SceneFile};
 
 /// Why a plugin's model could not be had.
 #[derive(Debug, thiserror::Error)]
@@ -33,16 +35,33 @@ pub fn build_model(
     Ok((plugin.name().to_owned(), model))
 }
 
+/// The plugin a scene key names: a plugin name, or a library path, which when
+/// relative is read from the scene's folder (as every other path of a scene).
 pub fn resolve(
     scene: &SceneFile,
     registry: &mut Registry,
     name: &Spanned<String>,
     key: &str,
 ) -> Result<Plugin, SourceError> {
-    registry.resolve(name.get_ref()).map_err(|e| match e {
+    let raw = name.get_ref();
+    let target = match scene.path.parent() {
+        Some(dir) if is_path(raw) && Path::new(raw).is_relative() => {
+            dir.join(raw).to_string_lossy().into_owned()
+        }
+        _ => raw.clone(),
+    };
+    registry.resolve(&target).map_err(|e| match e {
         PluginLoadError::NotFound { .. } => {
             SourceError::Scene(scene.invalid(name.span(), key, e.to_string()))
         }
+        PluginLoadError::Missing { path } => SourceError::Scene(scene.invalid(
+            name.span(),
+            key,
+            format!(
+                "plugin file {} does not exist (a relative path is read from the scene's folder)",
+                path.display()
+            ),
+        )),
         other => SourceError::Plugin(other),
     })
 }
@@ -80,28 +99,29 @@ pub fn plugin_error(scene: &SceneFile, e: PluginLoadError, table: &str) -> Sourc
     }
 }
 
-/// Line of `key = ...` inside the `[table]` (the table header's line when the
-/// key is not found there).
+/// Line of `key` inside the dotted `table` (e.g. `model.params`), found on
+/// the parsed document so that inline tables, nested tables and quoted keys
+/// all count; the table's line when the key is not there (the plugin may name
+/// a parameter the scene left out).
 fn param_line(text: &str, table: &str, key: &str) -> usize {
-    let header_text = format!("[{table}]");
-    let mut in_params = false;
-    let mut header = 0;
-    for (i, line) in text.lines().enumerate() {
-        let t = line.trim();
-        if t.starts_with('[') {
-            in_params = t == header_text;
-            if in_params {
-                header = i + 1;
-            }
-            continue;
-        }
-        if in_params {
-            if let Some((k, _)) = t.split_once('=') {
-                if k.trim().trim_matches('"') == key {
-                    return i + 1;
-                }
-            }
+    use toml::de::{DeTable, DeValue};
+    let Ok(doc) = DeTable::parse(text) else {
+        return 1;
+    };
+    let mut current: &DeTable = doc.get_ref();
+    let mut pos = 0;
+    for part in table.split('.') {
+        let Some((k, v)) = current.iter().find(|(k, _)| k.get_ref() == part) else {
+            return line_of(text, pos);
+        };
+        pos = k.span().start;
+        match v.get_ref() {
+            DeValue::Table(t) => current = t,
+            _ => return line_of(text, pos),
         }
     }
-    header
+    match current.iter().find(|(k, _)| k.get_ref() == key) {
+        Some((k, _)) => line_of(text, k.span().start),
+        None => line_of(text, pos),
+    }
 }

@@ -51,6 +51,18 @@ pub enum ModelError {
         /// The repeated name.
         name: String,
     },
+    /// A state or output name that cannot stand as a CSV column or plot label.
+    #[error("model '{model}': {what} name {name:?} {problem}: use letters, digits and punctuation other than commas and quotes")]
+    BadName {
+        /// Model name.
+        model: String,
+        /// "state" or "output".
+        what: &'static str,
+        /// The name.
+        name: String,
+        /// What is wrong with it.
+        problem: &'static str,
+    },
     /// The non-polynomial part could not be recast.
     #[error("model '{model}': recast: {source}")]
     Recast {
@@ -210,6 +222,7 @@ impl System {
         let b = to_csc(&model, "B", &m.b, n, n)?;
         let mut names = std::collections::HashSet::new();
         for s in m.states.iter() {
+            check_name(&model, "state", s.name.as_str())?;
             if !names.insert(s.name.as_str()) {
                 return Err(ModelError::DuplicateName {
                     model,
@@ -220,6 +233,7 @@ impl System {
         let mut outputs = Vec::with_capacity(m.outputs.len());
         let mut out_names = std::collections::HashSet::new();
         for o in m.outputs.iter() {
+            check_name(&model, "output", o.name.as_str())?;
             if !out_names.insert(o.name.as_str()) {
                 return Err(ModelError::DuplicateName {
                     model,
@@ -376,6 +390,32 @@ impl System {
     /// The output named `name`.
     pub fn output(&self, name: &str) -> Option<&OutputMap> {
         self.outputs.iter().find(|o| o.name == name)
+    }
+}
+
+/// A name becomes a CSV column header and a plot label: it must be non-empty
+/// and free of the CSV field separators (comma, double quote, line breaks and
+/// other control characters).
+fn check_name(model: &str, what: &'static str, name: &str) -> Result<(), ModelError> {
+    let problem = if name.trim().is_empty() {
+        Some("is empty")
+    } else if name.contains(',') {
+        Some("contains a comma")
+    } else if name.contains('"') {
+        Some("contains a double quote")
+    } else if name.chars().any(char::is_control) {
+        Some("contains a control character")
+    } else {
+        None
+    };
+    match problem {
+        Some(problem) => Err(ModelError::BadName {
+            model: model.to_owned(),
+            what,
+            name: name.to_owned(),
+            problem,
+        }),
+        None => Ok(()),
     }
 }
 

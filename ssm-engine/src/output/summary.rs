@@ -6,6 +6,7 @@ use serde_json::{json, Value};
 use super::{frc, report, ssm, validation};
 use crate::compare::report::Report;
 use crate::compare::validation::Validation;
+use crate::model::plugin::PluginOrigin;
 use crate::model::system::System;
 use crate::reduce::Reduction;
 use crate::rom::autonomous::InvarianceEntry;
@@ -39,6 +40,8 @@ pub struct Timing {
 pub struct Summary<'a> {
     /// The model analysed.
     pub system: &'a System,
+    /// The plugin libraries that ran (model, reducer).
+    pub plugins: &'a [PluginOrigin],
     /// Finite modes of the model (counted, or known from its structure).
     pub n_finite_modes: usize,
     /// The reduction that made the model, if any.
@@ -77,6 +80,11 @@ pub fn summary_json(s: &Summary<'_>) -> String {
     let t = &s.timing;
     let lin = &s.ssm.timing.linear;
     let value = json!({
+        "plugins": s.plugins.iter().map(|p| json!({
+            "name": p.name,
+            "version": p.version,
+            "file": p.file.display().to_string(),
+        })).collect::<Vec<_>>(),
         "model": {
             "plugin": sys.plugin,
             "name": sys.name,

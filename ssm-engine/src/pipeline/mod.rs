@@ -21,7 +21,7 @@ pub use spectral::Spectral;
 
 use crate::compare::report::{report, Report, ReportInputs};
 use crate::compare::validation::{validation, Validation};
-use crate::model::plugin::Registry;
+use crate::model::plugin::{PluginOrigin, Registry};
 use crate::model::source::build_model;
 use crate::model::system::{OutputMap, System};
 use crate::output::summary::{Summary, Timing};
@@ -68,6 +68,8 @@ pub struct JobResult {
     pub report: Option<Report>,
     /// Warnings (resonances, ...).
     pub warnings: Vec<String>,
+    /// The plugin libraries the run used (model, reducer).
+    pub plugins: Vec<PluginOrigin>,
     /// Files to write.
     pub outputs: OutputSet,
 }
@@ -137,7 +139,9 @@ pub fn run(
     let sc = &scene.scene;
     let mut timing = Timing::default();
     progress.stage("building model");
+    registry.take_used();
     let (system, reduction) = obtain_model(scene, registry)?;
+    let plugins = registry.take_used();
     let coordinates = checks::coordinates(scene, &system)?;
 
     let limits = budget::Limits::of_machine();
@@ -244,6 +248,7 @@ pub fn run(
         transient: answers.transient.as_ref(),
         summary: Summary {
             system: &system,
+            plugins: &plugins,
             n_finite_modes: sp.n_finite,
             reduction: reduction.as_ref(),
             spectrum: &sp.spectrum,
@@ -270,6 +275,7 @@ pub fn run(
         validation: checked,
         report: speed,
         warnings,
+        plugins,
         outputs,
     })
 }

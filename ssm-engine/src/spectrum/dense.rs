@@ -114,6 +114,7 @@ pub fn finite_eigenvalues(
         return Err(SpectrumError::SingularShift {
             shift,
             detail: "A - sigma B is numerically singular".into(),
+            suggestion: None,
         });
     }
     if norm == 0.0 {

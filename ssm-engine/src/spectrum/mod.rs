@@ -45,18 +45,21 @@ pub enum SpectrumError {
     },
     /// The pencil is singular (`det(lambda B - A) = 0` for all lambda): e.g.
     /// redundant constraints or a state that appears nowhere.
-    #[error("the pencil (A, B) is singular: {detail}. Check for redundant constraints (G0 must have full rank) or states that appear in no equation")]
+    #[error("the pencil (A, B) is singular: {detail}. The model has no well-defined dynamics: look for redundant constraints (the constraint Jacobian G0 must have full row rank), a mass matrix that is singular in a direction no constraint fixes, or a state that appears in no equation; changing [spectrum] shift cannot help")]
     SingularPencil {
         /// What was observed.
         detail: String,
     },
-    /// `A - sigma B` is singular at the chosen shift.
-    #[error("A - sigma B is singular at sigma = {shift} ({detail}); set [spectrum] shift to a value that is not an eigenvalue (e.g. -0.01)")]
+    /// `A - sigma B` is singular at the chosen shift (and regular elsewhere:
+    /// the shift is an eigenvalue). [`compute`] names a shift that works.
+    #[error("A - sigma B is singular at sigma = {shift} ({detail}): the shift is an eigenvalue of the model{}", match suggestion { Some(s) => format!("; set [spectrum] shift = {s:.6}, where A - sigma B is regular"), None => String::new() })]
     SingularShift {
         /// The shift.
         shift: f64,
         /// Factorization detail.
         detail: String,
+        /// A shift at which `A - sigma B` was found regular.
+        suggestion: Option<f64>,
     },
     /// The Krylov iteration found fewer modes than requested.
     #[error("sparse eigen-solver converged on {found} of {requested} modes; raise [spectrum] modes or choose a shift closer to the wanted modes")]
@@ -145,9 +148,15 @@ pub fn compute(
     } else {
         Method::Sparse
     });
-    let mut eigenvalues = match method {
-        Method::Dense => dense::finite_eigenvalues(a, b, opts.shift)?,
-        Method::Sparse => sparse::eigenvalues_near_shift(a, b, opts.shift, opts.modes)?,
+    let found = match method {
+        Method::Dense => dense::finite_eigenvalues(a, b, opts.shift),
+        Method::Sparse => sparse::eigenvalues_near_shift(a, b, opts.shift, opts.modes),
+    };
+    let mut eigenvalues = match found {
+        Err(SpectrumError::SingularShift { shift, detail, .. }) => {
+            return Err(diagnose_singular_shift(a, b, shift, detail))
+        }
+        other => other?,
     };
     sort_spectrum(&mut eigenvalues);
     Ok(Spectrum {
@@ -155,6 +164,37 @@ pub fn compute(
         complete: method == Method::Dense,
         method,
     })
+}
+
+/// Tells a shift that happens to be an eigenvalue from a singular pencil
+/// (`det(lambda B - A) = 0` for every `lambda`: a singular mass matrix in a
+/// direction no constraint fixes, redundant constraints, a state in no
+/// equation). `A - sigma B` is probed at two more shifts, apart from `shift`
+/// by irrational multiples of `1 + |shift|`: a regular pencil has finitely many
+/// eigenvalues and is regular at both with probability one, while a singular
+/// pencil is singular at every shift, so advice to change the shift would
+/// send the user in a circle.
+fn diagnose_singular_shift(
+    a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    b: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    shift: f64,
+    detail: String,
+) -> SpectrumError {
+    let scale = 1.0 + shift.abs();
+    let probes = [shift - 0.739_085_133 * scale, shift + 1.324_717_957 * scale];
+    match probes.into_iter().find(|&s| sparse::is_regular_at(a, b, s)) {
+        Some(s) => SpectrumError::SingularShift {
+            shift,
+            detail,
+            suggestion: Some(s),
+        },
+        None => SpectrumError::SingularPencil {
+            detail: format!(
+                "A - sigma B is singular at sigma = {shift} and at the probes {:.4} and {:.4} ({detail}), so at every shift",
+                probes[0], probes[1]
+            ),
+        },
+    }
 }
 
 /// Relative size below which an imaginary part counts as zero (real eigenvalue).

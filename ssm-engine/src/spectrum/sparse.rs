@@ -101,7 +101,8 @@ pub fn eigenvalues_near_shift(
     let shifted = combine(a, b, -shift);
     let lu = shifted.sp_lu().map_err(|e| SpectrumError::SingularShift {
         shift,
-        detail: format!("{e:?}"),
+        detail: lu_failure(&e),
+        suggestion: None,
     })?;
     let op = ShiftInvert { lu, b };
     // purified, deterministic start vector: T^2 x with x a fixed pseudo-random vector
@@ -115,6 +116,7 @@ pub fn eigenvalues_near_shift(
             return Err(SpectrumError::SingularShift {
                 shift,
                 detail: "the factorization produced a non-finite solution".into(),
+                suggestion: None,
             });
         }
         y /= faer::Scale(norm);
@@ -171,6 +173,40 @@ pub fn eigenvalues_near_shift(
         kept.push(l);
     }
     Ok(kept)
+}
+
+/// A sparse LU failure in words.
+fn lu_failure(e: &faer::sparse::linalg::LuError) -> String {
+    match e {
+        faer::sparse::linalg::LuError::SymbolicSingular { index } => {
+            format!("every pivot candidate is zero at elimination step {index}")
+        }
+        faer::sparse::linalg::LuError::Generic(e) => format!("sparse LU failed: {e:?}"),
+    }
+}
+
+/// True when `A - sigma B` factors with a finite, moderately sized solution
+/// for a pseudo-random right-hand side (a growth above `1e14` relative to the
+/// matrix scale counts as singular).
+pub fn is_regular_at(
+    a: SparseColMatRef<'_, usize, f64>,
+    b: SparseColMatRef<'_, usize, f64>,
+    sigma: f64,
+) -> bool {
+    let m = combine(a, b, -sigma);
+    let Ok(lu) = m.sp_lu() else {
+        return false;
+    };
+    let n = m.nrows();
+    let rhs = Mat::<f64>::from_fn(n, 1, |i, _| pseudo_random(i));
+    let x = lu.solve(&rhs);
+    let scale = m
+        .val()
+        .iter()
+        .fold(0.0_f64, |s, v| s.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
+    let growth = x.norm_l2() * scale / rhs.norm_l2().max(f64::MIN_POSITIVE);
+    growth.is_finite() && growth < 1e14
 }
 
 /// A fixed pseudo-random sequence in (-1, 1) (SplitMix64), so that runs are
