@@ -216,8 +216,11 @@ fn unstable_fixed_points_are_left_by_the_reduced_dynamics() {
 /// Reference: Li, Jain & Haller (2023), Fig. 6: on the saddle-node periodic
 /// orbit "A" of the unconstrained spatial oscillator (O(11), eps = 0.03, the
 /// fold at the top of the FRC) the residual of eq. (60) of the leading-order
-/// periodic SSM exceeds 0.015 over the period; we require the same order of
-/// magnitude, 0.015 < max ||Res||_2 < 0.15. With the higher-order
+/// periodic SSM exceeds 0.015 over the period ("the maximum residual in Fig. 6
+/// is more than 0.015", Sect. 5.1.2, paragraph after the Fig. 6 caption). That
+/// is the paper's reading of its plot, rounded down; had the maximum reached
+/// 0.02 it would have been read as more than 0.02, so we require
+/// 0.015 < max ||Res||_2 < 0.02. With the higher-order
 /// non-autonomous terms of [`ForcedSsm::expansion`] the residual on the same
 /// orbit falls with their order. The residual is also checked to
 /// reduce to the autonomous invariance residual at eps = 0, and to shrink on
@@ -281,7 +284,8 @@ fn fig6_residual_of_the_leading_order_periodic_ssm() {
     eprintln!(
         "orbit A at Omega = {omega_a}: max residual by non-autonomous order 0, 2, .., 10: {res_a:?}; eps = 0.01: {res_small:?}"
     );
-    assert!(res_a[0] > 0.015 && res_a[0] < 0.15, "{res_a:?}");
+    // Fig. 6: above the printed 0.015, below the next round value 0.02
+    assert!(res_a[0] > 0.015 && res_a[0] < 0.02, "{res_a:?}");
     assert!(res_small[0] < res_a[0] / 3.0, "{res_small:?} vs {res_a:?}");
     // beyond the paper: the O(eps |p|^k) terms remove the O(eps |p|) residual;
     // at eps = 0.03 it falls with every added order (by 10x at k = 10), at

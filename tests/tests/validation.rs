@@ -62,17 +62,19 @@ fn frc_at(
 /// Fig. 15: the 21 steady-state points of the full chain (405 states, eps =
 /// 0.6, [1.8, 2.2]) against the O(5) SSM FRC.
 ///
-/// Tolerance, from the error budget of the leading-order periodic SSM: (a) the
-/// autonomous truncation, estimated by the change of the FRC from O(5) to
-/// O(7) and at least ten times the invariance error at the peak amplitude
-/// (eq. 41, reported with the FRC); (b) the neglected O(eps |p|)
-/// terms, whose size we measure as the change of the FRC when they are
-/// included to O(eps |p|^4) (`nonautonomous_order = 4`); (c) the reference's
-/// own error: criterion (47) stops when one period changes the state by less
-/// than delta, which leaves a decaying transient of about
-/// delta q / (1 - q), q = exp(Re(lambda_1) 2 pi / Omega) the decay per period.
-/// The O(5) error must stay within 1.5 x ((a) + (b)) + (c); including the
-/// terms must reduce it, to within 1.5 x (a) + (c).
+/// Tolerance, fixed in advance (none of it from the FRCs under test). The
+/// reference's own error e_ref: criterion (47) stops when one period changes the
+/// state by less than delta, which leaves a decaying transient of at most
+/// delta q / (1 - q), q = exp(Re(lambda_1) 2 pi / Omega) the decay per period,
+/// largest at Omega = 2.2; from the published Re(lambda_1) = -0.0569 (eq. 45)
+/// and delta = 1e-3 (eq. 47) that is 5.7e-3 of the state. The paper finds the
+/// O(5) FRC converged to this reference (Sect. 5.2.3, Fig. 15); we hold it to
+/// the engine's default accuracy target, `[ssm] tolerance = 0.01`: the O(5)
+/// error must stay within 1 % + e_ref of the peak. Including the neglected
+/// O(eps |p|) terms to O(eps |p|^4) (`nonautonomous_order = 4`) must reduce
+/// it, to within 0.5 % + e_ref (half the target, what is left for the O(5)
+/// truncation). The O(5) to O(7) change, the invariance error at the peak and
+/// the change made by the terms are printed, not used.
 #[test]
 fn chain_steady_state_reference_matches_the_o5_frc() {
     let (s, out) = run_zoo_in("pendulum_chain_fig15.toml");
@@ -139,26 +141,31 @@ fn chain_steady_state_reference_matches_the_o5_frc() {
         .find(|c| c["order"] == 5)
         .expect("O(5) curve");
     let inv = curve["invariance_error_at_peak"].as_f64().unwrap();
-    let re = s["master_modes"][0]["lambda"]["re"].as_f64().unwrap();
-    let q = (re * 2.0 * std::f64::consts::PI / 2.2).exp();
-    let delta = ss["delta"].as_f64().unwrap();
+    // e_ref from the published numbers: Re(lambda_1) of eq. (45), delta of eq. (47)
+    let delta = 1e-3;
+    assert_eq!(
+        ss["delta"].as_f64().unwrap(),
+        delta,
+        "the scene uses eq. (47)'s delta"
+    );
+    let q = (-0.0569f64 * 2.0 * std::f64::consts::PI / 2.2).exp();
     let reference = delta * q / (1.0 - q);
-    let truncation = trunc.max(10.0 * inv);
-    let tol = 1.5 * (change + truncation) + reference;
+    let tol = 0.01 + reference;
+    let tol_k4 = 0.005 + reference;
     eprintln!(
-        "O(5) FRC against the full system: error {err_lead:.2e} (leading order), {err_k4:.2e} (with O(eps|p|^4)); budget: O(eps|p|) terms {change:.2e}, truncation {truncation:.2e} (O(5) to O(7); invariance error {inv:.2e}), reference {reference:.2e} -> tolerance {tol:.2e}"
+        "O(5) FRC against the full system: error {err_lead:.2e} (leading order, tolerance {tol:.2e}), {err_k4:.2e} (with O(eps|p|^4), tolerance {tol_k4:.2e}); reference error {reference:.2e}; not used: change by the O(eps|p|) terms {change:.2e}, O(5) to O(7) {trunc:.2e}, invariance error {inv:.2e}"
     );
     assert!(
         err_lead <= tol,
-        "O(5) error {err_lead} above the budget {tol}"
+        "O(5) error {err_lead} above 1 % + the reference's error ({tol})"
     );
     assert!(
         err_k4 < err_lead,
         "the O(eps |p|) terms do not explain the error"
     );
     assert!(
-        err_k4 <= 1.5 * truncation + reference,
-        "with the terms, the error is not within truncation and reference error"
+        err_k4 <= tol_k4,
+        "with the terms, the O(5) error {err_k4} is above 0.5 % + the reference's error ({tol_k4})"
     );
     // the engine's own comparison agrees with this one
     let reported = ss["frc_error"]
@@ -311,8 +318,11 @@ fn every_zoo_scene_parses() {
 /// Bistable Duffing response (`x'' + 0.02 x' + x + x^3 = 0.01 cos(Omega t)`,
 /// O(7) FRC): integrated from rest the full system settles on the lower
 /// branch; started from the FRC's largest stable response (`start = "ssm"`)
-/// it settles on the upper one. Both agree with the FRC branch they land on
-/// (2 %: the leading-order periodic SSM at eps = 0.01, cf. `frc.rs`).
+/// it settles on the upper one. Reference for the lower branch: harmonic
+/// balance in closed form (below), which the full system must match to 0.1 %
+/// and the FRC to twice the closed-form estimate of the O(eps |p|) terms the
+/// leading-order periodic SSM leaves out (0.7 %). The upper branch agrees with
+/// the FRC's to 2 % of its amplitude.
 #[test]
 fn steady_state_from_the_ssm_prediction_reaches_the_upper_branch() {
     let run = |start: &str| {
@@ -352,9 +362,51 @@ fn steady_state_from_the_ssm_prediction_reaches_the_upper_branch() {
     let frc_upper = frc_at(&stable, "7", "x_linf", 1.06, 1.0).unwrap();
     eprintln!("Omega = 1.06: from rest {lower:.4} (FRC {frc_lower:.4}), from the SSM {upper:.4} (FRC {frc_upper:.4})");
     assert!(frc_upper > 4.0 * frc_lower, "the FRC is bistable at 1.06");
+    // Reference: one-harmonic balance, x = a cos(Omega t - theta),
+    // a^2 ((1 - Omega^2 + 3 a^2 / 4)^2 + (2 zeta Omega)^2) = eps^2, a cubic in
+    // a^2 whose smallest root is the lower branch (a = 0.0831; the other two,
+    // 0.379 and 0.423, are the middle and upper ones); max |x| is a less the
+    // third harmonic a^3 / (4 (9 Omega^2 - 1)) (2e-4 of a).
+    let (zeta, eps, w) = (0.01f64, 0.01f64, 1.06f64);
+    let g = |u: f64| u * ((1.0 - w * w + 0.75 * u).powi(2) + (2.0 * zeta * w).powi(2)) - eps * eps;
+    let u_lin = eps * eps / ((1.0 - w * w).powi(2) + (2.0 * zeta * w).powi(2));
+    let (mut lo, mut hi) = (0.0f64, 0.01 * u_lin);
+    while g(hi) < 0.0 {
+        (lo, hi) = (hi, hi + 0.01 * u_lin);
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if g(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let a = lo.sqrt();
+    let hb_lower = a - a.powi(3) / (4.0 * (9.0 * w * w - 1.0));
+    // full system against it, 1e-3 relative: criterion (47) with delta = 1e-5
+    // leaves a transient below delta q / (1 - q) |z|, q = exp(-2 pi zeta /
+    // Omega) (1.6e-4 of |z| <= Omega a); the maximum is sampled at 128 points
+    // a period (at most 1 - cos(pi / 128) = 3e-4 low); the harmonics beyond
+    // the third change a by ~1e-5
     assert!(
-        (lower - frc_lower).abs() < 0.02 * frc_upper,
-        "{lower} vs {frc_lower}"
+        (lower - hb_lower).abs() < 1e-3 * hb_lower,
+        "from rest {lower} vs harmonic balance {hb_lower}"
+    );
+    // the FRC against it: the leading-order periodic SSM leaves out the
+    // cubic force on the non-resonant part of the linear response (a share
+    // r = (Omega - 1) / (Omega + 1) of it, taken three times: 3 x_r^2 x_nr),
+    // so it misjudges the cubic's share c = (a - a_lin) / a of the response by
+    // about 3 r c (0.36 % here); this estimate is 3.0e-3 / 5.1e-3 / 1.2e-2 at
+    // Omega = 0.93 / 0.95 / 0.98, above the errors of the leading order that
+    // `higher_order_nonautonomous_terms_improve_the_frc` (frc.rs) finds there
+    // against a simulation. Twice the estimate.
+    let r = (w - 1.0) / (w + 1.0);
+    let c = (a - u_lin.sqrt()) / a;
+    let tol_frc = 2.0 * 3.0 * r * c;
+    assert!(
+        (frc_lower - hb_lower).abs() < tol_frc * hb_lower,
+        "FRC lower branch {frc_lower} vs harmonic balance {hb_lower} (tolerance {tol_frc:.2e})"
     );
     assert!(
         (upper - frc_upper).abs() < 0.02 * frc_upper,
