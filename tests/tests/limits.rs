@@ -28,6 +28,20 @@ fn unbounded_requests_are_refused_at_their_key_with_the_estimate() {
             "ssm.order",
             7,
         ),
+        // one pair: refused before the eq. (53) resonance check, which
+        // enumerates the multi-indices up to the order (found by the scene
+        // fuzzer in tests/fuzz.rs: it ran for hours)
+        (
+            "[ssm]\norder = 1000000\n[outputs]\ncoordinates = [\"x1\"]\n",
+            "ssm.order",
+            6,
+        ),
+        // the estimate itself must not loop over the order (fuzzer again)
+        (
+            "[ssm]\nmaster_pairs = [1, 2]\norder = 9223372036854775807\n[outputs]\ncoordinates = [\"x1\"]\n",
+            "ssm.order",
+            7,
+        ),
         (
             "[ssm]\norder = 5\n[outputs]\ncoordinates = [\"x1\"]\n[forcing]\nepsilon = 0.01\nomega_range = [1.8, 2.2]\npoints = 1000000000\n",
             "forcing.points",

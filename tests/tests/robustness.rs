@@ -235,3 +235,17 @@ fn plugin_paths_in_scenes_are_relative_to_the_scene_and_recorded() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `[spectrum] modes` above the number of states is refused at its line (it
+/// used to abort on a 68 GB allocation; found by the scene fuzzer).
+#[test]
+fn more_spectrum_modes_than_states_are_refused() {
+    let (line, msg) = scene_error(
+        "[model]\nplugin = \"duffing\"\n[spectrum]\nmethod = \"sparse\"\nmodes = 4294967296\n[ssm]\norder = 3\n",
+    );
+    assert_eq!(line, 5, "{msg}");
+    assert!(
+        msg.starts_with("spectrum.modes") && msg.contains("2 states"),
+        "{msg}"
+    );
+}

@@ -77,9 +77,13 @@ struct Cost {
     bytes: f64,
 }
 
-/// `C(n + k, k)` in floating point (no overflow for any scene value).
+/// `C(n + k, k)` in floating point (no overflow for any scene value), as
+/// `C(n + k, min(n, k))`: `min(n, k)` factors, so a scene's `order = 2^63`
+/// costs as little as its number of variables.
 fn binomial(n: usize, k: usize) -> f64 {
-    (1..=k).fold(1.0, |acc, i| acc * (n + i) as f64 / i as f64)
+    let m = n.min(k);
+    let top = n as f64 + k as f64;
+    (1..=m).fold(1.0, |acc, i| acc * (top - (m - i) as f64) / i as f64)
 }
 
 /// Multi-indices of degree `0..=order` in `nvar` variables.
@@ -171,8 +175,9 @@ fn within(cost: &Cost, limits: &Limits) -> bool {
     cost.ops / OPS_PER_SECOND <= limits.seconds && cost.bytes <= limits.bytes
 }
 
-/// The dense spectrum: a QZ iteration on the `N x N` pencil, about `70 N^3`
-/// operations on 6 dense complex matrices.
+/// Before the spectral stage: the dense spectrum (a QZ iteration on the
+/// `N x N` pencil, about `70 N^3` operations on 6 dense complex matrices) and
+/// the SSM order (see [`check_order`]).
 pub fn check_spectrum(scene: &SceneFile, system: &System, limits: &Limits) -> Result<(), JobError> {
     use crate::scene::SpectrumMethod;
     let n = system.n_states() as f64;
@@ -195,6 +200,42 @@ pub fn check_spectrum(scene: &SceneFile, system: &System, limits: &Limits) -> Re
             &cost,
             limits,
             "use method = \"sparse\" with the modes you need",
+        ));
+    }
+    let pairs = scene.scene.ssm.master_pairs.get_ref().len().max(1);
+    check_order(scene, system, pairs, limits)
+}
+
+/// The SSM order against the limits, with `pairs` master pairs. Run before
+/// the spectral stage too (with the scene's pairs), since the eq. (53)
+/// resonance check there enumerates the multi-indices up to the order.
+fn check_order(
+    scene: &SceneFile,
+    system: &System,
+    pairs: usize,
+    limits: &Limits,
+) -> Result<(), JobError> {
+    let sc = &scene.scene;
+    let sizes = Sizes::of(system);
+    let order = *sc.ssm.order.get_ref();
+    let forced = sc.forcing.is_some() || sc.validate.is_some();
+    let mut ssm = ssm_cost(&sizes, pairs, order, forced);
+    if sc.report.is_some() {
+        // the report rebuilds the SSM at each of its orders (at most `order`)
+        ssm.ops *= order as f64;
+    }
+    if !within(&ssm, limits) {
+        return Err(refuse(
+            scene,
+            sc.ssm.order.span(),
+            "ssm.order",
+            format!(
+                "an SSM of order {order} with {pairs} master pair(s) of a {}-state model",
+                sizes.states
+            ),
+            &ssm,
+            limits,
+            "lower the order",
         ));
     }
     Ok(())
@@ -236,26 +277,7 @@ pub fn check(
     let pairs = masters.len().max(1);
     let nvar = 2 * pairs;
     let order = *sc.ssm.order.get_ref();
-    let forced = sc.forcing.is_some() || sc.validate.is_some();
-    let mut ssm = ssm_cost(&sizes, pairs, order, forced);
-    if sc.report.is_some() {
-        // the report rebuilds the SSM at each of its orders (at most `order`)
-        ssm.ops *= order as f64;
-    }
-    if !within(&ssm, limits) {
-        return Err(refuse(
-            scene,
-            sc.ssm.order.span(),
-            "ssm.order",
-            format!(
-                "an SSM of order {order} with {pairs} master pair(s) of a {}-state model",
-                sizes.states
-            ),
-            &ssm,
-            limits,
-            "lower the order",
-        ));
-    }
+    check_order(scene, system, pairs, limits)?;
     let n_idx = multi_indices(nvar, order);
     let omega = masters
         .iter()
@@ -380,12 +402,17 @@ pub fn check(
         if let Some(t_end) = &v.t_end {
             let n = steps(*t_end.get_ref());
             let samples = *v.samples.get_ref() as f64;
+            // each sample: the integrator stops there (dense output at worst a
+            // step), the reduced model is lifted through W, and the distance
+            // to the SSM is a Newton projection (about ten evaluations of W
+            // and its Jacobian)
+            let per_sample = 10.0 * n_idx * sizes.states * (nvar as f64 + 1.0);
             let cost = Cost {
-                ops: n * step,
+                ops: n.max(samples) * step + samples * per_sample,
                 bytes: samples * 8.0 * (3.0 * sizes.states + 4.0 * coords),
             };
             if !within(&cost, limits) {
-                let (span, key) = if n * step > samples * sizes.states * 1e3 {
+                let (span, key) = if n * step > samples * per_sample {
                     (t_end.span(), "validate.t_end")
                 } else {
                     (v.samples.span(), "validate.samples")

@@ -41,6 +41,21 @@ pub fn spectral(scene: &SceneFile, system: &System) -> Result<Spectral, JobError
     let mut warnings = Vec::new();
     let pairs = sc.ssm.master_pairs.get_ref();
     let max_pair = pairs.iter().copied().max().unwrap_or(1);
+    if let Some(m) = &sc.spectrum.modes {
+        let n = system.n_states();
+        if *m.get_ref() > n {
+            return Err(scene
+                .invalid(
+                    m.span(),
+                    "spectrum.modes",
+                    format!(
+                        "{} modes asked for, but the model has {n} states and so at most {n} finite eigenvalues",
+                        m.get_ref()
+                    ),
+                )
+                .into());
+        }
+    }
     let opts = SpectrumOptions {
         method: match sc.spectrum.method {
             SpectrumMethod::Auto => None,
