@@ -121,8 +121,9 @@ impl Sizes {
     }
 }
 
-/// The refusal of a request at `span` of `key`.
-fn refuse(
+/// `Ok` when `cost` is within `limits`, else the refusal of the request at
+/// `span` of `key`.
+fn ensure(
     scene: &SceneFile,
     span: Range<usize>,
     key: &str,
@@ -130,9 +131,12 @@ fn refuse(
     cost: &Cost,
     limits: &Limits,
     advice: &str,
-) -> JobError {
+) -> Result<(), JobError> {
+    if within(cost, limits) {
+        return Ok(());
+    }
     let secs = cost.ops / OPS_PER_SECOND;
-    scene
+    Err(scene
         .invalid(
             span,
             key,
@@ -144,7 +148,7 @@ fn refuse(
                 bytes(limits.bytes),
             ),
         )
-        .into()
+        .into())
 }
 
 fn duration(s: f64) -> String {
@@ -190,9 +194,9 @@ pub fn check_spectrum(scene: &SceneFile, system: &System, limits: &Limits) -> Re
         ops: 70.0 * n.powi(3),
         bytes: 6.0 * 16.0 * n * n,
     };
-    if dense && !within(&cost, limits) {
+    if dense {
         let at = scene.text.find("[spectrum]").unwrap_or(0);
-        return Err(refuse(
+        ensure(
             scene,
             at..at,
             "spectrum.method",
@@ -200,7 +204,7 @@ pub fn check_spectrum(scene: &SceneFile, system: &System, limits: &Limits) -> Re
             &cost,
             limits,
             "use method = \"sparse\" with the modes you need",
-        ));
+        )?;
     }
     let pairs = scene.scene.ssm.master_pairs.get_ref().len().max(1);
     check_order(scene, system, pairs, limits)
@@ -224,20 +228,18 @@ fn check_order(
         // the report rebuilds the SSM at each of its orders (at most `order`)
         ssm.ops *= order as f64;
     }
-    if !within(&ssm, limits) {
-        return Err(refuse(
-            scene,
-            sc.ssm.order.span(),
-            "ssm.order",
-            format!(
-                "an SSM of order {order} with {pairs} master pair(s) of a {}-state model",
-                sizes.states
-            ),
-            &ssm,
-            limits,
-            "lower the order",
-        ));
-    }
+    ensure(
+        scene,
+        sc.ssm.order.span(),
+        "ssm.order",
+        format!(
+            "an SSM of order {order} with {pairs} master pair(s) of a {}-state model",
+            sizes.states
+        ),
+        &ssm,
+        limits,
+        "lower the order",
+    )?;
     Ok(())
 }
 
@@ -302,8 +304,7 @@ pub fn check(
             ops: evaluations * (4.0 * n_idx * sizes.states + 4.0 * sizes.factors),
             bytes: points * (16.0 * nvar as f64 + 64.0),
         };
-        if !within(&cost, limits) {
-            return Err(refuse(
+        ensure(
                 scene,
                 ie.n_theta.span(),
                 "outputs.invariance_error.n_theta",
@@ -311,8 +312,7 @@ pub fn check(
                 &cost,
                 limits,
                 "lower n_alpha and n_theta",
-            ));
-        }
+        )?;
     }
     if let Some(bb) = &out.backbone {
         let points = *bb.points.get_ref() as f64;
@@ -321,17 +321,15 @@ pub fn check(
             ops: points * orders * 4.0 * n_idx * (coords + 1.0),
             bytes: points * orders * 8.0 * (coords + 6.0),
         };
-        if !within(&cost, limits) {
-            return Err(refuse(
-                scene,
-                bb.points.span(),
-                "outputs.backbone.points",
-                format!("a backbone of {points:.1e} points"),
-                &cost,
-                limits,
-                "lower the number of points",
-            ));
-        }
+        ensure(
+            scene,
+            bb.points.span(),
+            "outputs.backbone.points",
+            format!("a backbone of {points:.1e} points"),
+            &cost,
+            limits,
+            "lower the number of points",
+        )?;
     }
     if let Some(tr) = &out.transient {
         let t_end = *tr.t_end.get_ref();
@@ -345,30 +343,28 @@ pub fn check(
             ops: n * 7.0 * 4.0 * n_idx.min(1e3) * nvar as f64 + stored * 4.0 * n_idx * coords,
             bytes: stored * (16.0 * nvar as f64 + 8.0 * coords + 96.0),
         };
-        if !within(&cost, limits) {
-            let (span, key, what) = if n * 1e3 > stored {
-                (
-                    tr.t_end.span(),
-                    "outputs.transient.t_end",
-                    format!("a reduced transient over {:.1e} periods", periods(t_end)),
-                )
-            } else {
-                (
-                    tr.samples.span(),
-                    "outputs.transient.samples",
-                    format!("a reduced transient of {samples:.1e} samples"),
-                )
-            };
-            return Err(refuse(
-                scene,
-                span,
-                key,
-                what,
-                &cost,
-                limits,
-                "shorten the transient or take fewer samples",
-            ));
-        }
+        let (span, key, what) = if n * 1e3 > stored {
+            (
+                tr.t_end.span(),
+                "outputs.transient.t_end",
+                format!("a reduced transient over {:.1e} periods", periods(t_end)),
+            )
+        } else {
+            (
+                tr.samples.span(),
+                "outputs.transient.samples",
+                format!("a reduced transient of {samples:.1e} samples"),
+            )
+        };
+        ensure(
+            scene,
+            span,
+            key,
+            what,
+            &cost,
+            limits,
+            "shorten the transient or take fewer samples",
+        )?;
     }
     if let Some(f) = &sc.forcing {
         let points = *f.points.get_ref() as f64;
@@ -385,17 +381,15 @@ pub fn check(
             ops: curves * points * per_point,
             bytes: curves * points * 8.0 * (16.0 + 4.0 * nvar as f64 + coords),
         };
-        if !within(&cost, limits) {
-            return Err(refuse(
-                scene,
-                f.points.span(),
-                "forcing.points",
-                format!("{curves} forced response curve(s) of {points:.1e} points"),
-                &cost,
-                limits,
-                "lower the number of points",
-            ));
-        }
+        ensure(
+            scene,
+            f.points.span(),
+            "forcing.points",
+            format!("{curves} forced response curve(s) of {points:.1e} points"),
+            &cost,
+            limits,
+            "lower the number of points",
+        )?;
     }
     if let Some(v) = &sc.validate {
         let step = sizes.sparse_solve();
@@ -411,25 +405,23 @@ pub fn check(
                 ops: n.max(samples) * step + samples * per_sample,
                 bytes: samples * 8.0 * (3.0 * sizes.states + 4.0 * coords),
             };
-            if !within(&cost, limits) {
-                let (span, key) = if n * step > samples * per_sample {
-                    (t_end.span(), "validate.t_end")
-                } else {
-                    (v.samples.span(), "validate.samples")
-                };
-                return Err(refuse(
-                    scene,
-                    span,
-                    key,
-                    format!(
-                        "the full-system transient over {:.1e} periods with {samples:.1e} samples",
-                        periods(*t_end.get_ref())
-                    ),
-                    &cost,
-                    limits,
-                    "shorten [validate] t_end or take fewer samples",
-                ));
-            }
+            let (span, key) = if n * step > samples * per_sample {
+                (t_end.span(), "validate.t_end")
+            } else {
+                (v.samples.span(), "validate.samples")
+            };
+            ensure(
+                scene,
+                span,
+                key,
+                format!(
+                    "the full-system transient over {:.1e} periods with {samples:.1e} samples",
+                    periods(*t_end.get_ref())
+                ),
+                &cost,
+                limits,
+                "shorten [validate] t_end or take fewer samples",
+            )?;
         }
         if let Some(ss) = &v.steady_state {
             let freqs = ss
@@ -445,19 +437,17 @@ pub fn check(
                 ops: freqs * periods * per_period * step / cores,
                 bytes: freqs * (8.0 * sizes.states * per_period + 1e3),
             };
-            if !within(&cost, limits) {
-                return Err(refuse(
-                    scene,
-                    ss.max_periods.span(),
-                    "validate.steady_state.max_periods",
-                    format!(
-                        "steady states at {freqs:.0} frequencies over up to {periods:.1e} periods each"
-                    ),
-                    &cost,
-                    limits,
-                    "lower max_periods (or the number of frequencies)",
-                ));
-            }
+            ensure(
+                scene,
+                ss.max_periods.span(),
+                "validate.steady_state.max_periods",
+                format!(
+                    "steady states at {freqs:.0} frequencies over up to {periods:.1e} periods each"
+                ),
+                &cost,
+                limits,
+                "lower max_periods (or the number of frequencies)",
+            )?;
         }
     }
     Ok(())
