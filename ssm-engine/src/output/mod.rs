@@ -12,30 +12,28 @@ pub mod summary;
 pub mod validation;
 
 use crate::rom::autonomous::{BackboneCurve, LiftedTransient};
-use crate::spectrum::Spectrum;
+use crate::spectrum::ModalFigures;
 pub use files::{OutputError, OutputSet, MARKER};
 use plot::PlotError;
 use summary::{summary_json, Summary};
 
 /// `spectrum.csv`: one finite eigenvalue a row with its frequency, damping
-/// ratio and master-pair membership.
-pub fn spectrum_csv(spectrum: &Spectrum, master_indices: &[(usize, usize)]) -> String {
+/// ratio and master-pair membership (`(pair, index)` of each master).
+pub fn spectrum_csv(modal: &[ModalFigures], master_indices: &[(usize, usize)]) -> String {
     let mut s = String::from("index,re,im,abs,frequency,damping_ratio,master_pair\n");
-    for (k, l) in spectrum.eigenvalues.iter().enumerate() {
+    for (k, m) in modal.iter().enumerate() {
         let master = master_indices
             .iter()
             .find(|(_, i)| k == *i || k == *i + 1)
             .map_or(String::new(), |(p, _)| p.to_string());
-        let abs = l.norm();
-        let zeta = if abs > 0.0 { -l.re / abs } else { 0.0 };
         s.push_str(&format!(
             "{},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{}\n",
             k + 1,
-            l.re,
-            l.im,
-            abs,
-            l.im.abs(),
-            zeta,
+            m.lambda.re,
+            m.lambda.im,
+            m.abs,
+            m.frequency,
+            m.damping_ratio,
             master
         ));
     }
@@ -50,6 +48,8 @@ pub struct Products<'a> {
     pub backbone: Option<&'a [BackboneCurve]>,
     /// Reduced transient.
     pub transient: Option<&'a LiftedTransient>,
+    /// The finite spectrum's frequencies and damping ratios.
+    pub modal: &'a [ModalFigures],
     /// Everything `summary.json` reports (also the FRC, validation and report).
     pub summary: Summary<'a>,
 }
@@ -89,7 +89,7 @@ pub fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
         out.add("report.svg", report::svg(r)?);
     }
     let pair_index: Vec<(usize, usize)> = s.masters.iter().map(|m| (m.pair, m.index)).collect();
-    out.add("spectrum.csv", spectrum_csv(s.spectrum, &pair_index));
+    out.add("spectrum.csv", spectrum_csv(p.modal, &pair_index));
     out.add("summary.json", summary_json(s));
     Ok(out)
 }

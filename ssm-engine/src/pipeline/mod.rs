@@ -242,8 +242,10 @@ pub fn run(
     let names: Vec<String> = coordinates.iter().map(|o| o.name.clone()).collect();
     let pairs = sc.ssm.master_pairs.get_ref();
     timing.total = t0.elapsed().as_secs_f64();
+    let modal = sp.spectrum.modal_figures();
     let outputs = result_files(&Products {
         coordinates: &names,
+        modal: &modal,
         backbone: answers.backbone.as_deref(),
         transient: answers.transient.as_ref(),
         summary: Summary {

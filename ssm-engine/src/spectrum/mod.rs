@@ -13,7 +13,7 @@
 //!
 //! Master modes are then polished by inverse iteration with a complex sparse LU
 //! of `A - lambda B` (right vector) and its adjoint (left vector), and scaled by
-//! the scene's [`Normalization`].
+//! a [`Normalization`].
 //!
 //! # References
 //! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical systems
@@ -22,13 +22,14 @@
 
 pub mod dense;
 pub mod modes;
+mod normalization;
 pub mod resonance;
 pub mod sparse;
 
-use crate::scene::Normalization;
 use crate::C64;
 
 pub use modes::{master_modes, MasterMode};
+pub use normalization::Normalization;
 pub use resonance::{check_resonances, ResonanceReport, SpectralQuotients};
 
 /// Largest number of states for which `auto` uses the dense path.
@@ -121,6 +122,37 @@ pub struct Spectrum {
     pub complete: bool,
     /// Solver used.
     pub method: Method,
+}
+
+/// What a structural dynamicist reads off one finite eigenvalue `lambda`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModalFigures {
+    /// The eigenvalue.
+    pub lambda: C64,
+    /// `|lambda|`, the undamped natural frequency of an underdamped pair.
+    pub abs: f64,
+    /// `|Im lambda|`, the damped frequency.
+    pub frequency: f64,
+    /// `-Re lambda / |lambda|` (0 at `lambda = 0`).
+    pub damping_ratio: f64,
+}
+
+impl Spectrum {
+    /// [`ModalFigures`] of every eigenvalue, in order.
+    pub fn modal_figures(&self) -> Vec<ModalFigures> {
+        self.eigenvalues
+            .iter()
+            .map(|&lambda| {
+                let abs = lambda.norm();
+                ModalFigures {
+                    lambda,
+                    abs,
+                    frequency: lambda.im.abs(),
+                    damping_ratio: if abs > 0.0 { -lambda.re / abs } else { 0.0 },
+                }
+            })
+            .collect()
+    }
 }
 
 /// Options for [`compute`].

@@ -21,9 +21,9 @@ use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
 use faer::Mat;
 
 use super::sparse::pseudo_random;
+use super::Normalization;
 use super::{pair_starts, Spectrum, SpectrumError};
 use crate::model::system::System;
-use crate::scene::Normalization;
 use crate::C64;
 
 /// One master mode (the member of its pair with positive imaginary part).

@@ -766,6 +766,3 @@ fn shift_poly(p: &PolyVector, eq: &[f64], big_n: usize) -> PolyVector {
     }
     out
 }
-
-#[cfg(test)]
-mod tests;

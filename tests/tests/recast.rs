@@ -6,12 +6,12 @@
 
 use ssm_api::{Constraints, Equilibrium, Expr, MechanicalSystem, SparseMatrix};
 
-use super::AuxKind;
-use crate::model::system::{ModelError, System};
-use crate::poly::eval_poly;
-use crate::spectrum::dense::finite_eigenvalues;
-use crate::spectrum::modes::spmv;
-use crate::C64;
+use ssm_engine::model::recast::{AuxKind, RecastError};
+use ssm_engine::model::system::{ModelError, System};
+use ssm_engine::poly::eval_poly;
+use ssm_engine::spectrum::dense::finite_eigenvalues;
+use ssm_engine::spectrum::modes::spmv;
+use ssm_engine::C64;
 
 /// Two dofs and one constraint using every supported function, nested ones
 /// and a velocity inside a reciprocal; every term vanishes at the origin.
@@ -164,7 +164,7 @@ fn bad_models_give_typed_errors() {
     s.force_expressions = vec![(1, Expr::constant(-9.8)), (0, Expr::var(0).sin())];
     let e = recast_err(s.clone());
     assert!(
-        matches!(&e, super::RecastError::NotAnEquilibrium { state, .. } if state == "y"),
+        matches!(&e, RecastError::NotAnEquilibrium { state, .. } if state == "y"),
         "{e}"
     );
     // with a consistent equilibrium (a spring holds y) the model is accepted
@@ -180,7 +180,7 @@ fn bad_models_give_typed_errors() {
     s.force_expressions = vec![(0, Expr::var(1).sin())];
     let e = recast_err(s);
     assert!(
-        matches!(&e, super::RecastError::NoTimeDerivative { state, .. } if state == "x_dot"),
+        matches!(&e, RecastError::NoTimeDerivative { state, .. } if state == "x_dot"),
         "{e}"
     );
     // ln at a zero argument
@@ -189,7 +189,7 @@ fn bad_models_give_typed_errors() {
     s.force_expressions = vec![(0, Expr::var(0).ln())];
     let e = recast_err(s);
     assert!(
-        matches!(&e, super::RecastError::Singular { function: "ln", .. }),
+        matches!(&e, RecastError::Singular { function: "ln", .. }),
         "{e}"
     );
 }
