@@ -6,6 +6,7 @@ use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
 use crate::compare::validation::SteadyReference;
+use crate::rom::accuracy::percent;
 use crate::rom::forced_response::{CurveDetails, ForcedResponse};
 
 /// `frc.csv`: `order,epsilon,omega,stable,branch,<out>_linf...,rho_1..rho_m,<out>_h1...`.
@@ -64,9 +65,10 @@ fn curves(f: &ForcedResponse) -> Vec<Curve> {
                     String::new()
                 } else {
                     format!(
-                        "O({}), eps = {}{}",
+                        "O({}), eps = {}, estimated error {}{}",
                         c.order,
                         c.epsilon,
+                        percent(c.error_estimate()),
                         if c.untrusted {
                             "  UNTRUSTED: error estimate above [ssm] tolerance"
                         } else {
@@ -176,7 +178,10 @@ pub fn frc_json(f: &ForcedResponse) -> Value {
                 CurveDetails::Continuation {
                     branch_switches,
                     continuation_steps,
+                    error_estimate,
                 } => {
+                    v["error_estimate"] =
+                        json!(error_estimate.is_finite().then_some(error_estimate));
                     v["branch_switches"] = json!(branch_switches);
                     v["continuation_steps"] = json!(continuation_steps);
                 }

@@ -5,6 +5,7 @@
 use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::rom::accuracy::percent;
 use crate::rom::autonomous::{BackboneCurve, InvarianceEntry, LiftedTransient};
 use crate::ssm::analysis::Polar;
 use crate::ssm::{Dynamics, RTerm, SsmExpansion};
@@ -47,24 +48,41 @@ pub fn invariance_json(rows: &[InvarianceEntry]) -> Value {
         .collect()
 }
 
-/// `backbone.csv`: `order,rho,omega,<output>...`.
+/// `backbone.csv`: `order,rho,omega,<output>...,error_estimate` (the last
+/// empty where there is no estimate).
 pub fn backbone_csv(curves: &[BackboneCurve], outputs: &[String]) -> String {
     let mut csv = String::from("order,rho,omega");
     for o in outputs {
         csv.push(',');
         csv.push_str(o);
     }
-    csv.push('\n');
+    csv.push_str(",error_estimate\n");
     for c in curves {
         for p in &c.points {
             csv.push_str(&format!("{},{:.10e},{:.10e}", c.order, p.rho, p.omega));
             for a in &p.amplitudes {
                 csv.push_str(&format!(",{a:.10e}"));
             }
+            csv.push(',');
+            if let Some(e) = p.error_estimate.filter(|e| e.is_finite()) {
+                csv.push_str(&format!("{e:.3e}"));
+            }
             csv.push('\n');
         }
     }
     csv
+}
+
+/// A curve's legend: its order, estimate and, above the target, a warning.
+fn estimate_label(order: usize, estimate: Option<f64>, untrusted: bool) -> String {
+    let mut label = format!("O({order})");
+    if let Some(e) = estimate {
+        label.push_str(&format!(", estimated error {}", percent(e)));
+    }
+    if untrusted {
+        label.push_str("  UNTRUSTED: error estimate above [ssm] tolerance");
+    }
+    label
 }
 
 /// `backbone.svg`: omega against the amplitude of the first output (or
@@ -73,7 +91,7 @@ pub fn backbone_svg(curves: &[BackboneCurve], outputs: &[String]) -> Result<Stri
     let drawn: Vec<Curve> = curves
         .iter()
         .map(|c| Curve {
-            label: format!("O({})", c.order),
+            label: estimate_label(c.order, c.error_estimate, c.untrusted),
             points: c
                 .points
                 .iter()

@@ -9,6 +9,7 @@ use crate::compare::validation::Validation;
 use crate::model::plugin::PluginOrigin;
 use crate::model::system::System;
 use crate::reduce::Reduction;
+use crate::rom::accuracy::Accuracy;
 use crate::rom::autonomous::InvarianceEntry;
 use crate::rom::forced_response::ForcedResponse;
 use crate::spectrum::{MasterMode, SpectralQuotients, Spectrum};
@@ -68,6 +69,8 @@ pub struct Summary<'a> {
     pub validation: Option<&'a Validation>,
     /// Speed-against-error report.
     pub report: Option<&'a Report>,
+    /// The accuracy target, the order and every answer's estimate.
+    pub accuracy: &'a Accuracy,
     /// Warnings of the run.
     pub warnings: &'a [String],
     /// Stage timings.
@@ -122,6 +125,7 @@ pub fn summary_json(s: &Summary<'_>) -> String {
         "frc": s.frc.map(frc::frc_json),
         "validation": s.validation.map(validation::validation_json),
         "report": s.report.map(report::json),
+        "accuracy": accuracy_json(s.accuracy),
         "warnings": s.warnings,
         "timing_s": {
             "spectrum": t.spectrum,
@@ -143,6 +147,29 @@ pub fn summary_json(s: &Summary<'_>) -> String {
         },
     });
     serde_json::to_string_pretty(&value).expect("JSON values are serializable")
+}
+
+/// `"accuracy"`: the target, the order (and how it was set), and the error
+/// estimate of each answer.
+fn accuracy_json(a: &Accuracy) -> Value {
+    let finite = |e: Option<f64>| e.filter(|x| x.is_finite());
+    json!({
+        "tolerance": a.tolerance,
+        "order": a.order,
+        "order_from": if a.chosen { "tolerance" } else { "scene" },
+        "orders_tried": a.tried.iter().map(|(o, e)| json!({
+            "order": o,
+            "largest_estimate": finite(*e),
+        })).collect::<Vec<_>>(),
+        "answers": a.answers.iter().map(|x| json!({
+            "answer": x.answer,
+            "order": x.order,
+            "epsilon": x.epsilon,
+            "error_estimate": finite(x.estimate),
+            "diverged": x.estimate.is_some_and(|e| !e.is_finite()),
+            "untrusted": x.untrusted,
+        })).collect::<Vec<_>>(),
+    })
 }
 
 fn reduction_json(r: &Reduction) -> Value {

@@ -17,7 +17,7 @@ use std::ops::Range;
 
 use super::error::JobError;
 use crate::model::system::System;
-use crate::scene::SceneFile;
+use crate::scene::{SceneFile, AUTO_MAX_ORDER};
 use crate::spectrum::{MasterMode, DENSE_LIMIT};
 use crate::ssm::Dynamics;
 
@@ -181,8 +181,13 @@ fn within(cost: &Cost, limits: &Limits) -> bool {
 
 /// Before the spectral stage: the dense spectrum (a QZ iteration on the
 /// `N x N` pencil, about `70 N^3` operations on 6 dense complex matrices) and
-/// the SSM order (see [`check_order`]).
-pub fn check_spectrum(scene: &SceneFile, system: &System, limits: &Limits) -> Result<(), JobError> {
+/// the SSM order (see [`order_ceiling`]); returns the highest order the run
+/// may compute.
+pub fn check_spectrum(
+    scene: &SceneFile,
+    system: &System,
+    limits: &Limits,
+) -> Result<usize, JobError> {
     use crate::scene::SpectrumMethod;
     let n = system.n_states() as f64;
     let dense = match scene.scene.spectrum.method {
@@ -207,30 +212,62 @@ pub fn check_spectrum(scene: &SceneFile, system: &System, limits: &Limits) -> Re
         )?;
     }
     let pairs = scene.scene.ssm.master_pairs.get_ref().len().max(1);
-    check_order(scene, system, pairs, limits)
+    order_ceiling(scene, system, pairs, limits)
 }
 
-/// The SSM order against the limits, with `pairs` master pairs. Run before
-/// the spectral stage too (with the scene's pairs), since the eq. (53)
-/// resonance check there enumerates the multi-indices up to the order.
-fn check_order(
+/// The highest SSM order of the run, with `pairs` master pairs: the scene's
+/// `[ssm] order`, checked against the limits; without one, the highest odd
+/// order up to [`AUTO_MAX_ORDER`] that the limits allow (not below 3 nor
+/// the orders the answers name), which the pipeline may then lower. Run
+/// before the spectral stage, since the eq. (53) resonance check there
+/// enumerates the multi-indices up to this order.
+pub fn order_ceiling(
     scene: &SceneFile,
     system: &System,
     pairs: usize,
     limits: &Limits,
-) -> Result<(), JobError> {
+) -> Result<usize, JobError> {
+    if let Some(o) = &scene.scene.ssm.order {
+        check_order(scene, system, pairs, *o.get_ref(), limits)?;
+        return Ok(*o.get_ref());
+    }
+    let floor = scene.highest_named_order().max(3);
+    let top = (floor..=AUTO_MAX_ORDER.max(floor))
+        .rev()
+        .filter(|o| o % 2 == 1 || *o == floor)
+        .find(|&o| within(&order_cost(scene, system, pairs, o), limits));
+    match top {
+        Some(o) => Ok(o),
+        None => check_order(scene, system, pairs, floor, limits).map(|()| floor),
+    }
+}
+
+/// The SSM to `order` with `pairs` master pairs, rebuilt by the report.
+fn order_cost(scene: &SceneFile, system: &System, pairs: usize, order: usize) -> Cost {
     let sc = &scene.scene;
-    let sizes = Sizes::of(system);
-    let order = *sc.ssm.order.get_ref();
     let forced = sc.forcing.is_some() || sc.validate.is_some();
-    let mut ssm = ssm_cost(&sizes, pairs, order, forced);
+    let mut ssm = ssm_cost(&Sizes::of(system), pairs, order, forced);
     if sc.report.is_some() {
         // the report rebuilds the SSM at each of its orders (at most `order`)
         ssm.ops *= order as f64;
     }
+    ssm
+}
+
+/// The SSM order against the limits, with `pairs` master pairs.
+fn check_order(
+    scene: &SceneFile,
+    system: &System,
+    pairs: usize,
+    order: usize,
+    limits: &Limits,
+) -> Result<(), JobError> {
+    let sc = &scene.scene;
+    let sizes = Sizes::of(system);
+    let ssm = order_cost(scene, system, pairs, order);
     ensure(
         scene,
-        sc.ssm.order.span(),
+        sc.ssm.order_span(),
         "ssm.order",
         format!(
             "an SSM of order {order} with {pairs} master pair(s) of a {}-state model",
@@ -238,7 +275,11 @@ fn check_order(
         ),
         &ssm,
         limits,
-        "lower the order",
+        if sc.ssm.order.is_some() {
+            "lower the order"
+        } else {
+            "no [ssm] order was given and this is the lowest the answers need: lower the orders they name, or the master pairs"
+        },
     )?;
     Ok(())
 }
@@ -267,19 +308,19 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
 }
 
 /// Checks every request of `scene` against `limits`, once the model and its
-/// master modes are known and before the SSM is computed.
+/// master modes are known and before the SSM is computed to `order`.
 pub fn check(
     scene: &SceneFile,
     system: &System,
     masters: &[MasterMode],
+    order: usize,
     limits: &Limits,
 ) -> Result<(), JobError> {
     let sc = &scene.scene;
     let sizes = Sizes::of(system);
     let pairs = masters.len().max(1);
     let nvar = 2 * pairs;
-    let order = *sc.ssm.order.get_ref();
-    check_order(scene, system, pairs, limits)?;
+    check_order(scene, system, pairs, order, limits)?;
     let n_idx = multi_indices(nvar, order);
     let omega = masters
         .iter()

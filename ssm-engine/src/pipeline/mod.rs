@@ -28,6 +28,7 @@ use crate::output::summary::{Summary, Timing};
 use crate::output::{result_files, OutputSet, Products};
 use crate::reduce::scene::reduce_scene;
 use crate::reduce::Reduction;
+use crate::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
 use crate::rom::autonomous::{self, BackboneCurve, InvarianceEntry, LiftedTransient};
 use crate::rom::forced_response::{forced_response, ForcedResponse};
 use crate::scene::SceneFile;
@@ -81,37 +82,231 @@ struct Autonomous {
     transient: Option<LiftedTransient>,
 }
 
-/// Backbone, invariance error and reduced transient of `[outputs]`.
-fn autonomous_answers(
-    scene: &SceneFile,
-    expansion: &SsmExpansion,
-    system: &System,
-    coordinates: &[&OutputMap],
-) -> Result<Autonomous, JobError> {
-    let out = &scene.scene.outputs;
-    Ok(Autonomous {
-        invariance: out
-            .invariance_error
+/// The SSM at one order and every answer read off it, with the seconds spent.
+struct Reduced {
+    expansion: SsmExpansion,
+    answers: Autonomous,
+    frc: Option<ForcedResponse>,
+    estimates: Vec<AnswerEstimate>,
+    ssm_s: f64,
+    results_s: f64,
+    frc_s: f64,
+}
+
+/// What every order tried shares.
+struct Stage<'a> {
+    scene: &'a SceneFile,
+    system: &'a System,
+    sp: &'a Spectral,
+    others: &'a [C64],
+    coordinates: &'a [&'a OutputMap],
+    progress: &'a dyn Progress,
+}
+
+impl Stage<'_> {
+    /// The SSM to `order`, the backbone, invariance error and transient of
+    /// `[outputs]`, the forced response of `[forcing]`, and their estimates.
+    fn at(&self, order: usize) -> Result<Reduced, JobError> {
+        let sc = &self.scene.scene;
+        let tolerance = *sc.ssm.tolerance.get_ref();
+        let (sys, masters) = (self.system, &self.sp.masters);
+        self.progress.stage(&format!("SSM to order {order}"));
+        let t = Instant::now();
+        let options = SsmOptions {
+            order,
+            resonance_tol: *sc.ssm.resonance_tol.get_ref(),
+        };
+        let expansion = ssm::compute(sys, masters, self.others, &options)?;
+        let ssm_s = t.elapsed().as_secs_f64();
+
+        self.progress
+            .stage("backbone, invariance error, transients");
+        let t = Instant::now();
+        let out = &sc.outputs;
+        let answers = Autonomous {
+            invariance: out
+                .invariance_error
+                .as_ref()
+                .map(|sec| autonomous::invariance_table(&expansion, sys, sec))
+                .transpose()?,
+            backbone: out
+                .backbone
+                .as_ref()
+                .map(|sec| {
+                    let coords = self.coordinates;
+                    autonomous::backbone(&expansion, sys, &masters[0], sec, coords, tolerance)
+                })
+                .transpose()?,
+            transient: out
+                .transient
+                .as_ref()
+                .map(|sec| {
+                    let coords = self.coordinates;
+                    autonomous::transient(&expansion, sys, masters, sec, coords, tolerance)
+                })
+                .transpose()?,
+        };
+        let results_s = t.elapsed().as_secs_f64();
+
+        let t = Instant::now();
+        let frc = sc
+            .forcing
             .as_ref()
-            .map(|sec| autonomous::invariance_table(expansion, system, sec))
-            .transpose()?,
-        backbone: out
-            .backbone
-            .as_ref()
-            .map(|sec| autonomous::backbone(expansion, sec, coordinates))
-            .transpose()?,
-        transient: out
+            .map(|sec| {
+                self.progress.stage("forced response curves");
+                forced_response(&expansion, sys, masters, sec, self.coordinates, tolerance)
+            })
+            .transpose()?;
+        let frc_s = t.elapsed().as_secs_f64();
+        let transient_order = out
             .transient
             .as_ref()
-            .map(|sec| autonomous::transient(expansion, sec, coordinates))
-            .transpose()?,
-    })
+            .and_then(|t| t.order.as_ref())
+            .map_or(order, |o| *o.get_ref());
+        let estimates = estimates(&answers, transient_order, frc.as_ref());
+        Ok(Reduced {
+            expansion,
+            answers,
+            frc,
+            estimates,
+            ssm_s,
+            results_s,
+            frc_s,
+        })
+    }
+
+    /// Without an `[ssm] order`: the lowest odd order from the highest the
+    /// answers name (at least 3) up to `ceiling` whose answers meet the
+    /// tolerance; raising stops where two orders in a row bring no better
+    /// estimate (the answers lie beyond the expansion's convergence radius)
+    /// or an order cannot be computed, and the best order so far is kept.
+    fn choose(
+        &self,
+        ceiling: usize,
+        warnings: &mut Vec<String>,
+    ) -> Result<(Reduced, OrdersTried), JobError> {
+        let tolerance = *self.scene.scene.ssm.tolerance.get_ref();
+        let mut order = self.scene.highest_named_order().max(3).min(ceiling);
+        let mut tried = Vec::new();
+        let mut best: Option<(f64, Reduced)> = None;
+        let mut spent = [0.0; 3];
+        let mut stalls = 0;
+        loop {
+            let reduced = match self.at(order) {
+                Ok(r) => {
+                    spent[0] += r.ssm_s;
+                    spent[1] += r.results_s;
+                    spent[2] += r.frc_s;
+                    r
+                }
+                Err(e) if best.is_some() => {
+                    warnings.push(format!(
+                        "the engine could not raise the expansion order to {order} to meet [ssm] tolerance: {e}"
+                    ));
+                    break;
+                }
+                Err(e) => return Err(e),
+            };
+            let worst = Accuracy::worst(&reduced.estimates);
+            tried.push((order, worst));
+            let Some(e) = worst else {
+                // nothing estimated: the lowest order serves
+                best = Some((0.0, reduced));
+                break;
+            };
+            if best.as_ref().is_none_or(|(b, _)| e < *b) {
+                best = Some((e, reduced));
+                stalls = 0;
+            } else {
+                stalls += 1;
+            }
+            // two orders in a row without a better estimate: the answers lie
+            // beyond the convergence radius (one is not enough: the odd and
+            // even halves of some series converge at different rates)
+            if e <= tolerance || stalls == 2 || order + 2 > ceiling {
+                break;
+            }
+            order += 2;
+        }
+        let (e, mut reduced) = best.expect("at least one order was computed");
+        // the time of every order tried
+        [reduced.ssm_s, reduced.results_s, reduced.frc_s] = spent;
+        if e > tolerance {
+            warnings.push(format!(
+                "no expansion order up to {} meets the accuracy target {} ([ssm] tolerance); the answers are kept at order {} with an estimated error of {}: lower the amplitudes asked for (rho_max, rho0, epsilon) or widen the tolerance",
+                tried.last().map_or(order, |t| t.0),
+                percent(tolerance),
+                reduced.expansion.order,
+                percent(e),
+            ));
+        }
+        Ok((reduced, tried))
+    }
+}
+
+/// The error estimate of every estimated answer.
+fn estimates(
+    answers: &Autonomous,
+    transient_order: usize,
+    frc: Option<&ForcedResponse>,
+) -> Vec<AnswerEstimate> {
+    let mut list = Vec::new();
+    for c in answers.backbone.iter().flatten() {
+        list.push(AnswerEstimate {
+            answer: "backbone",
+            order: c.order,
+            epsilon: None,
+            estimate: c.error_estimate,
+            untrusted: c.untrusted,
+        });
+    }
+    if let Some(t) = &answers.transient {
+        list.push(AnswerEstimate {
+            answer: "transient",
+            order: transient_order,
+            epsilon: None,
+            estimate: t.error_estimate,
+            untrusted: t.untrusted,
+        });
+    }
+    for c in frc.iter().flat_map(|f| &f.curves) {
+        list.push(AnswerEstimate {
+            answer: "frc",
+            order: c.order,
+            epsilon: Some(c.epsilon),
+            estimate: Some(c.error_estimate()),
+            untrusted: c.untrusted,
+        });
+    }
+    list
+}
+
+/// Loud warnings for the autonomous answers whose estimate exceeds the
+/// tolerance (forced responses warn where they are computed).
+fn untrusted_warnings(estimates: &[AnswerEstimate], tolerance: f64) -> Vec<String> {
+    estimates
+        .iter()
+        .filter(|a| a.untrusted && a.answer != "frc")
+        .map(|a| {
+            format!(
+                "{} O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance); do not trust it: {}",
+                a.answer,
+                a.order,
+                percent(a.estimate.unwrap_or(f64::NAN)),
+                percent(tolerance),
+                if a.answer == "backbone" {
+                    "lower [outputs.backbone] rho_max or raise the expansion order"
+                } else {
+                    "start nearer the equilibrium (rho0), shorten t_end or raise the expansion order"
+                }
+            )
+        })
+        .collect()
 }
 
 /// The orders of the report: those of `[report]`, else the odd orders from 3
-/// up to the `[ssm]` order, which is always included.
-fn report_orders(scene: &SceneFile) -> Vec<usize> {
-    let max = *scene.scene.ssm.order.get_ref();
+/// up to the expansion order `max`, which is always included.
+fn report_orders(scene: &SceneFile, max: usize) -> Vec<usize> {
     scene
         .scene
         .report
@@ -145,45 +340,45 @@ pub fn run(
     let coordinates = checks::coordinates(scene, &system)?;
 
     let limits = budget::Limits::of_machine();
-    budget::check_spectrum(scene, &system, &limits)?;
+    let ceiling = budget::check_spectrum(scene, &system, &limits)?;
     progress.stage("spectrum");
-    let sp = spectral::spectral(scene, &system)?;
+    let sp = spectral::spectral(scene, &system, ceiling)?;
     timing.spectrum = sp.spectrum_s;
     timing.resonance_check = sp.resonance_s;
-    budget::check(scene, &system, &sp.masters, &limits)?;
+    budget::check(scene, &system, &sp.masters, ceiling, &limits)?;
 
-    progress.stage("SSM");
-    let t = Instant::now();
     let others: Vec<C64> = ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
-    let ssm_options = SsmOptions {
-        order: *sc.ssm.order.get_ref(),
-        resonance_tol: *sc.ssm.resonance_tol.get_ref(),
+    let stage = Stage {
+        scene,
+        system: &system,
+        sp: &sp,
+        others: &others,
+        coordinates: &coordinates,
+        progress,
     };
-    let expansion = ssm::compute(&system, &sp.masters, &others, &ssm_options)?;
-    timing.ssm = t.elapsed().as_secs_f64();
-
-    progress.stage("backbone, invariance error, transients");
-    let t = Instant::now();
-    let answers = autonomous_answers(scene, &expansion, &system, &coordinates)?;
-    timing.results = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let frc = sc
-        .forcing
-        .as_ref()
-        .map(|sec| {
-            progress.stage("forced response curves");
-            forced_response(
-                &expansion,
-                &system,
-                &sp.masters,
-                sec,
-                &coordinates,
-                *sc.ssm.tolerance.get_ref(),
-            )
-        })
-        .transpose()?;
-    timing.frc = t.elapsed().as_secs_f64();
+    let mut warnings = sp.warnings.clone();
+    let tolerance = *sc.ssm.tolerance.get_ref();
+    let (reduced, tried) = match &sc.ssm.order {
+        Some(_) => (stage.at(ceiling)?, Vec::new()),
+        None => stage.choose(ceiling, &mut warnings)?,
+    };
+    let Reduced {
+        expansion,
+        answers,
+        frc,
+        estimates,
+        ..
+    } = reduced;
+    timing.ssm = reduced.ssm_s;
+    timing.results = reduced.results_s;
+    timing.frc = reduced.frc_s;
+    let accuracy = Accuracy {
+        tolerance,
+        order: expansion.order,
+        chosen: sc.ssm.order.is_none(),
+        tried,
+        answers: estimates,
+    };
 
     let t = Instant::now();
     let mut compared = coordinates.clone();
@@ -209,12 +404,12 @@ pub fn run(
     let speed = match &sc.report {
         Some(_) => {
             progress.stage("speed-against-error report");
-            let orders = report_orders(scene);
+            let orders = report_orders(scene, expansion.order);
             let inputs = ReportInputs {
                 orders: &orders,
                 masters: &sp.masters,
                 others: &others,
-                resonance_tol: ssm_options.resonance_tol,
+                resonance_tol: *sc.ssm.resonance_tol.get_ref(),
                 outputs: &compared,
                 forcing: sc.forcing.as_ref(),
                 validation: checked.as_ref(),
@@ -231,10 +426,10 @@ pub fn run(
     };
     timing.report = t.elapsed().as_secs_f64();
 
-    let mut warnings = sp.warnings.clone();
     if let Some(f) = &frc {
         warnings.extend(f.warnings.iter().cloned());
     }
+    warnings.extend(untrusted_warnings(&accuracy.answers, tolerance));
     progress.stage("writing outputs");
     let polar_form = (expansion.dynamics == Dynamics::Flow)
         .then(|| polar(&expansion).ok())
@@ -264,6 +459,7 @@ pub fn run(
             frc: frc.as_ref(),
             validation: checked.as_ref(),
             report: speed.as_ref(),
+            accuracy: &accuracy,
             warnings: &warnings,
             timing,
         },

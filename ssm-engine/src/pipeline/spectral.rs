@@ -35,7 +35,7 @@ pub struct Spectral {
 }
 
 /// Runs the spectral stage of `scene` on `system`.
-pub fn spectral(scene: &SceneFile, system: &System) -> Result<Spectral, JobError> {
+pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spectral, JobError> {
     let sc = &scene.scene;
     let t_spec = Instant::now();
     let mut warnings = Vec::new();
@@ -139,7 +139,7 @@ pub fn spectral(scene: &SceneFile, system: &System) -> Result<Spectral, JobError
     let resonances = check_resonances(
         &rates,
         &master_indices,
-        *sc.ssm.order.get_ref(),
+        order,
         *sc.ssm.resonance_tol.get_ref(),
         spectrum.complete,
     );

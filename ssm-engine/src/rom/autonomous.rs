@@ -5,10 +5,13 @@
 //! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical
 //! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023): backbone
 //! curves from the polar form of the reduced dynamics (Sect. 3.3), the
-//! invariance error eq. (41), reduced transients (Figs. 4, 10, 14).
+//! invariance error eq. (41), reduced transients (Figs. 4, 10, 14); their
+//! error estimates are those of [`crate::rom::accuracy`].
 
 use crate::model::system::{OutputMap, System};
+use crate::rom::accuracy;
 use crate::scene::{BackboneSection, InvarianceErrorSection, TransientSection};
+use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar, PolarError};
 use crate::ssm::rom::{integrate, RomError};
 use crate::ssm::SsmExpansion;
@@ -42,6 +45,9 @@ pub struct BackbonePoint {
     pub omega: f64,
     /// Amplitude of each requested output.
     pub amplitudes: Vec<f64>,
+    /// Estimated relative error ([`accuracy::backbone_error`], interpolated
+    /// between the amplitudes where it is evaluated); `None` for maps.
+    pub error_estimate: Option<f64>,
 }
 
 /// A backbone curve of one expansion order.
@@ -51,14 +57,27 @@ pub struct BackboneCurve {
     pub order: usize,
     /// Points from `rho = 0` to `rho_max`.
     pub points: Vec<BackbonePoint>,
+    /// The largest estimated relative error on the curve; `None` for maps.
+    pub error_estimate: Option<f64>,
+    /// The estimate exceeds the accuracy target (or is not finite).
+    pub untrusted: bool,
 }
 
+/// Amplitudes of a backbone at which its error is evaluated (the rest are
+/// interpolated: the estimate grows smoothly, like `rho^(order - 1)`).
+const BACKBONE_ESTIMATES: usize = 17;
+
 /// Backbone curves of `sec` (one per order) on `points` amplitudes in
-/// `[0, rho_max]`; the amplitudes of `outputs` are read off `W`.
+/// `[0, rho_max]`; the amplitudes of `outputs` are read off `W`; each point
+/// with its error estimate, each curve checked against the relative
+/// `tolerance`.
 pub fn backbone(
     ssm: &SsmExpansion,
+    sys: &System,
+    master: &MasterMode,
     sec: &BackboneSection,
     outputs: &[&OutputMap],
+    tolerance: f64,
 ) -> Result<Vec<BackboneCurve>, ResultError> {
     let p = polar(ssm)?;
     let orders = sec
@@ -91,11 +110,64 @@ pub fn backbone(
                 rho,
                 omega,
                 amplitudes,
+                error_estimate: None,
             });
         }
-        curves.push(BackboneCurve { order, points });
+        let error_estimate = estimate_along(&mut points, |rho| {
+            accuracy::backbone_error(ssm, sys, master, rho, order)
+        });
+        curves.push(BackboneCurve {
+            order,
+            points,
+            error_estimate,
+            untrusted: error_estimate.is_some_and(|e| accuracy::exceeds(e, tolerance)),
+        });
     }
     Ok(curves)
+}
+
+/// Fills the points' error estimates: `estimate` at
+/// [`BACKBONE_ESTIMATES`] evenly spaced points, linear in `rho` in between;
+/// returns the largest (NaN when one is not finite).
+fn estimate_along(
+    points: &mut [BackbonePoint],
+    estimate: impl Fn(f64) -> Option<f64>,
+) -> Option<f64> {
+    let n = points.len();
+    let stride = (n - 1).div_ceil(BACKBONE_ESTIMATES - 1).max(1);
+    let mut knots: Vec<(usize, f64)> = Vec::new();
+    for i in (0..n)
+        .step_by(stride)
+        .chain(((n - 1) % stride != 0).then_some(n - 1))
+    {
+        let e = if points[i].rho == 0.0 {
+            Some(0.0)
+        } else {
+            estimate(points[i].rho)
+        };
+        knots.push((i, e?));
+    }
+    for w in knots.windows(2) {
+        let ((i0, e0), (i1, e1)) = (w[0], w[1]);
+        let (r0, r1) = (points[i0].rho, points[i1].rho);
+        for p in &mut points[i0..=i1] {
+            let s = if r1 > r0 {
+                (p.rho - r0) / (r1 - r0)
+            } else {
+                0.0
+            };
+            p.error_estimate = Some(e0 + s * (e1 - e0));
+        }
+    }
+    if let [(i, e)] = knots[..] {
+        points[i].error_estimate = Some(e);
+    }
+    Some(
+        knots
+            .iter()
+            .map(|k| k.1)
+            .fold(0.0, |a, e| if e.is_nan() { e } else { a.max(e) }),
+    )
 }
 
 /// One entry of the invariance-error table.
@@ -165,13 +237,21 @@ pub struct LiftedTransient {
     pub polar: Vec<Vec<(f64, f64)>>,
     /// Accepted steps of the reduced integration.
     pub steps: usize,
+    /// Estimated relative error ([`accuracy::transient_error`]); `None` for maps.
+    pub error_estimate: Option<f64>,
+    /// The estimate exceeds the accuracy target (or is not finite).
+    pub untrusted: bool,
 }
 
-/// The reduced model of `sec` integrated from `(rho0, theta0)` and lifted by `W`.
+/// The reduced model of `sec` integrated from `(rho0, theta0)` and lifted by
+/// `W`, with its error estimate checked against the relative `tolerance`.
 pub fn transient(
     ssm: &SsmExpansion,
+    sys: &System,
+    masters: &[MasterMode],
     sec: &TransientSection,
     outputs: &[&OutputMap],
+    tolerance: f64,
 ) -> Result<LiftedTransient, ResultError> {
     let order = sec.order.as_ref().map_or(ssm.order, |o| *o.get_ref());
     let m = ssm.dim() / 2;
@@ -211,10 +291,13 @@ pub fn transient(
         values.push(row);
         polar.push((0..m).map(|i| (p[2 * i].norm(), p[2 * i].arg())).collect());
     }
+    let error_estimate = accuracy::transient_error(ssm, sys, masters, &tr.times, &tr.states, order);
     Ok(LiftedTransient {
         times: tr.times,
         outputs: values,
         polar,
         steps: tr.steps,
+        error_estimate,
+        untrusted: error_estimate.is_some_and(|e| accuracy::exceeds(e, tolerance)),
     })
 }

@@ -10,6 +10,7 @@
 //! (eq. 16, internal resonances), Fig. 15.
 
 use crate::model::system::{OutputMap, System};
+use crate::rom::accuracy::{self, percent};
 use crate::rom::continuation::{
     Branch, BranchPoint, LocatedKind, PolarTerm, RotatingFrame, Settings,
 };
@@ -67,6 +68,57 @@ fn period_multiple(ratios: &[f64]) -> f64 {
         .map_or(1.0, f64::from)
 }
 
+/// Estimated relative error of the response at the point `row` of a curve:
+/// the eq. (60) residual (leading non-autonomous order) along its periodic
+/// orbit `p_j = q_j e^{i r_j phi}`, `phi` over `periods` forcing periods,
+/// projected on each master pair ([`accuracy::defect`]) and summed over the
+/// pairs, relative to `|q|`, with `R` and `W` truncated at `order`.
+#[allow(clippy::too_many_arguments)]
+fn orbit_error(
+    ssm: &SsmExpansion,
+    sys: &System,
+    masters: &[MasterMode],
+    forced: &mut ForcedSsm,
+    row: &FrcRow,
+    ratios: &[f64],
+    periods: f64,
+    order: usize,
+) -> Result<f64, FrcError> {
+    let scale = row.rho;
+    if scale == 0.0 {
+        return Ok(0.0);
+    }
+    let na = forced.expansion(ssm, sys, row.omega, 0)?;
+    let d = periods.round() as usize;
+    let n = accuracy::PHASES * d;
+    let mut modal = vec![Vec::with_capacity(n); masters.len()];
+    for k in 0..n {
+        let phi = 2.0 * std::f64::consts::PI * periods * k as f64 / n as f64;
+        let p: Vec<C64> = row
+            .q
+            .iter()
+            .zip(ratios)
+            .flat_map(|(q, r)| {
+                let z = q * C64::from_polar(1.0, r * phi);
+                [z, z.conj()]
+            })
+            .collect();
+        let r = na.residual(ssm, sys, row.epsilon, &p, phi, order);
+        for (mj, m) in modal.iter_mut().zip(masters) {
+            mj.push(m.left.iter().zip(&r).map(|(u, x)| u.conj() * x).sum());
+        }
+    }
+    Ok(masters
+        .iter()
+        .zip(&modal)
+        .zip(ratios.iter().zip(&row.q))
+        .map(|((m, mj), (r, q))| {
+            let co = (r * periods).round() as usize;
+            accuracy::defect(mj, co, *q, scale, row.omega / periods).forced(m.lambda)
+        })
+        .sum())
+}
+
 /// FRCs of several pairs for every `(order, epsilon)` of `sec`.
 pub fn forced_response_multi(
     ssm: &SsmExpansion,
@@ -75,6 +127,7 @@ pub fn forced_response_multi(
     sec: &ForcingSection,
     outputs: &[&OutputMap],
     ratios: &[f64],
+    tolerance: f64,
 ) -> Result<ForcedResponse, FrcError> {
     if sec
         .nonautonomous_order
@@ -248,16 +301,42 @@ pub fn forced_response_multi(
                 });
             }
         }
+        // the error figure of the curve: the largest over the peaks of its
+        // branches (where the truncated terms weigh most)
+        let mut error_estimate = 0.0f64;
+        for bi in 0..branches.len() {
+            let peak = rows[first..]
+                .iter()
+                .filter(|r| r.branch == bi + 1)
+                .max_by(|a, b| a.rho.total_cmp(&b.rho));
+            if let Some(pk) = peak {
+                let figures = accuracy::tail_orders(order)
+                    .into_iter()
+                    .map(|o| orbit_error(ssm, sys, masters, &mut forced, pk, ratios, periods, o))
+                    .collect::<Result<Vec<f64>, FrcError>>()?;
+                let e = accuracy::tail(&figures);
+                error_estimate = if e.is_nan() { e } else { error_estimate.max(e) };
+            }
+        }
+        let untrusted = accuracy::exceeds(error_estimate, tolerance);
+        if untrusted {
+            warnings.push(format!(
+                "O({order}), eps = {eps}: the estimated error of the response, {}, exceeds the accuracy target {} ([ssm] tolerance); do not trust this curve: raise the expansion order, or lower the forcing (the response may lie beyond the SSM's convergence radius); non-autonomous terms beyond the leading order are implemented for one master pair only",
+                percent(error_estimate),
+                percent(tolerance),
+            ));
+        }
         curves.push(FrcCurve {
             order,
             epsilon: eps,
             points: rows.len() - first,
             branches: branches.len(),
             bifurcations,
-            untrusted: false,
+            untrusted,
             details: CurveDetails::Continuation {
                 branch_switches: switched,
                 continuation_steps: branches.iter().map(|b| b.points.len()).sum::<usize>(),
+                error_estimate,
             },
         });
     }

@@ -5,7 +5,7 @@
 //!
 //! The estimate of a curve is the larger of two figures: the modal residual
 //! of eq. (60) along the peak's periodic orbit, converted into relative
-//! changes of damping and frequency ([`amplitude_error`]), and the change of the peak from
+//! changes of damping and frequency ([`accuracy::defect`]), and the change of the peak from
 //! the previous non-autonomous order tried. The first is reliable once the
 //! `O(eps |p|^k)` terms are in; the second catches what the first misses
 //! at the leading order (the output map's missing `eps p` terms).
@@ -19,6 +19,7 @@ use std::collections::HashMap;
 
 use crate::model::system::{OutputMap, System};
 use crate::poly::MultiIndexSet;
+use crate::rom::accuracy::{self, percent};
 use crate::rom::forced_response::{
     CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
 };
@@ -67,14 +68,6 @@ struct Context<'a> {
     nodes: Vec<f64>,
     /// Non-autonomous tables by order, made when first needed.
     tables: HashMap<usize, NaTable>,
-}
-
-fn percent(x: f64) -> String {
-    if x.is_finite() {
-        format!("{:.2} %", 100.0 * x)
-    } else {
-        "(diverged)".into()
-    }
 }
 
 /// FRCs of one master pair for every `(order, epsilon)` of `sec`, each with
@@ -191,7 +184,7 @@ pub fn forced_response_one_pair(
                 .map_or(0, |(i, _)| i),
         };
         let best = tried.swap_remove(pick);
-        let untrusted = best.estimate.is_nan() || best.estimate > tolerance;
+        let untrusted = accuracy::exceeds(best.estimate, tolerance);
         if untrusted {
             warnings.push(format!(
                 "O({order}), eps = {eps}: the estimated error of the response, {}, exceeds the accuracy target {} ([ssm] tolerance) with non-autonomous order {}; do not trust this curve: {}",
@@ -341,10 +334,9 @@ impl Context<'_> {
                     );
                 }
                 let lambda = masters[0].lambda;
-                (
-                    res60,
-                    amplitude_error(&modal, C64::from_polar(pk.rho, pk.theta), lambda),
-                )
+                let q0 = C64::from_polar(pk.rho, pk.theta);
+                let d = accuracy::defect(&modal, 1, q0, pk.rho, lambda.norm());
+                (res60, d.forced(lambda))
             }
             None => (0.0, 0.0),
         };
@@ -384,45 +376,6 @@ impl Context<'_> {
 
 /// Samples of the peak's periodic orbit for the eq. (60) residual.
 const ORBIT_SAMPLES: usize = 64;
-
-/// Relative error of the response at the peak, estimated from the modal
-/// residual `u^* r(phi)` of eq. (60) sampled along the periodic orbit through
-/// `q0` (at `phi = 0`).
-///
-/// The residual acts on the master mode as an extra term of the reduced
-/// dynamics. Its harmonic co-rotating with `q`, `c_1 = kappa q0`, perturbs the
-/// eigenvalue by `kappa`: `Re kappa / Re lambda` is the relative change of the
-/// damping, hence of the resonant amplitude, and `Im kappa / Im lambda` the
-/// relative shift of the frequency (of the backbone). Each other harmonic `j`
-/// is detuned by about `|j - 1| |lambda|` and changes the response by
-/// `|c_j| / (|j - 1| |lambda| |q0|)`.
-fn amplitude_error(modal: &[C64], q0: C64, lambda: C64) -> f64 {
-    let n = modal.len();
-    let mut error = 0.0;
-    for j in 0..n {
-        // harmonic j of the orbit (j > n/2 are the negative ones)
-        let c: C64 = modal
-            .iter()
-            .enumerate()
-            .map(|(k, r)| {
-                r * C64::from_polar(1.0, -2.0 * std::f64::consts::PI * (j * k) as f64 / n as f64)
-            })
-            .sum::<C64>()
-            / n as f64;
-        let harmonic = if j <= n / 2 {
-            j as f64
-        } else {
-            j as f64 - n as f64
-        };
-        error += if j == 1 {
-            let kappa = c / q0;
-            kappa.re.abs() / lambda.re.abs() + kappa.im.abs() / lambda.im.abs()
-        } else {
-            c.norm() / ((harmonic - 1.0).abs() * lambda.norm() * q0.norm())
-        };
-    }
-    error
-}
 
 /// Higher-order non-autonomous terms of order `k`: exact expansions at the
 /// Chebyshev nodes in `Omega`, interpolated in between (sigma, tau and the

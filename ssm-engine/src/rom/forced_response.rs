@@ -120,6 +120,10 @@ pub enum CurveDetails {
         branch_switches: usize,
         /// Continuation steps over all branches.
         continuation_steps: usize,
+        /// Estimated relative error of the response: the largest over the
+        /// branches' peaks of the eq. (60) residual's effect on the master
+        /// pairs (NaN or infinite when the expansion diverged).
+        error_estimate: f64,
     },
 }
 
@@ -140,6 +144,17 @@ pub struct FrcCurve {
     pub details: CurveDetails,
     /// The curve's error estimate exceeds the accuracy target.
     pub untrusted: bool,
+}
+
+impl FrcCurve {
+    /// The curve's estimated relative error (NaN or infinite when the
+    /// expansion diverged).
+    pub fn error_estimate(&self) -> f64 {
+        match self.details {
+            CurveDetails::OnePair { error_estimate, .. }
+            | CurveDetails::Continuation { error_estimate, .. } => error_estimate,
+        }
+    }
 }
 
 /// Everything `[forcing]` produced.
@@ -186,7 +201,8 @@ pub fn auto_ratios(masters: &[MasterMode], omega: f64) -> Vec<f64> {
 }
 
 /// FRCs for every `(order, epsilon)` of `sec`, with the amplitudes of
-/// `outputs`; one pair's curves are checked against the relative `tolerance`.
+/// `outputs`; each curve's error estimate is checked against the relative
+/// `tolerance`.
 pub fn forced_response(
     ssm: &SsmExpansion,
     sys: &System,
@@ -207,7 +223,7 @@ pub fn forced_response(
     };
     if masters.len() > 1 {
         return crate::rom::forced_multi::forced_response_multi(
-            ssm, sys, masters, sec, outputs, &ratios,
+            ssm, sys, masters, sec, outputs, &ratios, tolerance,
         );
     }
     if ratios[0] != 1.0 {

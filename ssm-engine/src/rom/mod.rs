@@ -2,8 +2,10 @@
 //! invariance error and lifted transients ([`autonomous`]), forced response
 //! curves of one pair ([`frc`], [`forced_one_pair`], with error estimates
 //! and the accuracy target) and of several pairs by
-//! continuation ([`continuation`], [`forced_multi`]).
+//! continuation ([`continuation`], [`forced_multi`]); the error estimates
+//! of them all from the invariance residual ([`accuracy`]).
 
+pub mod accuracy;
 pub mod autonomous;
 pub mod continuation;
 pub mod forced_multi;

@@ -215,9 +215,11 @@ pub struct SsmSection {
     /// 1-based master mode pairs, slowest first.
     #[serde(default = "default_master_pairs")]
     pub master_pairs: Spanned<Vec<usize>>,
-    /// Expansion order.
-    #[serde(default = "default_order")]
-    pub order: Spanned<usize>,
+    /// Expansion order; without it the engine chooses the lowest odd order
+    /// from 3 up to [`AUTO_MAX_ORDER`] (and the machine's limits) whose
+    /// answers meet `tolerance`.
+    #[serde(default)]
+    pub order: Option<Spanned<usize>>,
     /// Eigenvector scaling.
     #[serde(default)]
     pub normalization: Normalization,
@@ -234,9 +236,6 @@ pub struct SsmSection {
 fn default_master_pairs() -> Spanned<Vec<usize>> {
     Spanned::new(0..0, vec![1])
 }
-fn default_order() -> Spanned<usize> {
-    Spanned::new(0..0, 3)
-}
 fn default_resonance_tol() -> Spanned<f64> {
     Spanned::new(0..0, 0.02)
 }
@@ -248,11 +247,28 @@ impl Default for SsmSection {
     fn default() -> Self {
         Self {
             master_pairs: default_master_pairs(),
-            order: default_order(),
+            order: None,
             normalization: Normalization::Unit,
             resonance_tol: default_resonance_tol(),
             tolerance: default_tolerance(),
         }
+    }
+}
+
+/// The highest expansion order the engine chooses by itself when `[ssm]`
+/// names none: beyond it, on a model whose answers still miss the accuracy
+/// target, the expansion is usually outside its convergence radius.
+pub const AUTO_MAX_ORDER: usize = 15;
+
+impl SsmSection {
+    /// The highest order any answer may use: `order`, or [`AUTO_MAX_ORDER`].
+    pub fn max_order(&self) -> usize {
+        self.order.as_ref().map_or(AUTO_MAX_ORDER, |o| *o.get_ref())
+    }
+
+    /// Where `order` is written (the empty span without one).
+    pub fn order_span(&self) -> std::ops::Range<usize> {
+        self.order.as_ref().map_or(0..0, Spanned::span)
     }
 }
 
@@ -464,8 +480,8 @@ impl SceneFile {
                 "pairs are 1-based and must not repeat".into(),
             ));
         }
-        if *ssm.order.get_ref() < 1 {
-            return Err(self.invalid(ssm.order.span(), "ssm.order", "must be at least 1".into()));
+        if let Some(o) = ssm.order.as_ref().filter(|o| *o.get_ref() < 1) {
+            return Err(self.invalid(o.span(), "ssm.order", "must be at least 1".into()));
         }
         let tol = *ssm.resonance_tol.get_ref();
         if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
@@ -497,8 +513,37 @@ impl SceneFile {
 }
 
 impl SceneFile {
+    /// The highest expansion order an answer of the scene names itself
+    /// (`orders` lists, `order` keys, `nonautonomous_order + 1`); 1 when none
+    /// does. A chosen `[ssm] order` is never below it.
+    pub fn highest_named_order(&self) -> usize {
+        let sc = &self.scene;
+        let lists = [
+            sc.forcing.as_ref().and_then(|f| f.orders.as_ref()),
+            sc.outputs.invariance_error.as_ref().map(|i| &i.orders),
+            sc.outputs.backbone.as_ref().and_then(|b| b.orders.as_ref()),
+            sc.report.as_ref().and_then(|r| r.orders.as_ref()),
+        ];
+        let singles = [
+            sc.outputs.transient.as_ref().and_then(|t| t.order.as_ref()),
+            sc.validate.as_ref().and_then(|v| v.order.as_ref()),
+        ];
+        let na = sc
+            .forcing
+            .as_ref()
+            .and_then(|f| f.nonautonomous_order.as_ref())
+            .map(|k| *k.get_ref() + 1);
+        lists
+            .iter()
+            .flatten()
+            .flat_map(|o| o.get_ref().iter().copied())
+            .chain(singles.iter().flatten().map(|o| *o.get_ref()))
+            .chain(na)
+            .fold(1, usize::max)
+    }
+
     fn check_orders(&self, orders: &Spanned<Vec<usize>>, key: &str) -> Result<(), SceneError> {
-        let max = *self.scene.ssm.order.get_ref();
+        let max = self.scene.ssm.max_order();
         if orders.get_ref().is_empty() {
             return Err(self.invalid(orders.span(), key, "at least one order is needed".into()));
         }
@@ -553,7 +598,7 @@ impl SceneFile {
             self.check_positive(rm, "forcing.rho_max")?;
         }
         if let Some(k) = &f.nonautonomous_order {
-            let max = self.scene.ssm.order.get_ref().saturating_sub(1);
+            let max = self.scene.ssm.max_order().saturating_sub(1);
             if *k.get_ref() > max {
                 return Err(self.invalid(
                     k.span(),
