@@ -85,6 +85,9 @@ fn transient_estimates_match_the_full_system_error() {
             .and_then(|a| a["error_estimate"].as_f64())
             .unwrap_or_else(|| panic!("{scene}: no transient estimate in {answers:?}"));
         eprintln!("{scene}: estimate {estimate:.3e}, full system {measured:.3e}");
+        let listed = &s["accuracy"]["measured"][0];
+        assert_eq!(listed["answer"], "transient");
+        assert_eq!(listed["relative_error"].as_f64(), Some(measured));
         assert!(
             (0.2..=10.0).contains(&(estimate / measured)),
             "{scene}: estimate {estimate:.3e} against the full system's {measured:.3e}"
@@ -166,6 +169,19 @@ t_end = 50.0
     assert!(worst < 0.01, "O({order}) against O(15): {worst:.2e}");
 
     let far = run_scene_text(&scene(0.35)).expect("the scene runs");
+    let summary: serde_json::Value =
+        serde_json::from_slice(far.outputs.get("summary.json").unwrap()).unwrap();
+    let backbone = summary["accuracy"]["answers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["answer"] == "backbone")
+        .unwrap()
+        .clone();
+    assert_eq!(backbone["untrusted"], true);
+    // at rho = 0.2 the target is met (above), so it holds at least that far
+    let reach = backbone["trusted_up_to_rho"].as_f64().unwrap();
+    assert!((0.2..0.35).contains(&reach), "{backbone}");
     assert!(
         far.warnings
             .iter()

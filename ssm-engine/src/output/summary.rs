@@ -168,6 +168,13 @@ fn accuracy_json(a: &Accuracy) -> Value {
             "error_estimate": finite(x.estimate),
             "diverged": x.estimate.is_some_and(|e| !e.is_finite()),
             "untrusted": x.untrusted,
+            "trusted_up_to_rho": x.trusted_up_to,
+        })).collect::<Vec<_>>(),
+        "measured": a.measured.iter().map(|m| json!({
+            "answer": m.answer,
+            "order": m.order,
+            "epsilon": m.epsilon,
+            "relative_error": m.relative_error,
         })).collect::<Vec<_>>(),
     })
 }

@@ -28,7 +28,7 @@ use crate::output::summary::{Summary, Timing};
 use crate::output::{result_files, OutputSet, Products};
 use crate::reduce::scene::reduce_scene;
 use crate::reduce::Reduction;
-use crate::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
+use crate::rom::accuracy::{percent, Accuracy, AnswerEstimate, MeasuredError, OrdersTried};
 use crate::rom::autonomous::{self, BackboneCurve, InvarianceEntry, LiftedTransient};
 use crate::rom::forced_response::{forced_response, ForcedResponse};
 use crate::scene::SceneFile;
@@ -258,6 +258,7 @@ fn estimates(
             epsilon: None,
             estimate: c.error_estimate,
             untrusted: c.untrusted,
+            trusted_up_to: c.trusted_up_to,
         });
     }
     if let Some(t) = &answers.transient {
@@ -267,6 +268,7 @@ fn estimates(
             epsilon: None,
             estimate: t.error_estimate,
             untrusted: t.untrusted,
+            trusted_up_to: None,
         });
     }
     for c in frc.iter().flat_map(|f| &f.curves) {
@@ -276,6 +278,31 @@ fn estimates(
             epsilon: Some(c.epsilon),
             estimate: Some(c.error_estimate()),
             untrusted: c.untrusted,
+            trusted_up_to: None,
+        });
+    }
+    list
+}
+
+/// The errors `[validate]` measured against the full system: the
+/// transient's and each forced response curve's against the steady states.
+fn measured_errors(v: &Validation) -> Vec<MeasuredError> {
+    let mut list: Vec<MeasuredError> = v
+        .transient
+        .iter()
+        .map(|t| MeasuredError {
+            answer: "transient",
+            order: t.order,
+            epsilon: None,
+            relative_error: Some(t.max_relative_error),
+        })
+        .collect();
+    for e in v.steady.iter().flat_map(|s| s.frc_errors.iter().flatten()) {
+        list.push(MeasuredError {
+            answer: "frc",
+            order: e.order,
+            epsilon: Some(e.epsilon),
+            relative_error: e.max_relative_error,
         });
     }
     list
@@ -289,11 +316,13 @@ fn untrusted_warnings(estimates: &[AnswerEstimate], tolerance: f64) -> Vec<Strin
         .filter(|a| a.untrusted && a.answer != "frc")
         .map(|a| {
             format!(
-                "{} O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance); do not trust it: {}",
+                "{} O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance){}; do not trust it: {}",
                 a.answer,
                 a.order,
                 percent(a.estimate.unwrap_or(f64::NAN)),
                 percent(tolerance),
+                a.trusted_up_to
+                    .map_or(String::new(), |r| format!(" beyond rho = {r:.4}")),
                 if a.answer == "backbone" {
                     "lower [outputs.backbone] rho_max or raise the expansion order"
                 } else {
@@ -372,12 +401,13 @@ pub fn run(
     timing.ssm = reduced.ssm_s;
     timing.results = reduced.results_s;
     timing.frc = reduced.frc_s;
-    let accuracy = Accuracy {
+    let mut accuracy = Accuracy {
         tolerance,
         order: expansion.order,
         chosen: sc.ssm.order.is_none(),
         tried,
         answers: estimates,
+        measured: Vec::new(),
     };
 
     let t = Instant::now();
@@ -398,6 +428,7 @@ pub fn run(
         }
         None => None,
     };
+    accuracy.measured = checked.as_ref().map_or_else(Vec::new, measured_errors);
     timing.validation = t.elapsed().as_secs_f64();
 
     let t = Instant::now();

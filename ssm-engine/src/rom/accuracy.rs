@@ -271,6 +271,21 @@ pub struct AnswerEstimate {
     pub estimate: Option<f64>,
     /// The estimate exceeds the accuracy target.
     pub untrusted: bool,
+    /// Backbones: the largest amplitude `rho` up to which the target is met.
+    pub trusted_up_to: Option<f64>,
+}
+
+/// An error the run measured against a full-system reference (`[validate]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasuredError {
+    /// `"transient"` or `"frc"`.
+    pub answer: &'static str,
+    /// Expansion order of the answer.
+    pub order: usize,
+    /// Forcing amplitude (forced responses).
+    pub epsilon: Option<f64>,
+    /// The largest relative error found (`None`: no point could be compared).
+    pub relative_error: Option<f64>,
 }
 
 /// How the expansion order of a run was set and what its answers are worth.
@@ -287,6 +302,8 @@ pub struct Accuracy {
     pub tried: OrdersTried,
     /// Every estimated answer.
     pub answers: Vec<AnswerEstimate>,
+    /// Every error measured against the full system.
+    pub measured: Vec<MeasuredError>,
 }
 
 impl Accuracy {

@@ -61,6 +61,8 @@ pub struct BackboneCurve {
     pub error_estimate: Option<f64>,
     /// The estimate exceeds the accuracy target (or is not finite).
     pub untrusted: bool,
+    /// The largest `rho` up to which every point meets the accuracy target.
+    pub trusted_up_to: Option<f64>,
 }
 
 /// Amplitudes of a backbone at which its error is evaluated (the rest are
@@ -116,11 +118,22 @@ pub fn backbone(
         let error_estimate = estimate_along(&mut points, |rho| {
             accuracy::backbone_error(ssm, sys, master, rho, order)
         });
+        let trusted_up_to = error_estimate.map(|_| {
+            points
+                .iter()
+                .take_while(|p| {
+                    p.error_estimate
+                        .is_some_and(|e| !accuracy::exceeds(e, tolerance))
+                })
+                .last()
+                .map_or(0.0, |p| p.rho)
+        });
         curves.push(BackboneCurve {
             order,
             points,
             error_estimate,
             untrusted: error_estimate.is_some_and(|e| accuracy::exceeds(e, tolerance)),
+            trusted_up_to,
         });
     }
     Ok(curves)
