@@ -441,3 +441,18 @@ impl LinearConstrained {
         (x, v, -(a + 0.1 * v + 3.0 * x))
     }
 }
+
+/// Frequency of the conservative pendulum `phi'' + sin(phi) = 0` at amplitude
+/// `a`: `pi / (2 K(sin(a/2)))` with the complete elliptic integral of the first
+/// kind, `K(k) = pi / (2 AGM(1, sqrt(1 - k^2)))`, i.e. `AGM(1, cos(a/2))`.
+pub fn conservative_frequency(a: f64) -> f64 {
+    let (mut x, mut y) = (1.0f64, (a / 2.0).cos());
+    // quadratic convergence: 64 steps are far more than enough; stop at round-off
+    for _ in 0..64 {
+        if (x - y).abs() <= 4.0 * f64::EPSILON * x {
+            break;
+        }
+        (x, y) = (0.5 * (x + y), (x * y).sqrt());
+    }
+    x
+}

@@ -9,7 +9,7 @@ use ssm_engine::scene::Normalization;
 use ssm_engine::spectrum::{self, Method, Spectrum};
 use ssm_engine::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar};
 use ssm_engine::ssm::SsmExpansion;
-use ssm_tests::{spectrum_options, ssm_of, system};
+use ssm_tests::{conservative_frequency, spectrum_options, ssm_of, system};
 
 fn pendulum(model: &str, params: &str) -> System {
     system("pendulum", model, params)
@@ -163,21 +163,6 @@ fn rho_for_amplitude(
         }
     }
     0.5 * (lo + hi)
-}
-
-/// Frequency of the conservative pendulum `phi'' + sin(phi) = 0` at amplitude
-/// `a`: `pi / (2 K(sin(a/2)))` with the complete elliptic integral of the first
-/// kind, `K(k) = pi / (2 AGM(1, sqrt(1 - k^2)))`, i.e. `AGM(1, cos(a/2))`.
-fn conservative_frequency(a: f64) -> f64 {
-    let (mut x, mut y) = (1.0f64, (a / 2.0).cos());
-    // quadratic convergence: 64 steps are far more than enough; stop at round-off
-    for _ in 0..64 {
-        if (x - y).abs() <= 4.0 * f64::EPSILON * x {
-            break;
-        }
-        (x, y) = (0.5 * (x + y), (x * y).sqrt());
-    }
-    x
 }
 
 /// Reference: the exact frequency-amplitude relation of the conservative
