@@ -183,7 +183,7 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
                 .map_err(|source| ReportError::Frc { order, source })?;
             row.frc_s = Some(t.elapsed().as_secs_f64());
             if let Some(r) = steady {
-                row.frc_error = frc_error(&rep.rows, r, order).0;
+                row.frc_error = frc_error(&rep.rows, r, order, 0).0;
             }
             if row.invariance_rho.is_none() {
                 row.invariance_rho = rep.rows.iter().map(|r| r.rho).reduce(f64::max);

@@ -374,35 +374,43 @@ pub fn frc_errors(rows: &[FrcRow], r: &SteadyReference) -> Vec<FrcErrorEntry> {
         .collect();
     orders.sort_unstable();
     orders.dedup();
+    let outputs = r.outputs.len().max(1);
     orders
         .into_iter()
-        .map(|order| {
-            let (err, compared) = frc_error(rows, r, order);
-            FrcErrorEntry {
-                order,
-                epsilon: r.epsilon,
-                max_relative_error: err,
-                points_compared: compared,
-                output: r.outputs.first().cloned(),
-            }
+        .flat_map(|order| {
+            (0..outputs).map(move |k| {
+                let (err, compared) = frc_error(rows, r, order, k);
+                FrcErrorEntry {
+                    order,
+                    epsilon: r.epsilon,
+                    max_relative_error: err,
+                    points_compared: compared,
+                    output: r.outputs.get(k).cloned(),
+                }
+            })
         })
         .collect()
 }
 
-/// Largest `|A_frc - A_ref| / max A_ref` of the first output over the
-/// reference points covered by the FRC of `order`, and how many were covered.
-pub fn frc_error(rows: &[FrcRow], r: &SteadyReference, order: usize) -> (Option<f64>, usize) {
+/// Largest `|A_frc - A_ref| / max A_ref` of output `k` over the reference
+/// points covered by the FRC of `order`, and how many were covered.
+pub fn frc_error(
+    rows: &[FrcRow],
+    r: &SteadyReference,
+    order: usize,
+    k: usize,
+) -> (Option<f64>, usize) {
     let scale = r
         .points
         .iter()
-        .map(|p| p.amplitudes.first().copied().unwrap_or(0.0))
+        .map(|p| p.amplitudes.get(k).copied().unwrap_or(0.0))
         .fold(0.0, f64::max);
     let errs: Vec<f64> = r
         .points
         .iter()
         .filter_map(|p| {
-            let a = *p.amplitudes.first()?;
-            frc_amplitude_at(rows, order, r.epsilon, 0, p.omega, a).map(|f| (f - a).abs() / scale)
+            let a = *p.amplitudes.get(k)?;
+            frc_amplitude_at(rows, order, r.epsilon, k, p.omega, a).map(|f| (f - a).abs() / scale)
         })
         .collect();
     let n = errs.len();

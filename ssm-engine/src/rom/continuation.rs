@@ -110,7 +110,15 @@ pub struct Branch {
     /// The branch was stopped where a pair amplitude passed
     /// [`Settings::max_amplitude`].
     pub reached_max_amplitude: bool,
+    /// The branch came back to its start: a closed loop (an isola, or the
+    /// loop of a secondary branch through two branch points and its mirror
+    /// image under a symmetry of the reduced dynamics).
+    pub closed: bool,
 }
+
+/// Largest angle (radians) between the tangents of two consecutive steps
+/// before the step is halved.
+const MAX_TURN: f64 = 0.1;
 
 /// Settings of the continuation.
 #[derive(Debug, Clone, Copy)]
@@ -305,8 +313,9 @@ impl RotatingFrame {
         let mut points = vec![self.point(&u, &t)];
         let mut located = Vec::new();
         let (mut det, mut bp, mut unst, _) = self.tests(&u, &t);
-        let u_first = u.clone();
+        let (u_first, t_first) = (u.clone(), t.clone());
         let mut reached_max_amplitude = false;
+        let mut closed = false;
         for step in 0..s.max_steps {
             let pred: Vec<f64> = u.iter().zip(&t).map(|(a, b)| a + h * b).collect();
             let Some((un, iters)) = self.correct(&pred, &t) else {
@@ -352,8 +361,8 @@ impl RotatingFrame {
                     tangent: tl,
                 });
             }
-            u = un;
-            t = tn;
+            let u_prev = std::mem::replace(&mut u, un);
+            let t_prev = std::mem::replace(&mut t, tn);
             det = detn;
             bp = bpn;
             unst = unstn;
@@ -368,17 +377,21 @@ impl RotatingFrame {
                 }
             }
             // a closed branch (isola, or the loop of a secondary branch) is done
-            // when it comes back to where it started
-            let back = u
-                .iter()
-                .zip(&u_first)
-                .map(|(a, b)| (a - b).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            if step > 10 && back < 0.5 * s.h_max {
+            // when its last step passes its start in the starting direction
+            if step > 10
+                && passes_through(&u_prev, &u, &u_first, 0.1 * s.h_max)
+                && dot(&t, &t_first) > 0.5
+            {
+                closed = true;
                 break;
             }
-            if iters <= 3 {
+            // step control: shrink where the branch turns (so that two
+            // bifurcations never share a step), grow where it is straight and
+            // the corrector converged fast
+            let turn = dot(&t, &t_prev).clamp(-1.0, 1.0).acos();
+            if turn > MAX_TURN {
+                h = (0.5 * h).max(s.h_min);
+            } else if iters <= 3 && turn < 0.25 * MAX_TURN {
                 h = (h * 1.3).min(s.h_max);
             }
         }
@@ -386,6 +399,7 @@ impl RotatingFrame {
             points,
             located,
             reached_max_amplitude,
+            closed,
         }
     }
 
@@ -424,7 +438,6 @@ impl RotatingFrame {
         let cand: Vec<Vec<f64>> = (cols.saturating_sub(2)..cols)
             .map(|c| (0..=n).map(|r| v[(r, c)]).collect())
             .collect();
-        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
         let mut d = cand
             .iter()
             .min_by(|a, b| {
@@ -448,9 +461,34 @@ impl RotatingFrame {
                 .map(|(a, b)| a + 0.5 * s.h_max * b)
                 .collect();
             if let Some((u1, _)) = self.correct(&start, &dir) {
-                out.push(self.continue_branch(u1, dir, s));
+                let branch = self.continue_branch(u1, dir, s);
+                let closed = branch.closed;
+                out.push(branch);
+                if closed {
+                    // the loop came back through the branch point: the other
+                    // direction would trace it again
+                    break;
+                }
             }
         }
         out
     }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// True when the segment from `a` to `b` passes within `tol` of `p`.
+fn passes_through(a: &[f64], b: &[f64], p: &[f64], tol: f64) -> bool {
+    let ab: Vec<f64> = b.iter().zip(a).map(|(x, y)| x - y).collect();
+    let ap: Vec<f64> = p.iter().zip(a).map(|(x, y)| x - y).collect();
+    let len2 = dot(&ab, &ab);
+    let s = if len2 > 0.0 {
+        (dot(&ap, &ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let d2: f64 = ap.iter().zip(&ab).map(|(x, y)| (x - s * y).powi(2)).sum();
+    d2.sqrt() <= tol
 }

@@ -178,7 +178,7 @@ pub fn forced_response_multi(
         let scale = masters.iter().map(|mm| mm.lambda.im).fold(0.0, f64::max);
         let settings = Settings {
             omega_range: range,
-            h_max: 2e-3 * scale.max(range.1 - range.0),
+            h_max: 2e-2 * scale.max(range.1 - range.0),
             h_min: 1e-10 * scale,
             max_steps: 20 * *sec.points.get_ref(),
             max_amplitude: sec.rho_max.as_ref().map(|r| *r.get_ref()),
@@ -202,12 +202,14 @@ pub fn forced_response_multi(
                 .cloned()
                 .collect();
             for bp in bps {
-                // skip branch points already reached by an earlier branch
-                let seen = branches[..k].iter().any(|b| {
-                    b.located.iter().any(|l| {
-                        l.kind == LocatedKind::BranchPoint
-                            && (l.at.omega - bp.at.omega).abs() < 1e-6 * bp.at.omega
-                    })
+                // skip branch points that another branch already runs through
+                // (the secondary branch of a pitchfork ends at a second
+                // branch point of the main branch)
+                let seen = branches.iter().enumerate().any(|(i, b)| {
+                    i != k
+                        && b.located.iter().any(|l| {
+                            l.kind == LocatedKind::BranchPoint && same_point(&l.at, &bp.at)
+                        })
                 });
                 if seen || switched >= MAX_SWITCHES {
                     continue;
@@ -349,4 +351,17 @@ pub fn forced_response_multi(
         forcing_on_master: s,
         warnings,
     })
+}
+
+/// Two located points coincide: `1e-5` relative in `Omega`, `5e-2` relative
+/// in the amplitudes (a branch point located on a secondary branch sits off
+/// `q_j = 0` by up to a few percent of the amplitude, the corrector's error
+/// where two branches cross).
+fn same_point(a: &BranchPoint, b: &BranchPoint) -> bool {
+    let scale = b.q.iter().map(|q| q.norm()).fold(0.0, f64::max).max(1e-300);
+    (a.omega - b.omega).abs() < 1e-5 * b.omega
+        && a.q
+            .iter()
+            .zip(&b.q)
+            .all(|(x, y)| (x - y).norm() <= 5e-2 * scale)
 }
