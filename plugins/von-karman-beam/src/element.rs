@@ -135,43 +135,43 @@ impl Element {
     /// Consistent mass matrix `int rhoA (N_u^T N_u + N_w^T N_w) dx`.
     pub fn mass(&self) -> [[f64; 6]; 6] {
         let l = self.length;
-        let mut m = [[0.0; 6]; 6];
-        for (xi, w) in self.points() {
-            let nu = [1.0 - xi, xi];
-            let nw = hermite(xi, l);
-            for (a, &i) in AXIAL.iter().enumerate() {
-                for (b, &j) in AXIAL.iter().enumerate() {
-                    m[i][j] += w * self.section.rho_a * nu[a] * nu[b];
-                }
-            }
-            for (a, &i) in BENDING.iter().enumerate() {
-                for (b, &j) in BENDING.iter().enumerate() {
-                    m[i][j] += w * self.section.rho_a * nw[a] * nw[b];
-                }
-            }
-        }
-        m
+        self.integrate(
+            |xi| ([1.0 - xi, xi], hermite(xi, l)),
+            self.section.rho_a,
+            self.section.rho_a,
+        )
     }
 
     /// Linear stiffness matrix `int EA N_u'^T N_u' + EI N_w''^T N_w'' dx`.
     pub fn stiffness(&self) -> [[f64; 6]; 6] {
         let l = self.length;
         let b = [-1.0 / l, 1.0 / l];
-        let mut k = [[0.0; 6]; 6];
+        self.integrate(
+            |xi| (b, hermite_curvature(xi, l)),
+            self.section.ea,
+            self.section.ei,
+        )
+    }
+
+    /// `int a (f_u^T f_u) + c (f_w^T f_w) dx` for the axial functions `f_u`
+    /// and bending functions `f_w` that `at(xi)` returns, placed in the
+    /// local order of `q`.
+    fn integrate(&self, at: impl Fn(f64) -> ([f64; 2], [f64; 4]), a: f64, c: f64) -> [[f64; 6]; 6] {
+        let mut m = [[0.0; 6]; 6];
         for (xi, w) in self.points() {
-            let c = hermite_curvature(xi, l);
+            let (fu, fw) = at(xi);
             for (p, &i) in AXIAL.iter().enumerate() {
                 for (r, &j) in AXIAL.iter().enumerate() {
-                    k[i][j] += w * self.section.ea * b[p] * b[r];
+                    m[i][j] += w * a * fu[p] * fu[r];
                 }
             }
             for (p, &i) in BENDING.iter().enumerate() {
                 for (r, &j) in BENDING.iter().enumerate() {
-                    k[i][j] += w * self.section.ei * c[p] * c[r];
+                    m[i][j] += w * c * fw[p] * fw[r];
                 }
             }
         }
-        k
+        m
     }
 
     /// `A2_kl = int a_k a_l dx` and `A4_jklm = int a_j a_k a_l a_m dx` over the
