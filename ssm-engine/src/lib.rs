@@ -27,6 +27,7 @@
 //! Dependencies point one way: `pipeline` uses every stage, `output` reads
 //! the stages' result types, and no two modules import each other.
 
+pub mod chebyshev;
 pub mod compare;
 pub mod fom;
 pub mod model;

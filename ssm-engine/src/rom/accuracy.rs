@@ -52,6 +52,10 @@ pub struct Defect {
     pub kappa: C64,
     /// Relative distortion of the orbit by the other harmonics.
     pub distortion: f64,
+    /// The co-rotating harmonic `c_co` of the modal residual itself: in the
+    /// rotating frame of a forced response, the constant perturbation of
+    /// the pair's fixed-point equation.
+    pub co_rotating: C64,
 }
 
 impl Defect {
@@ -115,6 +119,7 @@ pub fn tail_orders(order: usize) -> Vec<usize> {
 pub fn defect(modal: &[C64], co: usize, q0: C64, scale: f64, unit: f64) -> Defect {
     let n = modal.len();
     let mut kappa = C64::new(0.0, 0.0);
+    let mut co_rotating = C64::new(0.0, 0.0);
     let mut distortion = 0.0;
     for h in 0..n {
         let c: C64 = modal
@@ -132,6 +137,7 @@ pub fn defect(modal: &[C64], co: usize, q0: C64, scale: f64, unit: f64) -> Defec
             h as f64 - n as f64
         };
         if h == co {
+            co_rotating = c;
             // in the pair's own phase when it moves; otherwise (a pair at
             // rest in a multi-pair orbit) the whole term counts in both parts
             kappa = if q0.norm() > 1e-3 * scale {
@@ -144,7 +150,11 @@ pub fn defect(modal: &[C64], co: usize, q0: C64, scale: f64, unit: f64) -> Defec
             distortion += c.norm() / ((harmonic - co as f64).abs() * unit * scale);
         }
     }
-    Defect { kappa, distortion }
+    Defect {
+        kappa,
+        distortion,
+        co_rotating,
+    }
 }
 
 /// The defect of the autonomous expansion truncated at `order` on master

@@ -116,6 +116,17 @@ pub struct Branch {
     pub closed: bool,
 }
 
+impl Branch {
+    /// The branch of the frame scaled by [`RotatingFrame::scaled`] with `a`,
+    /// in the original amplitudes (`q = a q_scaled`).
+    pub fn unscaled(mut self, a: f64) -> Branch {
+        let back = |p: &mut BranchPoint| p.q.iter_mut().for_each(|q| *q *= a);
+        self.points.iter_mut().for_each(back);
+        self.located.iter_mut().for_each(|l| back(&mut l.at));
+        self
+    }
+}
+
 /// Largest angle (radians) between the tangents of two consecutive steps
 /// before the step is halved.
 const MAX_TURN: f64 = 0.1;
@@ -139,6 +150,30 @@ pub struct Settings {
 impl RotatingFrame {
     fn m(&self) -> usize {
         self.ratios.len()
+    }
+
+    /// The same dynamics in the amplitude `q / a`: each term of degree `d`
+    /// is multiplied by `a^(d - 1)` and the forcing divided by `a`. Continuing
+    /// in the scaled frame makes the arclength (and so the step control and
+    /// the number of steps) independent of the amplitude unit, which for a
+    /// unit-normalized eigenvector grows with the number of degrees of
+    /// freedom.
+    pub fn scaled(&self, a: f64) -> RotatingFrame {
+        RotatingFrame {
+            terms: self
+                .terms
+                .iter()
+                .map(|t| {
+                    let degree: i32 = t.exponents.iter().map(|&e| i32::from(e)).sum();
+                    PolarTerm {
+                        coeff: t.coeff * a.powi(degree - 1),
+                        ..t.clone()
+                    }
+                })
+                .collect(),
+            ratios: self.ratios.clone(),
+            force: self.force.iter().map(|f| f / a).collect(),
+        }
     }
 
     /// `F(y, Omega)`.
@@ -420,6 +455,24 @@ impl RotatingFrame {
         let mut t0 = vec![0.0; n + 1];
         t0[n] = 1.0;
         Ok(self.continue_branch(u, t0, s))
+    }
+
+    /// The point of this frame's branch nearest `point` of the branch of
+    /// `other` (the same dynamics truncated differently): the corrector from
+    /// `point` in the hyperplane normal to `other`'s branch there, whose
+    /// unit tangent is the null vector of `other`'s `[F_y F_Omega]` (regular
+    /// at folds). `None` when the corrector does not converge: this frame has
+    /// no branch near `point`.
+    pub fn nearest_point(&self, other: &RotatingFrame, point: &BranchPoint) -> Option<BranchPoint> {
+        let n = point.q.len() * 2;
+        let mut u: Vec<f64> = point.q.iter().flat_map(|q| [q.re, q.im]).collect();
+        let j = other.jacobian(&u, point.omega);
+        let svd = j.svd().ok()?;
+        let v = svd.V();
+        let t: Vec<f64> = (0..=n).map(|r| v[(r, n)]).collect();
+        u.push(point.omega);
+        let (w, _) = self.correct(&u, &t)?;
+        Some(self.point(&w, &t))
     }
 
     /// The other branch through a located branch point, in both directions.

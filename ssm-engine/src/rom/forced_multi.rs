@@ -19,12 +19,16 @@ use crate::rom::forced_response::{
 };
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
-use crate::ssm::forced::ForcedSsm;
+use crate::ssm::forced::{ForcedSsm, OUTPUT_TABLE_TOLERANCE};
 use crate::ssm::SsmExpansion;
 use crate::C64;
 
 /// Branch switches at most per curve (each branch point found is switched once).
 const MAX_SWITCHES: usize = 6;
+
+/// Largest continuation step as a fraction of the width of the frequency
+/// range (in the scaled amplitudes of [`RotatingFrame::scaled`]).
+const H_MAX: f64 = 0.05;
 
 /// The rotating-frame terms of `R` truncated at `order`: those autonomous for
 /// `p_{2j} = q_j e^{i r_j Omega t}` (all of a consistent normal form).
@@ -57,6 +61,95 @@ fn rotating_terms(ssm: &SsmExpansion, ratios: &[f64], order: usize) -> (Vec<Pola
     (terms, dropped)
 }
 
+/// `(q_1, conj q_1, q_2, conj q_2, ...)`.
+fn conjugate_pairs(q: &[C64]) -> Vec<C64> {
+    q.iter().flat_map(|z| [*z, z.conj()]).collect()
+}
+
+/// The harmonic of `phi / periods` at which each monomial of the expansion
+/// turns on the orbit `p_j = q_j e^{i r_j phi}`: `periods * sum_v e_v r_v`
+/// (with `-r_j` for `conj p_j`), an integer for the ratios of
+/// [`period_multiple`].
+struct Harmonics {
+    /// Slot of each monomial up to the order (harmonic `+ offset`).
+    slot: Vec<usize>,
+    /// Number of slots.
+    span: usize,
+    /// Harmonic of slot 0 is `-offset`.
+    offset: i64,
+    periods: f64,
+}
+
+impl Harmonics {
+    fn new(ssm: &SsmExpansion, ratios: &[f64], periods: f64, order: usize) -> Self {
+        let end = ssm.set.of_order(order.min(ssm.order)).end;
+        let k: Vec<i64> = (0..end)
+            .map(|i| {
+                let h: f64 = ssm
+                    .set
+                    .exponents(i)
+                    .iter()
+                    .enumerate()
+                    .map(|(v, &e)| {
+                        let r = ratios[v / 2];
+                        f64::from(e) * if v % 2 == 0 { r } else { -r }
+                    })
+                    .sum();
+                (h * periods).round() as i64
+            })
+            .collect();
+        let lo = k.iter().copied().min().unwrap_or(0).min(0);
+        let hi = k.iter().copied().max().unwrap_or(0).max(0);
+        Self {
+            slot: k.iter().map(|&h| (h - lo) as usize).collect(),
+            span: (hi - lo + 1) as usize,
+            offset: -lo,
+            periods,
+        }
+    }
+
+    /// Frequency in `phi` of slot `s`.
+    fn frequency(&self, s: usize) -> f64 {
+        (s as i64 - self.offset) as f64 / self.periods
+    }
+}
+
+/// The phases `phi_k = 2 pi periods k / n` at which a response is sampled,
+/// with every harmonic's turn there, computed once for all points.
+struct Samples {
+    phi: Vec<f64>,
+    /// `turns[k][s] = e^{i f_s phi_k}` for the slots of [`Harmonics`].
+    turns: Vec<Vec<C64>>,
+    /// `e^{i phi_k}` (the forcing frequency's harmonic).
+    first: Vec<C64>,
+}
+
+impl Samples {
+    fn new(harmonics: &Harmonics, n: usize) -> Self {
+        let phi: Vec<f64> = (0..n)
+            .map(|k| 2.0 * std::f64::consts::PI * harmonics.periods * k as f64 / n as f64)
+            .collect();
+        let turns = phi
+            .iter()
+            .map(|&f| {
+                (0..harmonics.span)
+                    .map(|s| C64::from_polar(1.0, harmonics.frequency(s) * f))
+                    .collect()
+            })
+            .collect();
+        let first = phi.iter().map(|&f| C64::from_polar(1.0, f)).collect();
+        Self { phi, turns, first }
+    }
+
+    /// `e^{i kappa_h phi_k}` per sample for the forcing harmonics `kappa`.
+    fn forcing(&self, kappa: &[f64]) -> Vec<Vec<C64>> {
+        self.phi
+            .iter()
+            .map(|&f| kappa.iter().map(|&x| C64::from_polar(1.0, x * f)).collect())
+            .collect()
+    }
+}
+
 /// Least common denominator of the ratios (at most 6), for the response period.
 fn period_multiple(ratios: &[f64]) -> f64 {
     (1..=6)
@@ -68,55 +161,35 @@ fn period_multiple(ratios: &[f64]) -> f64 {
         .map_or(1.0, f64::from)
 }
 
-/// Estimated relative error of the response at the point `row` of a curve:
-/// the eq. (60) residual (leading non-autonomous order) along its periodic
-/// orbit `p_j = q_j e^{i r_j phi}`, `phi` over `periods` forcing periods,
-/// projected on each master pair ([`accuracy::defect`]) and summed over the
-/// pairs, relative to `|q|`, with `R` and `W` truncated at `order`.
-#[allow(clippy::too_many_arguments)]
-fn orbit_error(
-    ssm: &SsmExpansion,
-    sys: &System,
-    masters: &[MasterMode],
-    forced: &mut ForcedSsm,
-    row: &FrcRow,
-    ratios: &[f64],
-    periods: f64,
-    order: usize,
-) -> Result<f64, FrcError> {
-    let scale = row.rho;
+/// Distance of the point `row` of the curve of the frame `frame` (in
+/// amplitudes `q / a`) from the branch of `lower`, the same reduced dynamics
+/// truncated two orders lower: `|dq| / |q| + |dOmega| / Omega` between `row`
+/// and the nearest point of `lower`'s branch
+/// ([`RotatingFrame::nearest_point`]); infinite when `lower` has no branch
+/// there. While the expansion converges this is the error of the lower
+/// order's curve, an upper estimate of the error of `frame`'s.
+fn order_change(frame: &RotatingFrame, lower: &RotatingFrame, a: f64, row: &FrcRow) -> f64 {
+    let scale = row.rho / a;
     if scale == 0.0 {
-        return Ok(0.0);
+        return 0.0;
     }
-    let na = forced.expansion(ssm, sys, row.omega, 0)?;
-    let d = periods.round() as usize;
-    let n = accuracy::PHASES * d;
-    let mut modal = vec![Vec::with_capacity(n); masters.len()];
-    for k in 0..n {
-        let phi = 2.0 * std::f64::consts::PI * periods * k as f64 / n as f64;
-        let p: Vec<C64> = row
-            .q
-            .iter()
-            .zip(ratios)
-            .flat_map(|(q, r)| {
-                let z = q * C64::from_polar(1.0, r * phi);
-                [z, z.conj()]
-            })
-            .collect();
-        let r = na.residual(ssm, sys, row.epsilon, &p, phi, order);
-        for (mj, m) in modal.iter_mut().zip(masters) {
-            mj.push(m.left.iter().zip(&r).map(|(u, x)| u.conj() * x).sum());
+    let point = BranchPoint {
+        q: row.q.iter().map(|q| q / a).collect(),
+        omega: row.omega,
+        stable: row.stable,
+    };
+    match lower.nearest_point(frame, &point) {
+        Some(p) => {
+            let dq =
+                p.q.iter()
+                    .zip(&point.q)
+                    .map(|(x, y)| (x - y).norm_sqr())
+                    .sum::<f64>()
+                    .sqrt();
+            dq / scale + (p.omega - row.omega).abs() / row.omega
         }
+        None => f64::INFINITY,
     }
-    Ok(masters
-        .iter()
-        .zip(&modal)
-        .zip(ratios.iter().zip(&row.q))
-        .map(|((m, mj), (r, q))| {
-            let co = (r * periods).round() as usize;
-            accuracy::defect(mj, co, *q, scale, row.omega / periods).forced(m.lambda)
-        })
-        .sum())
 }
 
 /// FRCs of several pairs for every `(order, epsilon)` of `sec`.
@@ -160,11 +233,23 @@ pub fn forced_response_multi(
     let mut rows = Vec::new();
     let mut curves = Vec::new();
     let mut warnings = Vec::new();
+    let weights: Vec<&[(usize, f64)]> = outputs.iter().map(|o| o.weights.as_slice()).collect();
+    let table_error = forced.tabulate_outputs(range.0, range.1, &weights)?;
+    if table_error > OUTPUT_TABLE_TOLERANCE {
+        warnings.push(format!(
+            "X0 could not be interpolated in Omega over [{}, {}] (estimated error {table_error:.1e}: a non-master eigenvalue is near i Omega); the outputs are solved at every point instead, which costs one sparse solve of the full system per point",
+            range.0, range.1
+        ));
+    }
     for (&order, &eps) in orders
         .iter()
         .flat_map(|o| sec.epsilon.get_ref().iter().map(move |e| (o, e)))
     {
         let (terms, dropped) = rotating_terms(ssm, ratios, order);
+        let harmonics = Harmonics::new(ssm, ratios, periods, order);
+        let sampled = Samples::new(&harmonics, 64 * periods as usize);
+        let kappa: Vec<f64> = sys.forcing.iter().map(|h| h.multiple).collect();
+        let forcing_turns = sampled.forcing(&kappa);
         if dropped > 0 {
             warnings.push(format!(
                 "O({order}): {dropped} near-resonant terms of R are not autonomous for the resonance ratios {ratios:?} and were left out of the forced response"
@@ -175,13 +260,30 @@ pub fn forced_response_multi(
             ratios: ratios.to_vec(),
             force: s.iter().map(|v| v * eps).collect(),
         };
-        let scale = masters.iter().map(|mm| mm.lambda.im).fold(0.0, f64::max);
+        // continue in q / a, where a maps the largest linear resonant peak
+        // |eps s_j / Re lambda_j| onto the width of the frequency range: the
+        // steps then weigh frequency and amplitude alike, whatever the
+        // amplitude unit
+        let width = range.1 - range.0;
+        let peak = masters
+            .iter()
+            .zip(&frame.force)
+            .map(|(mm, f)| f.norm() / mm.lambda.re.abs().max(1e-300))
+            .fold(0.0, f64::max);
+        let a = if peak.is_finite() && peak > 0.0 {
+            peak / width
+        } else {
+            1.0
+        };
+        let unscaled = frame;
+        let frame = unscaled.scaled(a);
+        let top = masters.iter().map(|mm| mm.lambda.im).fold(0.0, f64::max);
         let settings = Settings {
             omega_range: range,
-            h_max: 2e-2 * scale.max(range.1 - range.0),
-            h_min: 1e-10 * scale,
+            h_max: H_MAX * width,
+            h_min: 1e-10 * top.max(width),
             max_steps: 20 * *sec.points.get_ref(),
-            max_amplitude: sec.rho_max.as_ref().map(|r| *r.get_ref()),
+            max_amplitude: sec.rho_max.as_ref().map(|r| *r.get_ref() / a),
         };
         let guess: Vec<f64> = (0..m)
             .flat_map(|j| {
@@ -208,7 +310,8 @@ pub fn forced_response_multi(
                 let seen = branches.iter().enumerate().any(|(i, b)| {
                     i != k
                         && b.located.iter().any(|l| {
-                            l.kind == LocatedKind::BranchPoint && same_point(&l.at, &bp.at)
+                            l.kind == LocatedKind::BranchPoint
+                                && same_point(&l.at, &bp.at, settings.h_max)
                         })
                 });
                 if seen || switched >= MAX_SWITCHES {
@@ -219,6 +322,7 @@ pub fn forced_response_multi(
             }
             k += 1;
         }
+        let branches: Vec<Branch> = branches.into_iter().map(|b| b.unscaled(a)).collect();
         let first = rows.len();
         for (bi, br) in branches.iter().enumerate() {
             if let (true, Some(last)) = (br.reached_max_amplitude, br.points.last()) {
@@ -235,25 +339,30 @@ pub fn forced_response_multi(
                 .iter()
                 .filter(|p| p.omega >= range.0 && p.omega <= range.1)
             {
-                let x0 = forced.at(p.omega)?;
+                let x0 = forced.outputs_at(p.omega)?;
+                // on the orbit p_j = q_j e^{i r_j phi} each monomial turns at
+                // its own harmonic of phi / periods: sum the series per harmonic
+                // once, then sample the harmonics
+                let mono = ssm.set.monomials(&conjugate_pairs(&p.q), order);
+                let end = ssm.set.of_order(order.min(ssm.order)).end;
+                let amplitudes: Vec<Vec<C64>> = series
+                    .iter()
+                    .map(|ser| {
+                        let mut h = vec![C64::new(0.0, 0.0); harmonics.span];
+                        for i in 0..end {
+                            h[harmonics.slot[i]] += ser[i] * mono[i];
+                        }
+                        h
+                    })
+                    .collect();
                 let mut linf = vec![0.0f64; outputs.len()];
                 let mut h1 = vec![C64::new(0.0, 0.0); outputs.len()];
-                let samples = 64 * periods as usize;
-                for k in 0..samples {
-                    let phi = 2.0 * std::f64::consts::PI * periods * k as f64 / samples as f64;
-                    let pz: Vec<C64> = (0..m)
-                        .flat_map(|j| {
-                            let q = p.q[j] * C64::from_polar(1.0, ratios[j] * phi);
-                            [q, q.conj()]
-                        })
-                        .collect();
-                    let mono = ssm.set.monomials(&pz, order);
-                    let end = ssm.set.of_order(order.min(ssm.order)).end;
-                    for (oi, (o, ser)) in outputs.iter().zip(&series).enumerate() {
-                        let y = (0..end).map(|i| ser[i] * mono[i]).sum::<C64>().re
-                            + eps * x0.output_at(&o.weights, phi);
+                for (k, turns) in sampled.turns.iter().enumerate() {
+                    for (oi, h) in amplitudes.iter().enumerate() {
+                        let y = h.iter().zip(turns).map(|(a, b)| a * b).sum::<C64>().re
+                            + eps * x0.value_turned(oi, &forcing_turns[k]);
                         linf[oi] = linf[oi].max(y.abs());
-                        h1[oi] += y * C64::from_polar(1.0, -phi);
+                        h1[oi] += y * sampled.first[k].conj();
                     }
                 }
                 rows.push(FrcRow {
@@ -266,7 +375,10 @@ pub fn forced_response_multi(
                     q: p.q.clone(),
                     pair_amplitudes: p.q.iter().map(|q| q.norm()).collect(),
                     linf,
-                    h1: h1.iter().map(|a| 2.0 * a.norm() / samples as f64).collect(),
+                    h1: h1
+                        .iter()
+                        .map(|a| 2.0 * a.norm() / sampled.turns.len() as f64)
+                        .collect(),
                 });
             }
             let plotted: Vec<(&BranchPoint, f64)> = br
@@ -288,14 +400,30 @@ pub fn forced_response_multi(
                             .map(|(a, b)| (a - b).norm())
                             .sum::<f64>()
                 };
+                let kind = match l.kind {
+                    LocatedKind::BranchPoint => "BP",
+                    LocatedKind::Bifurcation(b) => b.label(),
+                };
+                let rho: Vec<f64> = l.at.q.iter().map(|q| q.norm()).collect();
+                // a closed secondary branch runs through its mirror image
+                // (q_j -> -q_j for the pairs of odd resonance ratio, the same
+                // orbit half a period later): list each bifurcation once
+                if bifurcations.iter().any(|b: &FrcBifurcation| {
+                    b.branch == bi + 1
+                        && b.kind == kind
+                        && (b.omega - l.at.omega).abs() <= 1e-6 * l.at.omega
+                        && b.rho
+                            .iter()
+                            .zip(&rho)
+                            .all(|(x, y)| (x - y).abs() <= 1e-3 * y.max(*x))
+                }) {
+                    continue;
+                }
                 bifurcations.push(FrcBifurcation {
-                    kind: match l.kind {
-                        LocatedKind::BranchPoint => "BP",
-                        LocatedKind::Bifurcation(b) => b.label(),
-                    },
+                    kind,
                     omega: l.at.omega,
                     branch: bi + 1,
-                    rho: l.at.q.iter().map(|q| q.norm()).collect(),
+                    rho,
                     plotted: plotted
                         .iter()
                         .min_by(|a, b| dist(a.0).total_cmp(&dist(b.0)))
@@ -304,7 +432,15 @@ pub fn forced_response_multi(
             }
         }
         // the error figure of the curve: the largest over the peaks of its
-        // branches (where the truncated terms weigh most)
+        // branches (where the truncated terms weigh most) of the change from
+        // two orders lower
+        let lower = (order >= 3).then(|| {
+            RotatingFrame {
+                terms: rotating_terms(ssm, ratios, order - 2).0,
+                ..unscaled.clone()
+            }
+            .scaled(a)
+        });
         let mut error_estimate = 0.0f64;
         for bi in 0..branches.len() {
             let peak = rows[first..]
@@ -312,11 +448,9 @@ pub fn forced_response_multi(
                 .filter(|r| r.branch == bi + 1)
                 .max_by(|a, b| a.rho.total_cmp(&b.rho));
             if let Some(pk) = peak {
-                let figures = accuracy::tail_orders(order)
-                    .into_iter()
-                    .map(|o| orbit_error(ssm, sys, masters, &mut forced, pk, ratios, periods, o))
-                    .collect::<Result<Vec<f64>, FrcError>>()?;
-                let e = accuracy::tail(&figures);
+                let e = lower
+                    .as_ref()
+                    .map_or(f64::NAN, |l| order_change(&frame, l, a, pk));
                 error_estimate = if e.is_nan() { e } else { error_estimate.max(e) };
             }
         }
@@ -353,15 +487,17 @@ pub fn forced_response_multi(
     })
 }
 
-/// Two located points coincide: `1e-5` relative in `Omega`, `5e-2` relative
-/// in the amplitudes (a branch point located on a secondary branch sits off
-/// `q_j = 0` by up to a few percent of the amplitude, the corrector's error
-/// where two branches cross).
-fn same_point(a: &BranchPoint, b: &BranchPoint) -> bool {
-    let scale = b.q.iter().map(|q| q.norm()).fold(0.0, f64::max).max(1e-300);
-    (a.omega - b.omega).abs() < 1e-5 * b.omega
-        && a.q
+/// Two located points of the scaled frame coincide: closer than the largest
+/// step (a branch point located on a secondary branch sits off `q_j = 0` by
+/// a fraction of a step: near the crossing the corrector of the bisection
+/// may land on either branch); this is the resolution of the continuation,
+/// which does not tell apart two branch points closer than that.
+fn same_point(a: &BranchPoint, b: &BranchPoint, h_max: f64) -> bool {
+    let d2 = (a.omega - b.omega).powi(2)
+        + a.q
             .iter()
             .zip(&b.q)
-            .all(|(x, y)| (x - y).norm() <= 5e-2 * scale)
+            .map(|(x, y)| (x - y).norm_sqr())
+            .sum::<f64>();
+    d2.sqrt() < h_max
 }

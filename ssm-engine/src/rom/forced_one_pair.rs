@@ -23,13 +23,11 @@ use crate::rom::accuracy::{self, percent};
 use crate::rom::forced_response::{
     CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
 };
-use crate::rom::frc::{
-    chebyshev_interpolate, one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair,
-};
+use crate::rom::frc::{one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair};
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{invariance_error, polar, Polar};
-use crate::ssm::forced::ForcedSsm;
+use crate::ssm::forced::{ForcedSsm, OUTPUT_TABLE_TOLERANCE};
 use crate::ssm::SsmExpansion;
 use crate::C64;
 
@@ -132,6 +130,14 @@ pub fn forced_response_one_pair(
     let mut rows = Vec::new();
     let mut curves = Vec::new();
     let mut warnings = Vec::new();
+    let weights: Vec<&[(usize, f64)]> = outputs.iter().map(|o| o.weights.as_slice()).collect();
+    let table_error = ctx.forced.tabulate_outputs(range.0, range.1, &weights)?;
+    if table_error > OUTPUT_TABLE_TOLERANCE {
+        warnings.push(format!(
+            "X0 could not be interpolated in Omega over [{}, {}] (estimated error {table_error:.1e}: a non-master eigenvalue is near i Omega); the outputs are solved at every point instead, which costs one sparse solve of the full system per point",
+            range.0, range.1
+        ));
+    }
     for (&order, &eps) in orders
         .iter()
         .flat_map(|o| eps_list.iter().map(move |e| (o, e)))
@@ -265,7 +271,7 @@ impl Context<'_> {
             let mut h1 = Vec::with_capacity(outputs.len());
             match table {
                 Some(t) => {
-                    let x = chebyshev_interpolate(nodes, &t.xs, p.omega);
+                    let x = crate::chebyshev::interpolate(nodes, &t.xs, p.omega);
                     let len = t.set.len();
                     for (oi, ser) in series.iter().enumerate() {
                         let xo = &x[oi * len..(oi + 1) * len];
@@ -280,9 +286,9 @@ impl Context<'_> {
                     }
                 }
                 None => {
-                    let x0 = forced.at(p.omega)?;
-                    for (o, ser) in outputs.iter().zip(series) {
-                        let part = |_: C64, phi: f64| eps * x0.output_at(&o.weights, phi);
+                    let x0 = forced.outputs_at(p.omega)?;
+                    for (oi, ser) in series.iter().enumerate() {
+                        let part = |_: C64, phi: f64| eps * x0.value(oi, phi);
                         let (l, a) = response_amplitudes(ssm, ser, order, p, &part);
                         linf.push(l);
                         h1.push(a);

@@ -121,8 +121,10 @@ pub enum CurveDetails {
         /// Continuation steps over all branches.
         continuation_steps: usize,
         /// Estimated relative error of the response: the largest over the
-        /// branches' peaks of the eq. (60) residual's effect on the master
-        /// pairs (NaN or infinite when the expansion diverged).
+        /// branches' peaks of the distance to the curve two orders lower
+        /// (an upper estimate while the expansion converges; infinite where
+        /// the lower order has no branch, NaN below O(3)). The truncation of
+        /// the non-autonomous terms at leading order is not in this figure.
         error_estimate: f64,
     },
 }

@@ -106,12 +106,7 @@ pub struct ForcedCoefficients {
 impl ForcedCoefficients {
     /// Chebyshev nodes (second kind) on `[a, b]`.
     pub fn nodes(a: f64, b: f64, count: usize) -> Vec<f64> {
-        (0..count)
-            .map(|k| {
-                let t = (std::f64::consts::PI * k as f64 / (count - 1) as f64).cos();
-                0.5 * (a + b) + 0.5 * (b - a) * t
-            })
-            .collect()
+        crate::chebyshev::lobatto_nodes(a, b, count)
     }
 
     /// From `(sigma, tau)` evaluated at [`ForcedCoefficients::nodes`].
@@ -134,36 +129,13 @@ impl ForcedCoefficients {
     fn at(&self, omega: f64) -> (Vec<C64>, Vec<C64>) {
         let lo = self.nodes.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = self.nodes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let all: Vec<C64> = chebyshev_interpolate(&self.nodes, &self.values, omega.clamp(lo, hi))
-            .iter()
-            .map(|c| c * self.eps)
-            .collect();
+        let all: Vec<C64> =
+            crate::chebyshev::interpolate(&self.nodes, &self.values, omega.clamp(lo, hi))
+                .iter()
+                .map(|c| c * self.eps)
+                .collect();
         (all[..self.n_sigma].to_vec(), all[self.n_sigma..].to_vec())
     }
-}
-
-/// Barycentric interpolation at `x` of vectors given at the Chebyshev nodes
-/// of [`ForcedCoefficients::nodes`] (weights `(-1)^k`, halved at the ends).
-pub fn chebyshev_interpolate(nodes: &[f64], values: &[Vec<C64>], x: f64) -> Vec<C64> {
-    let n = nodes.len();
-    let len = values[0].len();
-    let mut num = vec![C64::new(0.0, 0.0); len];
-    let mut den = 0.0;
-    for (k, (&xk, v)) in nodes.iter().zip(values).enumerate() {
-        let mut w = if k == 0 || k == n - 1 { 0.5 } else { 1.0 };
-        if k % 2 == 1 {
-            w = -w;
-        }
-        let d = x - xk;
-        if d == 0.0 {
-            return v.clone();
-        }
-        den += w / d;
-        for (o, c) in num.iter_mut().zip(v) {
-            *o += c * (w / d);
-        }
-    }
-    num.iter().map(|c| c / den).collect()
 }
 
 /// `sum_a c_a u^a` and its derivative in `u`.
