@@ -71,6 +71,7 @@ pub fn registry() -> ssm_engine::model::plugin::Registry {
         plugin_path("oscillator-chain"),
         plugin_path("duffing"),
         plugin_path("pendulum"),
+        plugin_path("divider"),
         plugin_path("ssm-fixture-modal-truncation"),
         plugin_path("ssm-fixture-api-1-0"),
     ])
