@@ -27,7 +27,7 @@ use crate::rom::frc::{one_pair_frc, response_amplitudes, ForcedCoefficients, One
 use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{invariance_error, polar, Polar};
-use crate::ssm::forced::{ForcedSsm, OUTPUT_TABLE_TOLERANCE};
+use crate::ssm::forced::{table_warning, ForcedSsm};
 use crate::ssm::SsmExpansion;
 use crate::C64;
 
@@ -132,11 +132,8 @@ pub fn forced_response_one_pair(
     let mut warnings = Vec::new();
     let weights: Vec<&[(usize, f64)]> = outputs.iter().map(|o| o.weights.as_slice()).collect();
     let table_error = ctx.forced.tabulate_outputs(range.0, range.1, &weights)?;
-    if table_error > OUTPUT_TABLE_TOLERANCE {
-        warnings.push(format!(
-            "X0 could not be interpolated in Omega over [{}, {}] (estimated error {table_error:.1e}: a non-master eigenvalue is near i Omega); the outputs are solved at every point instead, which costs one sparse solve of the full system per point",
-            range.0, range.1
-        ));
+    if let Some(w) = table_warning(table_error, range) {
+        warnings.push(w);
     }
     for (&order, &eps) in orders
         .iter()

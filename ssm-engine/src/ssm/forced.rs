@@ -141,6 +141,32 @@ impl OutputCoefficients {
 /// 14,402-state divider, 2e-11 for its 146 states).
 pub const OUTPUT_TABLE_TOLERANCE: f64 = 1e-6;
 
+/// Largest relative error estimate of [`ForcedSsm::tabulate_outputs`] at
+/// which the table is still used (with a warning above
+/// [`OUTPUT_TABLE_TOLERANCE`]): the interpolant has converged to the noise of
+/// the solves themselves (ill-conditioned `Lambda B - A`, e.g. a very fine
+/// mesh), and solving every point would be no more accurate. Beyond it the
+/// table did not converge (a non-master eigenvalue near `i Omega`).
+pub const OUTPUT_TABLE_ACCEPT: f64 = 1e-2;
+
+/// The warning for a table of [`ForcedSsm::tabulate_outputs`] over `range`
+/// with error estimate `error`, if any.
+pub fn table_warning(error: f64, range: (f64, f64)) -> Option<String> {
+    if error <= OUTPUT_TABLE_TOLERANCE {
+        None
+    } else if error <= OUTPUT_TABLE_ACCEPT {
+        Some(format!(
+            "X0 over [{}, {}] is interpolated in Omega to {error:.1e} (relative), the accuracy of the sparse solves themselves: Lambda B - A is ill-conditioned (a very fine mesh or a stiff model)",
+            range.0, range.1
+        ))
+    } else {
+        Some(format!(
+            "X0 could not be interpolated in Omega over [{}, {}] (estimated error {error:.1e}): either a non-master eigenvalue is near i Omega, or the sparse solves of this model have lost that much precision (an ill-conditioned pencil: compare the eigenvalues with a coarser mesh); the outputs are solved at every point instead, one sparse solve of the full system per point",
+            range.0, range.1
+        ))
+    }
+}
+
 /// Most Chebyshev nodes (exact solves) spent on an output table.
 const OUTPUT_TABLE_MAX_NODES: usize = 129;
 
@@ -302,7 +328,7 @@ impl<'a> ForcedSsm<'a> {
     /// resonances are removed by the bordering of eq. 60), so Chebyshev
     /// interpolation converges geometrically and a few dozen sparse solves
     /// serve every point of a curve. Returns the table's relative error
-    /// estimate; when it exceeds [`OUTPUT_TABLE_TOLERANCE`] the table is
+    /// estimate; when it exceeds [`OUTPUT_TABLE_ACCEPT`] the table is
     /// dropped and every frequency is solved exactly.
     ///
     /// # Errors
@@ -323,7 +349,7 @@ impl<'a> ForcedSsm<'a> {
             |omega| self.solve_outputs(omega),
         )?;
         let error = table.error;
-        if error <= OUTPUT_TABLE_TOLERANCE {
+        if error <= OUTPUT_TABLE_ACCEPT {
             self.table = Some(table);
         }
         Ok(error)
