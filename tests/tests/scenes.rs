@@ -173,6 +173,20 @@ fn check_ssm_outputs(c: &str, s: &serde_json::Value, out: &std::path::Path) {
             w[0]
         );
     }
+    // invariance.csv holds the same table, row by row
+    let inv = std::fs::read_to_string(out.join("invariance.csv")).unwrap();
+    let mut lines = inv.lines();
+    assert_eq!(lines.next().unwrap(), "order,radius,error");
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 36);
+    for r in &rows {
+        let want = at(r[0] as u64, r[1]);
+        assert!((r[2] - want).abs() <= 1e-9 * want, "{r:?} against {want}");
+    }
+    let svg = std::fs::read_to_string(out.join("invariance.svg")).unwrap();
+    assert!(svg.contains("O(3)") && svg.contains("O(13)"));
     let bb = std::fs::read_to_string(out.join("backbone.csv")).unwrap();
     assert_eq!(
         bb.lines().next().unwrap(),

@@ -1,6 +1,6 @@
 //! Writers of what is read off an SSM: the `ssm`, `polar` and
-//! `invariance_error` entries of `summary.json`, `backbone.csv`/`.svg` and
-//! `rom_trajectory.csv`. They format typed results and compute nothing.
+//! `invariance_error` entries of `summary.json`, `invariance.csv`/`.svg`,
+//! `backbone.csv`/`.svg` and `rom_trajectory.csv`. They format typed results and compute nothing.
 
 use serde_json::{json, Value};
 
@@ -46,6 +46,43 @@ pub fn invariance_json(rows: &[InvarianceEntry]) -> Value {
     rows.iter()
         .map(|r| json!({"order": r.order, "radius": r.radius, "error": r.error}))
         .collect()
+}
+
+/// `invariance.csv`: `order,radius,error`, one row per order and radius
+/// (eq. 41; Fig. 21 of Li, Jain & Haller 2023).
+pub fn invariance_csv(rows: &[InvarianceEntry]) -> String {
+    let mut csv = String::from("order,radius,error\n");
+    for r in rows {
+        csv.push_str(&format!("{},{:.10e},{:.10e}\n", r.order, r.radius, r.error));
+    }
+    csv
+}
+
+/// `invariance.svg`: the invariance error against the radius, one curve per
+/// order, logarithmic axes.
+pub fn invariance_svg(rows: &[InvarianceEntry]) -> Result<String, PlotError> {
+    let mut orders: Vec<usize> = rows.iter().map(|r| r.order).collect();
+    orders.sort_unstable();
+    orders.dedup();
+    let drawn: Vec<Curve> = orders
+        .iter()
+        .map(|&o| Curve {
+            label: format!("O({o})"),
+            points: rows
+                .iter()
+                .filter(|r| r.order == o)
+                .map(|r| (r.radius, r.error))
+                .collect(),
+            ..Curve::default()
+        })
+        .collect();
+    line_plot(
+        "invariance error (eq. 41)",
+        "radius rho",
+        "relative invariance error",
+        &drawn,
+        Scale::LogLog,
+    )
 }
 
 /// `backbone.csv`: `order,rho,omega,<output>...,error_estimate` (the last
