@@ -17,7 +17,6 @@ use std::ops::Range;
 
 use super::error::JobError;
 use crate::model::system::System;
-use crate::poly::Composition;
 use crate::scene::{SceneFile, AUTO_MAX_ORDER};
 use crate::spectrum::{MasterMode, DENSE_LIMIT};
 use crate::ssm::Dynamics;
@@ -99,9 +98,6 @@ struct Sizes {
     nnz: f64,
     /// Factors of all monomials of `F` (a bound on the composition's nodes).
     factors: f64,
-    /// Distinct monomials of `F` and their prefixes: the nodes of the
-    /// composition's trie, each holding one series.
-    monomials: f64,
 }
 
 impl Sizes {
@@ -116,7 +112,6 @@ impl Sizes {
             states: system.n_states() as f64,
             nnz: (system.a.compute_nnz() + system.b.compute_nnz()) as f64,
             factors: factors as f64,
-            monomials: Composition::new(&system.nonlinearity, 0).n_nodes() as f64,
         }
     }
 
@@ -300,7 +295,7 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
     let once = Cost {
         ops: 4.0 * sizes.factors * products + 0.5 * n_idx * sizes.sparse_solve(),
         // the series product table holds one 8-byte entry per product
-        bytes: 16.0 * n_idx * (2.0 * sizes.states + sizes.monomials + nvar as f64) + 8.0 * products,
+        bytes: 16.0 * n_idx * (2.0 * sizes.states + sizes.factors + nvar as f64) + 8.0 * products,
     };
     if forced {
         Cost {
