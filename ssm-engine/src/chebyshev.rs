@@ -70,12 +70,32 @@ pub struct Table {
 }
 
 impl Table {
-    /// The interpolant at `x`, held at the end values outside `[a, b]`.
+    /// The interpolant at `x`, held at the end values outside the nodes.
     pub fn at(&self, x: f64) -> Vec<C64> {
-        let lo = self.nodes.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = self.nodes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        interpolate(&self.nodes, &self.values, x.clamp(lo, hi))
+        interpolate_held(&self.nodes, &self.values, x)
     }
+
+    /// `x` lies within the nodes.
+    pub fn contains(&self, x: f64) -> bool {
+        let (lo, hi) = span(&self.nodes);
+        (lo..=hi).contains(&x)
+    }
+}
+
+/// Smallest and largest node.
+fn span(nodes: &[f64]) -> (f64, f64) {
+    nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
+/// [`interpolate`] at `x`, held at the end values outside the nodes (where
+/// a polynomial interpolant would extrapolate).
+pub fn interpolate_held(nodes: &[f64], values: &[Vec<C64>], x: f64) -> Vec<C64> {
+    let (lo, hi) = span(nodes);
+    interpolate(nodes, values, x.clamp(lo, hi))
 }
 
 /// Tabulates `f` on `[a, b]` from 17 nodes, doubling the intervals until the
@@ -107,6 +127,7 @@ pub fn adaptive<E>(
         let mut values = Vec::with_capacity(finer.len());
         let mut diff = 0.0f64;
         let mut size = 0.0f64;
+        let mut finite = true;
         for (k, &x) in finer.iter().enumerate() {
             let v = if k % 2 == 0 {
                 table.values[k / 2].clone()
@@ -121,10 +142,17 @@ pub fn adaptive<E>(
             for p in &v {
                 size = size.max(p.norm());
             }
+            finite &= v.iter().all(|p| p.re.is_finite() && p.im.is_finite());
             values.push(v);
         }
         count = finer.len();
-        let error = if size > 0.0 { diff / size } else { 0.0 };
+        let error = if !finite {
+            f64::INFINITY
+        } else if size > 0.0 {
+            diff / size
+        } else {
+            0.0
+        };
         let previous = table.error;
         table = Table {
             nodes: finer,
@@ -160,6 +188,20 @@ mod tests {
             .map(|x| (t.at(x)[0] - f(x).unwrap()[0]).norm())
             .fold(0.0, f64::max);
         assert!(worst < 1e-11, "true error {worst:e}");
+    }
+
+    /// A function with a non-finite value is never taken for converged.
+    #[test]
+    fn non_finite_values_are_not_converged() {
+        let f = |x: f64| -> Result<Vec<C64>, ()> {
+            Ok(vec![if x > 0.5 {
+                C64::new(f64::NAN, 0.0)
+            } else {
+                C64::new(1.0, 0.0)
+            }])
+        };
+        let t = adaptive(-1.0, 1.0, 1e-10, 129, f).unwrap();
+        assert!(t.error.is_infinite(), "estimate {}", t.error);
     }
 
     /// A pole inside the interval cannot be tabulated: the estimate says so.

@@ -30,6 +30,19 @@ const MAX_SWITCHES: usize = 6;
 /// range (in the scaled amplitudes of [`RotatingFrame::scaled`]).
 const H_MAX: f64 = 0.05;
 
+/// The rate, in multiples of `Omega`, at which the monomial with exponents
+/// `e` over `(p_1, conj p_1, p_2, ...)` turns on the orbit
+/// `p_j = q_j e^{i r_j Omega t}`: `sum_v e_v r_v`, with `-r_j` for `conj p_j`.
+fn turn_rate(e: &[u16], ratios: &[f64]) -> f64 {
+    e.iter()
+        .enumerate()
+        .map(|(v, &k)| {
+            let r = ratios[v / 2];
+            f64::from(k) * if v % 2 == 0 { r } else { -r }
+        })
+        .sum()
+}
+
 /// The rotating-frame terms of `R` truncated at `order`: those autonomous for
 /// `p_{2j} = q_j e^{i r_j Omega t}` (all of a consistent normal form).
 fn rotating_terms(ssm: &SsmExpansion, ratios: &[f64], order: usize) -> (Vec<PolarTerm>, usize) {
@@ -40,15 +53,7 @@ fn rotating_terms(ssm: &SsmExpansion, ratios: &[f64], order: usize) -> (Vec<Pola
             continue;
         }
         let e = ssm.set.exponents(t.index);
-        let phase: f64 = e
-            .iter()
-            .enumerate()
-            .map(|(v, &k)| {
-                let r = ratios[v / 2];
-                f64::from(k) * if v % 2 == 0 { r } else { -r }
-            })
-            .sum();
-        if (phase - ratios[t.coord / 2]).abs() > 1e-9 {
+        if (turn_rate(e, ratios) - ratios[t.coord / 2]).abs() > 1e-9 {
             dropped += 1;
             continue;
         }
@@ -84,19 +89,7 @@ impl Harmonics {
     fn new(ssm: &SsmExpansion, ratios: &[f64], periods: f64, order: usize) -> Self {
         let end = ssm.set.of_order(order.min(ssm.order)).end;
         let k: Vec<i64> = (0..end)
-            .map(|i| {
-                let h: f64 = ssm
-                    .set
-                    .exponents(i)
-                    .iter()
-                    .enumerate()
-                    .map(|(v, &e)| {
-                        let r = ratios[v / 2];
-                        f64::from(e) * if v % 2 == 0 { r } else { -r }
-                    })
-                    .sum();
-                (h * periods).round() as i64
-            })
+            .map(|i| (turn_rate(ssm.set.exponents(i), ratios) * periods).round() as i64)
             .collect();
         let lo = k.iter().copied().min().unwrap_or(0).min(0);
         let hi = k.iter().copied().max().unwrap_or(0).max(0);
@@ -448,11 +441,19 @@ pub fn forced_response_multi(
                 let e = lower
                     .as_ref()
                     .map_or(f64::NAN, |l| order_change(&frame, l, a, pk));
-                error_estimate = if e.is_nan() { e } else { error_estimate.max(e) };
+                error_estimate = if e.is_nan() || error_estimate.is_nan() {
+                    f64::NAN
+                } else {
+                    error_estimate.max(e)
+                };
             }
         }
         let untrusted = accuracy::exceeds(error_estimate, tolerance);
-        if untrusted {
+        if lower.is_none() {
+            warnings.push(format!(
+                "O({order}), eps = {eps}: no error estimate below O(3) (the estimate compares the curve with the one two orders lower); do not trust this curve: raise the expansion order"
+            ));
+        } else if untrusted {
             warnings.push(format!(
                 "O({order}), eps = {eps}: the estimated error of the response, {}, exceeds the accuracy target {} ([ssm] tolerance); do not trust this curve: raise the expansion order, or lower the forcing (the response may lie beyond the SSM's convergence radius); non-autonomous terms beyond the leading order are implemented for one master pair only",
                 percent(error_estimate),

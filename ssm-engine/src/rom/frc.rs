@@ -127,13 +127,10 @@ impl ForcedCoefficients {
     /// `(eps sigma_a, eps tau_b)` at `omega` (barycentric interpolation; held
     /// at the end values outside the nodes, where the FRC is not reported).
     fn at(&self, omega: f64) -> (Vec<C64>, Vec<C64>) {
-        let lo = self.nodes.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = self.nodes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let all: Vec<C64> =
-            crate::chebyshev::interpolate(&self.nodes, &self.values, omega.clamp(lo, hi))
-                .iter()
-                .map(|c| c * self.eps)
-                .collect();
+        let all: Vec<C64> = crate::chebyshev::interpolate_held(&self.nodes, &self.values, omega)
+            .iter()
+            .map(|c| c * self.eps)
+            .collect();
         (all[..self.n_sigma].to_vec(), all[self.n_sigma..].to_vec())
     }
 }

@@ -362,11 +362,7 @@ impl<'a> ForcedSsm<'a> {
     /// # Errors
     /// A failed solve.
     pub fn outputs_at(&mut self, omega: f64) -> Result<OutputCoefficients, ForcedError> {
-        let inside = self.table.as_ref().filter(|t| {
-            let lo = t.nodes.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = t.nodes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            (lo..=hi).contains(&omega)
-        });
+        let inside = self.table.as_ref().filter(|t| t.contains(omega));
         let c = match inside {
             Some(t) => t.at(omega),
             None => self.solve_outputs(omega)?,
