@@ -33,11 +33,10 @@
 //! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023), eqs. (41),
 //! (42), (60), Fig. 6 (the residual grows in step with the error).
 
-use rayon::prelude::*;
-
 use crate::model::system::System;
 use crate::spectrum::MasterMode;
-use crate::ssm::{Dynamics, SsmExpansion};
+use crate::ssm::modal_residual::ModalResidual;
+use crate::ssm::SsmExpansion;
 use crate::C64;
 
 /// Phases of a master pair sampled per turn (resolves harmonics up to 16,
@@ -158,51 +157,42 @@ pub fn defect(modal: &[C64], co: usize, q0: C64, scale: f64, unit: f64) -> Defec
 }
 
 /// The defect of the autonomous expansion truncated at `order` on master
-/// pair `j` at the reduced point `p` (conjugate pairs): the residual of
-/// eq. (42) with the phase of pair `j` swept over a turn, the other pairs
-/// held. `None` for maps (their residual is a defect of the multiplier, not
-/// of the eigenvalue) and at `p_j = 0`.
+/// pair `j` (eigenvalue `lambda`, residual projected by `modal`) at the
+/// reduced point `p` (conjugate pairs): the residual of eq. (42) with the
+/// phase of pair `j` swept over a turn, the other pairs held. `None` at
+/// `p_j = 0`.
 pub fn pair_defect(
     ssm: &SsmExpansion,
-    sys: &System,
-    master: &MasterMode,
+    modal: &ModalResidual,
+    lambda: C64,
     p: &[C64],
     j: usize,
     order: usize,
 ) -> Option<Defect> {
-    if ssm.dynamics != Dynamics::Flow || p[2 * j].norm() == 0.0 {
+    let q0 = p[2 * j];
+    if q0.norm() == 0.0 {
         return None;
     }
-    let q0 = p[2 * j];
-    let modal: Vec<C64> = (0..PHASES)
-        .into_par_iter()
-        .map(|k| {
-            let turn = C64::from_polar(1.0, 2.0 * std::f64::consts::PI * k as f64 / PHASES as f64);
-            let mut point = p.to_vec();
-            point[2 * j] = q0 * turn;
-            point[2 * j + 1] = (q0 * turn).conj();
-            let r = ssm.residual(sys, &point, order);
-            master.left.iter().zip(&r).map(|(u, x)| u.conj() * x).sum()
-        })
-        .collect();
-    Some(defect(&modal, 1, q0, q0.norm(), master.lambda.norm()))
+    let samples = modal.on_circle(ssm, p, j, order, PHASES);
+    Some(defect(&samples, 1, q0, q0.norm(), lambda.norm()))
 }
 
 /// Estimated relative error of a backbone point at polar amplitude `rho` of
-/// a one-pair SSM truncated at `order`: [`Defect::backbone`] at `order`,
-/// with its [`tail`] from the orders below; `None` for maps and at `rho = 0`
-/// (where the linear part is exact).
+/// a one-pair SSM truncated at `order`, its master mode of eigenvalue
+/// `lambda` seen through `modal`: [`Defect::backbone`] at `order`, with its
+/// [`tail`] from the orders below; `None` at `rho = 0` (where the linear
+/// part is exact).
 pub fn backbone_error(
     ssm: &SsmExpansion,
-    sys: &System,
-    master: &MasterMode,
+    modal: &ModalResidual,
+    lambda: C64,
     rho: f64,
     order: usize,
 ) -> Option<f64> {
     let p = [C64::new(rho, 0.0), C64::new(rho, 0.0)];
     let figures = tail_orders(order)
         .into_iter()
-        .map(|o| pair_defect(ssm, sys, master, &p, 0, o).map(|d| d.backbone(master.lambda)))
+        .map(|o| pair_defect(ssm, modal, lambda, &p, 0, o).map(|d| d.backbone(lambda)))
         .collect::<Option<Vec<f64>>>()?;
     Some(tail(&figures))
 }
@@ -220,12 +210,16 @@ pub fn transient_error(
     states: &[Vec<C64>],
     order: usize,
 ) -> Option<f64> {
-    if ssm.dynamics != Dynamics::Flow || times.is_empty() {
+    if times.is_empty() {
         return None;
     }
+    let modal = masters
+        .iter()
+        .map(|m| ModalResidual::new(ssm, sys, &m.left).map(|r| (r, m.lambda)))
+        .collect::<Option<Vec<_>>>()?;
     let figures: Vec<f64> = tail_orders(order)
         .into_iter()
-        .map(|o| drift(ssm, sys, masters, times, states, o))
+        .map(|o| drift(ssm, &modal, times, states, o))
         .collect();
     Some(tail(&figures))
 }
@@ -233,8 +227,7 @@ pub fn transient_error(
 /// The accumulated defect and distortion of [`transient_error`] at `order`.
 fn drift(
     ssm: &SsmExpansion,
-    sys: &System,
-    masters: &[MasterMode],
+    modal: &[(ModalResidual, C64)],
     times: &[f64],
     states: &[Vec<C64>],
     order: usize,
@@ -251,8 +244,8 @@ fn drift(
     for i in picked {
         let (t, p) = (times[i], &states[i]);
         let mut rate = 0.0;
-        for (j, m) in masters.iter().enumerate() {
-            if let Some(d) = pair_defect(ssm, sys, m, p, j, order) {
+        for (j, (m, lambda)) in modal.iter().enumerate() {
+            if let Some(d) = pair_defect(ssm, m, *lambda, p, j, order) {
                 // the pair's share of the whole amplitude weighs its drift
                 let share = p[2 * j].norm() / norm_of_pairs(p);
                 rate += d.kappa.norm() * share;

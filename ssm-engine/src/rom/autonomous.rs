@@ -8,11 +8,14 @@
 //! invariance error eq. (41), reduced transients (Figs. 4, 10, 14); their
 //! error estimates are those of [`crate::rom::accuracy`].
 
+use rayon::prelude::*;
+
 use crate::model::system::{OutputMap, System};
 use crate::rom::accuracy;
 use crate::scene::{BackboneSection, InvarianceErrorSection, TransientSection};
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar, PolarError};
+use crate::ssm::modal_residual::ModalResidual;
 use crate::ssm::rom::{integrate, RomError};
 use crate::ssm::SsmExpansion;
 use crate::C64;
@@ -92,6 +95,7 @@ pub fn backbone(
         .collect();
     let n = *sec.points.get_ref();
     let rho_max = *sec.rho_max.get_ref();
+    let modal = ModalResidual::new(ssm, sys, &master.left);
     let mut curves = Vec::with_capacity(orders.len());
     for &order in &orders {
         let mut points = Vec::with_capacity(n);
@@ -116,7 +120,7 @@ pub fn backbone(
             });
         }
         let error_estimate = estimate_along(&mut points, |rho| {
-            accuracy::backbone_error(ssm, sys, master, rho, order)
+            accuracy::backbone_error(ssm, modal.as_ref()?, master.lambda, rho, order)
         });
         let trusted_up_to = error_estimate.map(|_| {
             points
@@ -144,22 +148,22 @@ pub fn backbone(
 /// returns the largest (NaN when one is not finite).
 fn estimate_along(
     points: &mut [BackbonePoint],
-    estimate: impl Fn(f64) -> Option<f64>,
+    estimate: impl Fn(f64) -> Option<f64> + Sync,
 ) -> Option<f64> {
     let n = points.len();
     let stride = (n - 1).div_ceil(BACKBONE_ESTIMATES - 1).max(1);
-    let mut knots: Vec<(usize, f64)> = Vec::new();
-    for i in (0..n)
+    let at: Vec<(usize, f64)> = (0..n)
         .step_by(stride)
         .chain(((n - 1) % stride != 0).then_some(n - 1))
-    {
-        let e = if points[i].rho == 0.0 {
-            Some(0.0)
-        } else {
-            estimate(points[i].rho)
-        };
-        knots.push((i, e?));
-    }
+        .map(|i| (i, points[i].rho))
+        .collect();
+    let knots: Vec<(usize, f64)> = at
+        .into_par_iter()
+        .map(|(i, rho)| {
+            let e = if rho == 0.0 { Some(0.0) } else { estimate(rho) };
+            e.map(|e| (i, e))
+        })
+        .collect::<Option<Vec<_>>>()?;
     for w in knots.windows(2) {
         let ((i0, e0), (i1, e1)) = (w[0], w[1]);
         let (r0, r1) = (points[i0].rho, points[i1].rho);

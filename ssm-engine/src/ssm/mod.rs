@@ -38,6 +38,7 @@
 pub mod analysis;
 pub mod forced;
 pub mod homological;
+pub mod modal_residual;
 pub mod nonautonomous;
 pub mod rom;
 
