@@ -21,6 +21,7 @@
 //! Appendix D.
 
 pub mod dense;
+mod krylov;
 pub mod modes;
 mod normalization;
 pub mod resonance;

@@ -23,7 +23,7 @@ use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
 use faer::{Accum, Col, Mat, MatMut, MatRef, Par};
 
-use super::SpectrumError;
+use super::{krylov, SpectrumError};
 use crate::C64;
 
 /// The operator `(A - sigma B)^{-1} B`.
@@ -123,29 +123,29 @@ pub fn eigenvalues_near_shift(
         std::mem::swap(&mut x, &mut y);
     }
     let v0: Col<f64> = x.col(0).to_owned();
-    // ask for two more than wanted so that a pair is not cut at the edge
-    let want = (modes + 2).min(n);
-    let params = faer::matrix_free::eigen::PartialEigenParams {
-        max_restarts: 2000,
-        ..Default::default()
+    // a pair at the edge is taken whole by the iteration
+    let want = modes.min(n);
+    let apply = |x: faer::ColRef<'_, f64>, out: MatMut<'_, f64>| {
+        op.apply(
+            out,
+            x.as_mat(),
+            Par::Seq,
+            MemStack::new(&mut MemBuffer::new(StackReq::EMPTY)),
+        );
     };
-    let par = Par::Seq;
-    let mut mem = MemBuffer::new(faer::matrix_free::eigen::partial_eigen_scratch(
-        &op, want, par, params,
-    ));
-    let mut vecs = Mat::<C64>::zeros(n, want);
-    let mut vals = vec![C64::new(0.0, 0.0); want];
-    let info = faer::matrix_free::eigen::partial_eigen(
-        vecs.as_mut(),
-        &mut vals,
-        &op,
-        v0.as_ref(),
-        1e-12,
-        par,
-        MemStack::new(&mut mem),
-        params,
-    );
-    let found = info.n_converged_eigen.min(want);
+    let vals = krylov::largest_eigenvalues(&apply, n, v0.as_ref(), want, 1e-12, 2000).map_err(
+        |e| match e {
+            krylov::KrylovError::NotConverged { converged, .. } => SpectrumError::NotConverged {
+                found: converged,
+                requested: modes,
+            },
+            krylov::KrylovError::RayleighQuotient { .. } => SpectrumError::NotConverged {
+                found: 0,
+                requested: modes,
+            },
+        },
+    )?;
+    let found = vals.len();
     if found < modes.min(n) {
         return Err(SpectrumError::NotConverged {
             found,
