@@ -94,6 +94,22 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
     if let Dynamics::Map { .. } = dynamics {
         spectrum::sort_multipliers(&mut spectrum.eigenvalues);
     }
+    let coverage = match (spectrum.complete, dynamics) {
+        (false, Dynamics::Flow) => {
+            let automatic = sc.spectrum.modes.is_none();
+            let (widened, coverage) = cover_resonances(
+                pencil_a,
+                pencil_b,
+                &opts,
+                spectrum,
+                (pairs, order, *sc.ssm.resonance_tol.get_ref()),
+                automatic,
+            )?;
+            spectrum = widened;
+            coverage
+        }
+        _ => None,
+    };
     let n_original = system.n_states() - system.n_auxiliary();
     let mechanical_layout = system
         .mechanical
@@ -146,11 +162,26 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
     let resonance_s = t_res.elapsed().as_secs_f64();
     warnings.extend(resonances.warnings.iter().cloned());
     if !spectrum.complete {
-        warnings.push(format!(
-            "sparse path: {} finite modes nearest sigma = {} were computed; resonance checks and spectral quotients cover only those",
-            spectrum.eigenvalues.len(),
-            opts.shift
-        ));
+        warnings.push(match coverage {
+            Some(c) if c.radius >= c.needed => format!(
+                "sparse path: the {} finite modes with |lambda - sigma| <= {:.4e} (sigma = {}) were computed; they hold every eigenvalue that the non-resonance conditions of eq. (53) up to order {order} can involve (|lambda| <= {:.4e}); the real-part conditions of eq. (57) and the spectral quotients count only them",
+                spectrum.eigenvalues.len(),
+                c.radius + opts.shift.abs(),
+                opts.shift,
+                c.needed
+            ),
+            Some(c) => format!(
+                "sparse path: the {} finite modes computed hold the eigenvalues with |lambda| <= {:.4e} only, but the non-resonance conditions of eq. (53) up to order {order} can involve |lambda| up to {:.4e}: the resonance checks and spectral quotients are incomplete; raise [spectrum] modes (or leave it out to let the engine choose) or set method = \"dense\"",
+                spectrum.eigenvalues.len(),
+                c.radius,
+                c.needed
+            ),
+            None => format!(
+                "sparse path: {} finite modes nearest sigma = {} were computed; resonance checks and spectral quotients cover only those",
+                spectrum.eigenvalues.len(),
+                opts.shift
+            ),
+        });
     }
     Ok(Spectral {
         spectrum,
@@ -161,6 +192,72 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
         spectrum_s,
         resonance_s,
     })
+}
+
+/// The most modes the sparse path computes on its own to cover the
+/// resonance checks (the Krylov basis holds about twice as many vectors).
+const MAX_AUTOMATIC_MODES: usize = 160;
+
+/// Which eigenvalues a partial spectrum holds for the resonance checks.
+#[derive(Debug, Clone, Copy)]
+struct Coverage {
+    /// Every eigenvalue with `|lambda| <= radius` was computed.
+    radius: f64,
+    /// Resonances up to the expansion order involve `|lambda| <= needed`:
+    /// `order max |lambda_master|` with the resonance tolerance.
+    needed: f64,
+}
+
+/// Widens a sparse spectrum until it holds every eigenvalue that the
+/// non-resonance conditions of eq. (53) up to `order` can involve
+/// (`lambda_j = <m, lambda_M>` with `|m| <= order` needs `|lambda_j| <=
+/// order max |lambda_M|`, widened by the resonance tolerance `tol`; the
+/// real-part conditions of eq. (57) reach up to the absolute spectral
+/// quotient, which only the whole spectrum knows), doubling the modes, at most [`MAX_AUTOMATIC_MODES`]
+/// and half the states; only when `automatic` (the scene named no count).
+/// The shift-invert iteration finds the eigenvalues nearest `sigma`, so
+/// the computed set is the whole disk `|lambda - sigma| <= max |lambda_i -
+/// sigma|` and covers `|lambda| <=` that radius minus `|sigma|`.
+fn cover_resonances(
+    a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    b: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    opts: &SpectrumOptions,
+    mut found: Spectrum,
+    (pairs, order, tol): (&[usize], usize, f64),
+    automatic: bool,
+) -> Result<(Spectrum, Option<Coverage>), JobError> {
+    let n = a.nrows();
+    let mut modes = opts.modes;
+    loop {
+        let starts = spectrum::pair_starts(&found.eigenvalues);
+        let Some(master_abs) = pairs
+            .iter()
+            .map(|&p| starts.get(p - 1).map(|&i| found.eigenvalues[i].norm()))
+            .collect::<Option<Vec<f64>>>()
+        else {
+            // a missing master pair is reported by the master-mode stage
+            return Ok((found, None));
+        };
+        let needed = order as f64 * master_abs.iter().copied().fold(0.0, f64::max) * (1.0 + tol);
+        let radius = found
+            .eigenvalues
+            .iter()
+            .map(|l| (l - opts.shift).norm())
+            .fold(0.0, f64::max)
+            - opts.shift.abs();
+        let coverage = Coverage { radius, needed };
+        let next = (2 * modes).min(MAX_AUTOMATIC_MODES).min(n / 2);
+        if radius >= needed || !automatic || next <= modes {
+            return Ok((found, Some(coverage)));
+        }
+        modes = next;
+        let wider = SpectrumOptions {
+            modes,
+            method: Some(Method::Sparse),
+            ..opts.clone()
+        };
+        found = spectrum::compute(a, b, &wider)?;
+    }
 }
 
 /// A warning for each master eigenvalue that is repeated (to within the

@@ -34,7 +34,7 @@ pub use normalization::Normalization;
 pub use resonance::{check_resonances, ResonanceReport, SpectralQuotients};
 
 /// Largest number of states for which `auto` uses the dense path.
-pub const DENSE_LIMIT: usize = 1000;
+pub const DENSE_LIMIT: usize = 100;
 
 /// Why a spectrum could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
