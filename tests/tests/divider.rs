@@ -163,7 +163,8 @@ fn frc_branch_points_secondary_branch_and_full_system_steady_states() {
 /// the scene's accuracy target, 1 % of each output's largest value. The
 /// energy transfer of the paper is checked on the full system itself:
 /// `w_hori_mid` (second mode) starts near zero and grows to a maximum after
-/// the first second before it decays.
+/// the first second before it decays. The run's error estimate bounds the
+/// measured error within a factor 10.
 #[test]
 fn fig22_transient_from_ic1_matches_the_full_system() {
     let (s, out) = run_zoo_in("divider_fig22_ic1.toml");
@@ -173,6 +174,23 @@ fn fig22_transient_from_ic1_matches_the_full_system() {
         eprintln!("Fig. 22 IC1: {} relative error {e:.2e}", o["name"]);
         assert!(e <= 0.01, "{}: {e}", o["name"]);
     }
+    // the error estimate of a transient of two pairs (the smaller of the
+    // modal defect and the change from O(5) to O(7); measured 6.2 times the
+    // error, the modal defect alone was 46 times) against the measured
+    // error: an upper estimate, at most ten times the error
+    let measured = v["max_relative_error"].as_f64().unwrap();
+    let estimate = s["accuracy"]["answers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["answer"] == "transient")
+        .and_then(|a| a["error_estimate"].as_f64())
+        .expect("a transient estimate");
+    eprintln!("Fig. 22 IC1: estimate {estimate:.2e}, measured {measured:.2e}");
+    assert!(
+        (1.0..=10.0).contains(&(estimate / measured)),
+        "estimate {estimate:.3e} against the full system's {measured:.3e}"
+    );
     let csv = std::fs::read_to_string(out.join("validation.csv")).unwrap();
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();

@@ -243,6 +243,39 @@ pub fn polar_point(rho: &[f64], theta: &[f64]) -> Vec<C64> {
         .collect()
 }
 
+/// The outputs `Re sum_k s_k p^k` (series `s` of each output, truncated at
+/// `order`) along the reduced states, one row per sample.
+fn lift(
+    ssm: &SsmExpansion,
+    series: &[Vec<C64>],
+    order: usize,
+    times: &[f64],
+    states: &[Vec<C64>],
+) -> Result<Vec<Vec<f64>>, ResultError> {
+    let end = ssm.set.of_order(order).end;
+    times
+        .iter()
+        .zip(states)
+        .map(|(t, p)| {
+            let mono = ssm.set.monomials(p, order);
+            series
+                .iter()
+                .map(|s| {
+                    let y: C64 = (0..end).map(|i| s[i] * mono[i]).sum();
+                    if y.re.is_finite() {
+                        Ok(y.re)
+                    } else {
+                        Err(ResultError::NonFinite {
+                            what: "reduced-model trajectory".into(),
+                            place: format!("t = {t}"),
+                        })
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// A reduced transient lifted to physical outputs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LiftedTransient {
@@ -289,26 +322,33 @@ pub fn transient(
         .iter()
         .map(|o| ssm.output_series(&o.weights))
         .collect();
-    let end = ssm.set.of_order(order).end;
-    let mut values = Vec::with_capacity(tr.times.len());
-    let mut polar = Vec::with_capacity(tr.times.len());
-    for (t, p) in tr.times.iter().zip(&tr.states) {
-        let mono = ssm.set.monomials(p, order);
-        let mut row = Vec::with_capacity(series.len());
-        for s in &series {
-            let y: C64 = (0..end).map(|i| s[i] * mono[i]).sum();
-            if !y.re.is_finite() {
-                return Err(ResultError::NonFinite {
-                    what: "reduced-model trajectory".into(),
-                    place: format!("t = {t}"),
-                });
-            }
-            row.push(y.re);
+    let values = lift(ssm, &series, order, &tr.times, &tr.states)?;
+    let polar = tr
+        .states
+        .iter()
+        .map(|p| (0..m).map(|i| (p[2 * i].norm(), p[2 * i].arg())).collect())
+        .collect();
+    let defect = accuracy::transient_error(ssm, sys, masters, &tr.times, &tr.states, order);
+    let error_estimate = match defect {
+        // several pairs: the smaller of the modal defect and the change from
+        // two orders lower (see accuracy::order_change)
+        Some(d) if m > 1 && order >= 3 => {
+            let lower = integrate(
+                ssm,
+                order - 2,
+                &p0,
+                *sec.t_end.get_ref(),
+                *sec.samples.get_ref(),
+                *sec.rtol.get_ref(),
+            )
+            .ok()
+            .and_then(|l| lift(ssm, &series, order - 2, &l.times, &l.states).ok())
+            .filter(|l| l.len() == values.len());
+            // a lower order that blows up or stops early leaves the defect
+            Some(lower.map_or(d, |l| d.min(accuracy::order_change(&values, &l))))
         }
-        values.push(row);
-        polar.push((0..m).map(|i| (p[2 * i].norm(), p[2 * i].arg())).collect());
-    }
-    let error_estimate = accuracy::transient_error(ssm, sys, masters, &tr.times, &tr.states, order);
+        other => other,
+    };
     Ok(LiftedTransient {
         times: tr.times,
         outputs: values,
