@@ -274,7 +274,10 @@ impl Composition {
     /// `n_index` multi-indices.
     pub fn new(f: &PolyVector, n_index: usize) -> Self {
         let mut nodes: Vec<Node> = Vec::new();
-        let mut child: HashMap<(Option<usize>, usize), usize> = HashMap::new();
+        // the root of each variable, and each node's children (few: the
+        // variables that follow it in some monomial), found without hashing
+        let mut roots = vec![usize::MAX; f.n_vars as usize];
+        let mut children: Vec<Vec<(usize, usize)>> = Vec::new();
         let mut terms = Vec::with_capacity(f.terms.len());
         let mut vars: Vec<usize> = Vec::new();
         for t in f.terms.iter() {
@@ -285,24 +288,32 @@ impl Composition {
             vars.sort_unstable();
             let mut node: Option<usize> = None;
             for &v in &vars {
-                let leaf = *child.entry((None, v)).or_insert_with(|| {
+                if roots[v] == usize::MAX {
+                    roots[v] = nodes.len();
                     nodes.push(Node {
                         parent: None,
                         var: v,
                         leaf: nodes.len(),
                     });
-                    nodes.len() - 1
-                });
+                    children.push(Vec::new());
+                }
+                let leaf = roots[v];
                 let next = match node {
                     None => leaf,
-                    Some(_) => *child.entry((node, v)).or_insert_with(|| {
-                        nodes.push(Node {
-                            parent: node,
-                            var: v,
-                            leaf,
-                        });
-                        nodes.len() - 1
-                    }),
+                    Some(parent) => match children[parent].iter().find(|c| c.0 == v) {
+                        Some(&(_, c)) => c,
+                        None => {
+                            let id = nodes.len();
+                            nodes.push(Node {
+                                parent: Some(parent),
+                                var: v,
+                                leaf,
+                            });
+                            children.push(Vec::new());
+                            children[parent].push((v, id));
+                            id
+                        }
+                    },
                 };
                 node = Some(next);
             }
