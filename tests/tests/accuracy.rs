@@ -77,6 +77,19 @@ fn transient_estimates_match_the_full_system_error() {
         let listed = &s["accuracy"]["measured"][0];
         assert_eq!(listed["answer"], "transient");
         assert_eq!(listed["relative_error"].as_f64(), Some(measured));
+        let worst = s["validation"]["transient"]["outputs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .max_by(|a, b| {
+                let e = |o: &&serde_json::Value| o["relative_error"].as_f64().unwrap();
+                e(a).total_cmp(&e(b))
+            })
+            .unwrap();
+        assert_eq!(
+            listed["output"], worst["name"],
+            "{scene}: the output measured"
+        );
         assert!(
             (0.2..=10.0).contains(&(estimate / measured)),
             "{scene}: estimate {estimate:.3e} against the full system's {measured:.3e}"

@@ -175,6 +175,7 @@ fn accuracy_json(a: &Accuracy) -> Value {
             "order": m.order,
             "epsilon": m.epsilon,
             "relative_error": m.relative_error,
+            "output": m.output,
         })).collect::<Vec<_>>(),
     })
 }

@@ -295,6 +295,11 @@ fn measured_errors(v: &Validation) -> Vec<MeasuredError> {
             order: t.order,
             epsilon: None,
             relative_error: Some(t.max_relative_error),
+            output: t.relative_errors[..t.n_compared]
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1))
+                .map(|(k, _)| t.outputs[k].clone()),
         })
         .collect();
     for e in v.steady.iter().flat_map(|s| s.frc_errors.iter().flatten()) {
@@ -303,6 +308,7 @@ fn measured_errors(v: &Validation) -> Vec<MeasuredError> {
             order: e.order,
             epsilon: Some(e.epsilon),
             relative_error: e.max_relative_error,
+            output: e.output.clone(),
         });
     }
     list

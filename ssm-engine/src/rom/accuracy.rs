@@ -322,6 +322,8 @@ pub struct MeasuredError {
     pub epsilon: Option<f64>,
     /// The largest relative error found (`None`: no point could be compared).
     pub relative_error: Option<f64>,
+    /// The output it was found on.
+    pub output: Option<String>,
 }
 
 /// How the expansion order of a run was set and what its answers are worth.
