@@ -69,6 +69,9 @@ pub struct TransientComparison {
     pub result: TransientValidation,
     /// Relative error of each output over the run.
     pub relative_errors: Vec<f64>,
+    /// Root-mean-square relative error of each output over the run
+    /// ([`TransientValidation::rms_relative_error`]).
+    pub rms_relative_errors: Vec<f64>,
     /// Relative error over all outputs at each sample.
     pub relative_error_series: Vec<f64>,
     /// Largest relative error of the compared outputs.
@@ -285,6 +288,7 @@ fn transient_comparison(
         max_algebraic_residual: max(&tv.algebraic_residual),
         steps_per_s: tv.stats.accepted as f64 / tv.full_s.max(1e-12),
         relative_errors,
+        rms_relative_errors: (0..outs.len()).map(|k| tv.rms_relative_error(k)).collect(),
         result: tv,
     })
 }

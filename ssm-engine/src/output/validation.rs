@@ -84,7 +84,13 @@ fn transient_json(c: &TransientComparison) -> Value {
     let tv = &c.result;
     let named = |range: std::ops::Range<usize>| {
         range
-            .map(|k| json!({"name": c.outputs[k], "relative_error": c.relative_errors[k]}))
+            .map(|k| {
+                json!({
+                    "name": c.outputs[k],
+                    "relative_error": c.relative_errors[k],
+                    "rms_relative_error": c.rms_relative_errors[k],
+                })
+            })
             .collect::<Vec<_>>()
     };
     json!({
