@@ -327,3 +327,46 @@ fn a_shift_on_an_eigenvalue_gets_a_working_shift_suggested() {
         assert!(s != 0.0 && spectrum::sparse::is_regular_at(sys.a.as_ref(), sys.b.as_ref(), s));
     }
 }
+
+/// Reference: the closed-form chain spectrum (`chain_eigenvalues`). Without
+/// `[spectrum] modes`, `auto` takes the sparse path for 1,000 states and
+/// widens it until it holds every eigenvalue eq. (53) can involve up to
+/// O(13): all closed-form eigenvalues with `|lambda| <= 13 |lambda_1|
+/// (1 + resonance_tol)` (14 pairs, more than the 6 pairs of the default
+/// count) are among the computed ones, to 1e-9. A chain of 3 masses on the
+/// sparse path finds all 6 finite modes and reports a complete spectrum.
+#[test]
+fn sparse_path_covers_what_the_resonance_checks_need() {
+    let (k, alpha, beta) = CHAIN_DEFAULTS;
+    let scene = |n: usize, method: &str| {
+        format!(
+            "[model]\nplugin = \"oscillator-chain\"\n[model.params]\nn = {n}\n\
+             [spectrum]\nmethod = \"{method}\"\n[ssm]\norder = 13\n\
+             [outputs]\ncoordinates = [\"x1\"]\n"
+        )
+    };
+    let job = ssm_tests::run_scene_text(&scene(500, "auto")).unwrap();
+    assert_eq!(job.spectrum.method, Method::Sparse);
+    let exact = chain_eigenvalues(500, k, alpha, beta, 40);
+    let radius = 13.0 * exact[0].norm() * 1.02;
+    let needed: Vec<&C64> = exact.iter().filter(|l| l.norm() <= radius).collect();
+    assert!(
+        needed.len() >= 13,
+        "{} pairs inside the radius",
+        needed.len()
+    );
+    for l in needed {
+        assert!(
+            job.spectrum
+                .eigenvalues
+                .iter()
+                .any(|c| (c - l).norm() <= 1e-9 * l.norm()),
+            "{l} (|lambda| = {:.4e} <= {radius:.4e}) was not computed",
+            l.norm()
+        );
+    }
+    assert!(!job.spectrum.complete);
+    let small = ssm_tests::run_scene_text(&scene(3, "sparse")).unwrap();
+    assert_eq!(small.spectrum.eigenvalues.len(), 6);
+    assert!(small.spectrum.complete, "every finite mode was found");
+}

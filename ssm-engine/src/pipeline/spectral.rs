@@ -130,6 +130,11 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
         (Some(m), false) => 2 * (m.n_dof - m.n_constraints.min(m.n_dof)),
         _ => spectrum.eigenvalues.len(),
     };
+    // a sparse path that found every finite mode of a mechanical model has
+    // the whole spectrum
+    if mechanical_layout.is_some() && spectrum.eigenvalues.len() >= n_finite {
+        spectrum.complete = true;
+    }
     let masters = spectrum::master_modes(system, &spectrum, pairs, opts.normalization).map_err(
         |e| match e {
             SpectrumError::PairOutOfRange { .. } => JobError::Scene(scene.invalid(
@@ -198,6 +203,10 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
 /// resonance checks (the Krylov basis holds about twice as many vectors).
 const MAX_AUTOMATIC_MODES: usize = 160;
 
+/// The most numbers the Krylov basis of an automatic widening may hold
+/// (2^27: 1 GiB).
+const KRYLOV_BASIS_MAX: usize = 1 << 27;
+
 /// Which eigenvalues a partial spectrum holds for the resonance checks.
 #[derive(Debug, Clone, Copy)]
 struct Coverage {
@@ -213,8 +222,10 @@ struct Coverage {
 /// (`lambda_j = <m, lambda_M>` with `|m| <= order` needs `|lambda_j| <=
 /// order max |lambda_M|`, widened by the resonance tolerance `tol`; the
 /// real-part conditions of eq. (57) reach up to the absolute spectral
-/// quotient, which only the whole spectrum knows), doubling the modes, at most [`MAX_AUTOMATIC_MODES`]
-/// and half the states; only when `automatic` (the scene named no count).
+/// quotient, which only the whole spectrum knows), doubling the modes, at most
+/// [`MAX_AUTOMATIC_MODES`], half the states and a basis of
+/// [`KRYLOV_BASIS_MAX`] numbers; only when `automatic` (the scene named no
+/// count).
 /// The shift-invert iteration finds the eigenvalues nearest `sigma`, so
 /// the computed set is the whole disk `|lambda - sigma| <= max |lambda_i -
 /// sigma|` and covers `|lambda| <=` that radius minus `|sigma|`.
@@ -246,7 +257,13 @@ fn cover_resonances(
             .fold(0.0, f64::max)
             - opts.shift.abs();
         let coverage = Coverage { radius, needed };
-        let next = (2 * modes).min(MAX_AUTOMATIC_MODES).min(n / 2);
+        // the Krylov basis holds about 2 modes + 8 vectors of n numbers:
+        // at most KRYLOV_BASIS_MAX of them
+        let by_memory = (KRYLOV_BASIS_MAX / n.max(1)).saturating_sub(8) / 2;
+        let next = (2 * modes)
+            .min(MAX_AUTOMATIC_MODES)
+            .min(n / 2)
+            .min(by_memory);
         if radius >= needed || !automatic || next <= modes {
             return Ok((found, Some(coverage)));
         }
