@@ -267,3 +267,21 @@ fn spectrum_converges_at_fourth_order_under_mesh_refinement() {
         }
     }
 }
+
+/// The divider's pencil (146 states, stiff axial modes) defeats the dense
+/// path's rank decisions. Asked for explicitly, the dense path's failure is
+/// reported as such, with the sparse path named as the way out (it computes
+/// the spectrum), not as a singular model.
+#[test]
+fn dense_path_failure_on_the_stiff_pencil_points_to_the_sparse_path() {
+    let text = "[model]\nplugin = \"divider\"\n[spectrum]\nmethod = \"dense\"\n\
+                [ssm]\nmaster_pairs = [1, 2]\norder = 3\n";
+    let Err(e) = ssm_tests::run_scene_text(text) else {
+        panic!("the dense path fails on this pencil");
+    };
+    let msg = e.to_string();
+    assert!(
+        msg.contains("too stiff") && msg.contains("method = \"sparse\""),
+        "{msg}"
+    );
+}

@@ -89,6 +89,24 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
             ));
             sp
         }
+        // asked for explicitly: say whether the sparse path would have worked
+        Err(e @ (SpectrumError::SingularPencil { .. } | SpectrumError::NoConvergence { .. })) => {
+            let sparse = SpectrumOptions {
+                method: Some(Method::Sparse),
+                ..opts.clone()
+            };
+            return Err(JobError::Spectrum(
+                match spectrum::compute(pencil_a, pencil_b, &sparse) {
+                    Ok(_) => SpectrumError::DenseTooStiff {
+                        detail: match &e {
+                            SpectrumError::SingularPencil { detail } => detail.clone(),
+                            other => other.to_string(),
+                        },
+                    },
+                    Err(_) => e,
+                },
+            ));
+        }
         r => r?,
     };
     if let Dynamics::Map { .. } = dynamics {

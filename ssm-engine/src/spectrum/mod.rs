@@ -63,6 +63,12 @@ pub enum SpectrumError {
         /// A shift at which `A - sigma B` was found regular.
         suggestion: Option<f64>,
     },
+    /// The dense path failed where the sparse path succeeds (a stiff pencil).
+    #[error("the dense path failed on this pencil ({detail}), while the sparse path computes its spectrum: the pencil is too stiff for the dense path's rank decisions, not singular; set [spectrum] method = \"sparse\" or \"auto\"")]
+    DenseTooStiff {
+        /// The dense path's error.
+        detail: String,
+    },
     /// The Krylov iteration found fewer modes than requested.
     #[error("sparse eigen-solver converged on {found} of {requested} modes; raise [spectrum] modes or choose a shift closer to the wanted modes")]
     NotConverged {
