@@ -213,6 +213,20 @@ impl MultiIndexSet {
         v
     }
 
+    /// `d(p^k)/dp . r = sum_v k_v p^{k - e_v} r_v`: the monomial `idx`
+    /// differentiated along the reduced vector field `r`, from the monomials
+    /// `mono` of `p` (the multi-index `k` of `[DW(p) R(p)]`).
+    pub fn derivative_along(&self, idx: usize, mono: &[C64], r: &[C64]) -> C64 {
+        let mut s = C64::new(0.0, 0.0);
+        for (v, &ev) in self.exponents(idx).iter().enumerate() {
+            if ev > 0 {
+                let low = self.lower(idx, v).expect("k_v > 0");
+                s += mono[low] * r[v] * f64::from(ev);
+            }
+        }
+        s
+    }
+
     /// All monomials `p^k` up to order `max` at the point `p`, by the recursion
     /// `p^k = p^{k - e_v} p_v` (one multiplication each).
     pub fn monomials(&self, p: &[C64], max: usize) -> Vec<C64> {

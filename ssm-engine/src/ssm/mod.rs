@@ -496,14 +496,7 @@ impl SsmExpansion {
                 let mut d = vec![C64::new(0.0, 0.0); self.n_states()];
                 let end = self.set.of_order(order).end;
                 for idx in self.set.of_order(1).start..end {
-                    let e = self.set.exponents(idx);
-                    let mut s = C64::new(0.0, 0.0);
-                    for (v, &ev) in e.iter().enumerate() {
-                        if ev > 0 {
-                            let low = self.set.lower(idx, v).expect("k_v > 0");
-                            s += mono[low] * rp[v] * ev as f64;
-                        }
-                    }
+                    let s = self.set.derivative_along(idx, &mono, &rp);
                     axpy(&mut d, s, &self.w[idx]);
                 }
                 d

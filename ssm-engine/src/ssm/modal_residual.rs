@@ -195,14 +195,7 @@ impl ModalResidual {
         let rp = ssm.r_at(&mono, order);
         let mut acc = C64::new(0.0, 0.0);
         for k in ssm.set.of_order(1).start..end {
-            // DW(p) R(p) at multi-index k: sum_v k_v p^{k - e_v} R_v(p)
-            let mut s = C64::new(0.0, 0.0);
-            for (v, &ev) in ssm.set.exponents(k).iter().enumerate() {
-                if ev > 0 {
-                    let low = ssm.set.lower(k, v).expect("k_v > 0");
-                    s += mono[low] * rp[v] * f64::from(ev);
-                }
-            }
+            let s = ssm.set.derivative_along(k, &mono, &rp);
             acc += self.bw[k] * s - self.aw[k] * mono[k];
         }
         acc

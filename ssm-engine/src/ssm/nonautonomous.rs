@@ -294,7 +294,7 @@ impl NonAutonomous {
         let mut lhs = vec![C64::new(0.0, 0.0); n];
         let end = ssm.set.of_order(order).end;
         for idx in ssm.set.of_order(1).start..end {
-            let s = dmono(&ssm.set, idx, &mono_ssm, &r);
+            let s = ssm.set.derivative_along(idx, &mono_ssm, &r);
             for (l, wk) in lhs.iter_mut().zip(&ssm.w[idx]) {
                 *l += s * wk;
             }
@@ -307,7 +307,7 @@ impl NonAutonomous {
                 let d = if idx == 0 {
                     C64::new(0.0, 0.0)
                 } else {
-                    dmono(&self.set, idx, &mono, &r)
+                    self.set.derivative_along(idx, &mono, &r)
                 };
                 for i in 0..n {
                     xp[i] += mono[idx] * xk[i];
@@ -370,19 +370,6 @@ impl NonAutonomous {
         }
         (sigma, tau)
     }
-}
-
-/// `d(p^k)/dp . r = sum_v k_v p^{k - e_v} r_v` for multi-index `idx`.
-fn dmono(set: &MultiIndexSet, idx: usize, mono: &[C64], r: &[C64]) -> C64 {
-    let e = set.exponents(idx);
-    let mut s = C64::new(0.0, 0.0);
-    for (v, &ev) in e.iter().enumerate() {
-        if ev > 0 {
-            let low = set.lower(idx, v).expect("k_v > 0");
-            s += mono[low] * r[v] * f64::from(ev);
-        }
-    }
-    s
 }
 
 /// Coefficient of `p^m` in the nonlinear part of `R_v`.
