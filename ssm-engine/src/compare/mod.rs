@@ -21,6 +21,7 @@ use crate::fom::{
     RadauOptions, RadauStats, SimError, SteadyOptions, SteadyState,
 };
 use crate::model::system::{OutputMap, System};
+use crate::rom::accuracy::relative_gap;
 use crate::ssm::rom::{integrate, RomError};
 use crate::ssm::SsmExpansion;
 use crate::C64;
@@ -74,16 +75,12 @@ impl TransientValidation {
     /// Largest `|full - rom|` of output `k` over the run relative to the
     /// largest `|full|` of that output.
     pub fn relative_error(&self, k: usize) -> f64 {
-        let scale = self.full[k].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let err = self.full[k]
-            .iter()
-            .zip(&self.rom[k])
-            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        if scale > 0.0 {
-            err / scale
-        } else {
-            err
-        }
+        relative_gap(
+            self.full[k]
+                .iter()
+                .copied()
+                .zip(self.rom[k].iter().copied()),
+        )
     }
 
     /// Root-mean-square `|full - rom|` of output `k` over the samples,

@@ -242,19 +242,22 @@ pub fn transient_error(
 pub fn order_change(values: &[Vec<f64>], lower: &[Vec<f64>]) -> f64 {
     let outputs = values.first().map_or(0, Vec::len);
     (0..outputs)
-        .map(|k| {
-            let scale = values.iter().fold(0.0f64, |m, row| m.max(row[k].abs()));
-            let gap = values
-                .iter()
-                .zip(lower)
-                .fold(0.0f64, |m, (a, b)| m.max((a[k] - b[k]).abs()));
-            if scale > 0.0 {
-                gap / scale
-            } else {
-                gap
-            }
-        })
+        .map(|k| relative_gap(values.iter().zip(lower).map(|(a, b)| (a[k], b[k]))))
         .fold(0.0, f64::max)
+}
+
+/// The largest `|a - b|` over the samples `(a, b)` of one output, relative
+/// to the largest `|a|` (absolute where `a` is zero throughout): the metric
+/// of the full-system transient comparison and of [`order_change`].
+pub fn relative_gap(samples: impl Iterator<Item = (f64, f64)>) -> f64 {
+    let (scale, gap) = samples.fold((0.0f64, 0.0f64), |(s, g), (a, b)| {
+        (s.max(a.abs()), g.max((a - b).abs()))
+    });
+    if scale > 0.0 {
+        gap / scale
+    } else {
+        gap
+    }
 }
 
 /// The accumulated defect and distortion of [`transient_error`] at `order`.

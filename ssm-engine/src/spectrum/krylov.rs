@@ -103,6 +103,14 @@ pub fn largest_eigenvalues(
             coeff += &again;
             let coeff = coeff.col(0);
             let beta = w.col(0).norm_l2();
+            if !beta.is_finite() {
+                // a non-finite operator value: no restart can recover
+                return Err(KrylovError::NotConverged {
+                    converged: 0,
+                    wanted,
+                    restarts: restart,
+                });
+            }
             h.get_mut(..j + 1, j).copy_from(coeff);
             h[(j + 1, j)] = beta;
             if beta <= 1e-14 * coeff.norm_l2() {
