@@ -65,7 +65,7 @@ pub use model::{
     Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyTerm, PolyVector, SparseMatrix,
     StateInfo, StateKind, TimeKind, Triplet, VarPower, Weight,
 };
-pub use params::{ParamKind, ParamSpec, ParamValue, Params};
+pub use params::{ParamKind, ParamSpec, ParamValue, Params, PATH_KIND};
 pub use plugin::{SsmPlugin, SsmPluginRef, API_VERSION};
 pub use reducer::{
     Diagnostic, InputNeeds, Lift, Reduced, ReducerInfo, ReducerInput, Signals, Trajectory,

@@ -10,7 +10,7 @@ use abi_stable::std_types::{RString, RVec};
 use crate::expr::{Expr, ExprVector};
 use crate::model::{
     Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyVector, SparseMatrix, StateInfo,
-    StateKind, TimeKind, Weight,
+    StateKind, TimeKind, Triplet, Weight,
 };
 
 /// Configuration constraints `g(x) = 0` (eq. 2) in the `n` displacements: the
@@ -302,16 +302,18 @@ impl MechanicalSystem {
         let big_n = 2 * n + nc;
         let mut a = SparseMatrix::zeros(big_n, big_n);
         let mut b = SparseMatrix::zeros(big_n, big_n);
+        // entries copied as given, explicit zeros included: they are part of
+        // the sparsity pattern the engine factorizes
         for (i, k, v) in self.stiffness.iter() {
-            a.push(i, k, -v);
+            put(&mut a, i, k, -v);
         }
         for (i, k, v) in self.mass.iter() {
-            a.push(n + i, n + k, v);
-            b.push(i, n + k, v);
-            b.push(n + i, k, v);
+            put(&mut a, n + i, n + k, v);
+            put(&mut b, i, n + k, v);
+            put(&mut b, n + i, k, v);
         }
         for (i, k, v) in self.damping.iter() {
-            b.push(i, k, v);
+            put(&mut b, i, k, v);
         }
         let mut f = PolyVector::zeros(big_n, big_n);
         for t in self.internal_force.terms.iter() {
@@ -439,6 +441,15 @@ impl MechanicalSystem {
             equilibrium,
         })
     }
+}
+
+/// Stores an entry, an explicit zero included.
+fn put(m: &mut SparseMatrix, row: usize, col: usize, value: f64) {
+    m.entries.push(Triplet {
+        row: row as u32,
+        col: col as u32,
+        value,
+    });
 }
 
 fn state(name: &str, kind: StateKind, motion: MotionKind) -> StateInfo {

@@ -15,6 +15,13 @@ pub enum ParamKind {
     Count,
     /// One of a fixed set of strings.
     Choice(&'static [&'static str]),
+    /// A file or folder path; the engine reads a relative path from the
+    /// scene's folder (it passes the plugin the joined path). The default is
+    /// the empty string: not given.
+    Path,
+    /// A list of exactly this many real numbers, or the empty list (the
+    /// default: not given).
+    Floats(usize),
 }
 
 /// A parameter value.
@@ -26,6 +33,8 @@ pub enum ParamValue {
     Count(u64),
     /// A string.
     Text(String),
+    /// A list of real numbers.
+    Floats(Vec<f64>),
 }
 
 impl std::fmt::Display for ParamValue {
@@ -34,6 +43,10 @@ impl std::fmt::Display for ParamValue {
             Self::Float(x) => write!(f, "{x}"),
             Self::Count(x) => write!(f, "{x}"),
             Self::Text(s) => write!(f, "\"{s}\""),
+            Self::Floats(v) => {
+                let items: Vec<String> = v.iter().map(f64::to_string).collect();
+                write!(f, "[{}]", items.join(", "))
+            }
         }
     }
 }
@@ -88,12 +101,35 @@ impl ParamSpec {
         }
     }
 
+    /// A path parameter (not given by default); relative paths are read from
+    /// the scene's folder.
+    pub fn path(name: &'static str, description: &'static str) -> Self {
+        Self {
+            name,
+            kind: ParamKind::Path,
+            default: ParamValue::Text(String::new()),
+            description,
+        }
+    }
+
+    /// A list of `len` real numbers (not given by default).
+    pub fn floats(name: &'static str, len: usize, description: &'static str) -> Self {
+        Self {
+            name,
+            kind: ParamKind::Floats(len),
+            default: ParamValue::Floats(Vec::new()),
+            description,
+        }
+    }
+
     /// The ABI-stable listing of this parameter.
     pub fn info(&self) -> ParamInfo {
         let kind = match self.kind {
             ParamKind::Float => "float".to_owned(),
             ParamKind::Count => "integer".to_owned(),
             ParamKind::Choice(c) => c.join(" | "),
+            ParamKind::Path => PATH_KIND.to_owned(),
+            ParamKind::Floats(len) => format!("{len} floats"),
         };
         ParamInfo {
             name: self.name.into(),
@@ -103,6 +139,11 @@ impl ParamSpec {
         }
     }
 }
+
+/// The listed kind ([`ParamInfo::kind`]) of a [`ParamKind::Path`] parameter:
+/// the engine resolves relative values of such parameters against the scene's
+/// folder before it passes the table to the plugin.
+pub const PATH_KIND: &str = "path";
 
 /// Parsed and validated parameter values (defaults filled in).
 #[derive(Clone, Debug, PartialEq)]
@@ -158,6 +199,29 @@ impl Params {
                     }
                     _ => return Err(bad(&format!("one of {}", choices.join(", ")))),
                 },
+                ParamKind::Path => match value {
+                    toml::Value::String(s) if !s.is_empty() => ParamValue::Text(s.clone()),
+                    _ => return Err(bad("a non-empty path string")),
+                },
+                ParamKind::Floats(len) => {
+                    let items = match value {
+                        toml::Value::Array(items) if items.len() == len => items,
+                        _ => return Err(bad(&format!("a list of {len} numbers"))),
+                    };
+                    let mut v = Vec::with_capacity(len);
+                    for item in items {
+                        let x = match item {
+                            toml::Value::Float(x) => *x,
+                            toml::Value::Integer(i) => *i as f64,
+                            _ => return Err(bad(&format!("a list of {len} numbers"))),
+                        };
+                        if !x.is_finite() {
+                            return Err(bad(&format!("a list of {len} finite numbers")));
+                        }
+                        v.push(x);
+                    }
+                    ParamValue::Floats(v)
+                }
             };
             values.insert(spec.name, parsed);
         }
@@ -181,11 +245,20 @@ impl Params {
         }
     }
 
-    /// The string value of `name` (a declared choice parameter).
+    /// The string value of `name` (a declared choice or path parameter; an
+    /// empty path was not given).
     pub fn text(&self, name: &str) -> &str {
         match self.values.get(name) {
             Some(ParamValue::Text(s)) => s,
-            _ => panic!("parameter '{name}' is not a declared choice parameter"),
+            _ => panic!("parameter '{name}' is not a declared choice or path parameter"),
+        }
+    }
+
+    /// The list value of `name` (a declared list parameter; empty when not given).
+    pub fn floats(&self, name: &str) -> &[f64] {
+        match self.values.get(name) {
+            Some(ParamValue::Floats(v)) => v,
+            _ => panic!("parameter '{name}' is not a declared list parameter"),
         }
     }
 }
@@ -199,6 +272,8 @@ mod tests {
             ParamSpec::float("zeta", 0.01, "damping"),
             ParamSpec::count("n", 3, "bodies"),
             ParamSpec::choice("constraint", &["none", "cubic"], "none", "kind"),
+            ParamSpec::path("dir", "model folder"),
+            ParamSpec::floats("rayleigh", 2, "alpha, beta"),
         ]
     }
 
@@ -218,5 +293,25 @@ mod tests {
         assert_eq!(e.context.as_str(), "n");
         let e = Params::parse("constraint = \"round\"", &specs()).unwrap_err();
         assert!(e.message.contains("none, cubic"));
+    }
+
+    #[test]
+    fn paths_and_lists() {
+        let p = Params::parse("dir = \"model\"\nrayleigh = [0.5, 1]", &specs()).unwrap();
+        assert_eq!(p.text("dir"), "model");
+        assert_eq!(p.floats("rayleigh"), &[0.5, 1.0]);
+        let p = Params::parse("", &specs()).unwrap();
+        assert_eq!(p.text("dir"), "");
+        assert!(p.floats("rayleigh").is_empty());
+        for bad in [
+            "rayleigh = [1.0]",
+            "rayleigh = [1.0, \"x\"]",
+            "rayleigh = 2.0",
+            "dir = 3",
+            "dir = \"\"",
+        ] {
+            let e = Params::parse(bad, &specs()).unwrap_err();
+            assert_eq!(e.context.as_str(), bad.split(' ').next().unwrap(), "{bad}");
+        }
     }
 }

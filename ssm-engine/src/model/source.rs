@@ -28,7 +28,7 @@ pub fn build_model(
 ) -> Result<(String, ssm_api::Model), SourceError> {
     let plugin = resolve(scene, registry, &m.plugin, "model.plugin")?;
     let name = m.name.as_ref().map_or("", |n| n.get_ref().as_str());
-    let params = params_toml(scene, &m.params, "model.params")?;
+    let params = model_params_toml(scene, &plugin, name, &m.params)?;
     let model = plugin
         .build_model(name, &params)
         .map_err(|e| plugin_error(scene, e, "model.params"))?;
@@ -66,6 +66,41 @@ pub fn resolve(
     })
 }
 
+/// The TOML text of `[model.params]` with every parameter the model lists as a
+/// path ([`ssm_api::PATH_KIND`]) read from the scene's folder when relative, so
+/// a scene and its model files move together.
+fn model_params_toml(
+    scene: &SceneFile,
+    plugin: &Plugin,
+    name: &str,
+    table: &Spanned<toml::Table>,
+) -> Result<String, SourceError> {
+    let models = plugin.models()?;
+    let listed = if name.is_empty() {
+        models.first()
+    } else {
+        models.iter().find(|m| m.name.as_str() == name)
+    };
+    let paths: Vec<&str> = listed.map_or_else(Vec::new, |m| {
+        m.params
+            .iter()
+            .filter(|p| p.kind.as_str() == ssm_api::PATH_KIND)
+            .map(|p| p.name.as_str())
+            .collect()
+    });
+    let dir = scene.path.parent().unwrap_or(Path::new(""));
+    let mut resolved = table.clone();
+    for key in paths {
+        if let Some(toml::Value::String(s)) = resolved.get_mut().get_mut(key) {
+            if Path::new(s.as_str()).is_relative() {
+                *s = dir.join(s.as_str()).to_string_lossy().into_owned();
+            }
+        }
+    }
+    params_toml(scene, &resolved, "model.params")
+}
+
+/// The TOML text of a scene's parameter table, as passed to a plugin.
 pub fn params_toml(
     scene: &SceneFile,
     table: &Spanned<toml::Table>,
