@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ssm_engine::model::plugin::Registry;
-use ssm_engine::pipeline::{self, Progress};
+use ssm_engine::pipeline::{self, export, Progress};
 use ssm_engine::scene::{ReportSection, SceneFile};
 
 const SCENE_HELP: &str = concat!(
@@ -61,6 +61,17 @@ enum Command {
         /// Output directory (default ./out/<scene name>).
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
+    },
+    /// Write the mechanical model of a scene's [model] as a model folder
+    /// (M.mtx, K.mtx, C.mtx, G.mtx, f2/f3/g2/g3.coo, fext.mtx, outputs.csv) that
+    /// the plugin matrix-model reads back; DIR is replaced as a whole.
+    Export {
+        /// Scene file whose [model] is written.
+        #[arg(value_name = "SCENE.toml")]
+        scene: PathBuf,
+        /// Folder to write (created; an earlier export there is replaced).
+        #[arg(value_name = "DIR")]
+        dir: PathBuf,
     },
 }
 
@@ -171,6 +182,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     let (scene_path, out, report) = match cli.command {
         Some(Command::Plugins) => return list_plugins(&registry),
         Some(Command::Report { scene, out }) => (scene, out, true),
+        Some(Command::Export { scene, dir }) => {
+            let scene = SceneFile::load(&scene)?;
+            let (files, notes) = export::export(&scene, &mut registry)?;
+            files.write(&dir)?;
+            for note in notes {
+                eprintln!("note: {note}");
+            }
+            println!("{}: wrote the model files to {}", scene.name(), dir.display());
+            return Ok(());
+        }
         None => match cli.scene {
             Some(s) => (s, cli.out, false),
             None => anyhow::bail!(

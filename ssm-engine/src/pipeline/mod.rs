@@ -11,6 +11,7 @@
 pub mod budget;
 mod checks;
 mod error;
+pub mod export;
 mod spectral;
 
 use std::path::PathBuf;

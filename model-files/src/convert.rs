@@ -1,0 +1,389 @@
+//! Between a model folder and the engine's data: a [`ModelFiles`] becomes a
+//! [`MechanicalSystem`] (the plugin `matrix-model`), and a [`Model`] built by
+//! the mechanical builder becomes a [`ModelFiles`] (`ssm-engine export`).
+//!
+//! The inverse of the builder's block layout (eqs. 4-5 of Li, Jain & Haller
+//! 2023): rows `0..n` hold `C x' + M v' = -K x - f(x) - G(x)^T mu`, rows
+//! `n..2n` hold `M x' = M v`, rows `2n..2n+n_c` hold `0 = G0 x + g_nl(x)`.
+//!
+//! # References
+//! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical systems
+//! via spectral submanifolds*, Nonlinear Dyn. 111 (2023) 8881-8911, eqs. (1)-(5).
+
+use ssm_api::{
+    Constraints, Harmonic, MechanicalInfo, MechanicalSystem, Model, PolyTerm, PolyVector,
+    SparseMatrix, TimeKind,
+};
+
+use crate::error::ExportError;
+use crate::mtx::summed;
+use crate::ModelFiles;
+
+/// What makes `M` singular or not a mass matrix, checked on its entries: a
+/// degree of freedom whose row or column is empty (no inertia), or a diagonal
+/// entry that is not positive. `None` when no such defect shows.
+pub fn mass_defect(m: &SparseMatrix, constrained: bool) -> Option<String> {
+    let n = m.nrows as usize;
+    let mut row = vec![false; n];
+    let mut col = vec![false; n];
+    let mut diag = vec![0.0; n];
+    for (i, j, v) in summed(m).into_iter().filter(|e| e.2 != 0.0) {
+        row[i] = true;
+        col[j] = true;
+        if i == j {
+            diag[i] = v;
+        }
+    }
+    let hint = if constrained {
+        "a massless degree of freedom that a constraint fixes belongs out of the model \
+         (eliminate it); give every other one mass"
+    } else {
+        "the model has no constraints (no G.mtx), so M must be non-singular: give every \
+         degree of freedom mass, or write the relation that fixes a massless one as a \
+         constraint in G.mtx"
+    };
+    if let Some(i) = (0..n).find(|&i| !row[i] || !col[i]) {
+        return Some(format!(
+            "M is singular: degree of freedom {} has no mass (its row or column is empty); \
+             each massless degree of freedom turns a pair of the pencil's eigenvalues \
+             infinite (a mode without inertia), and the model is no longer an ODE; {hint}",
+            i + 1
+        ));
+    }
+    if let Some(i) = (0..n).find(|&i| diag[i] <= 0.0) {
+        return Some(format!(
+            "M({0}, {0}) = {1}: a mass matrix must be positive definite, so its diagonal \
+             must be positive; {hint}",
+            i + 1,
+            diag[i]
+        ));
+    }
+    None
+}
+
+impl ModelFiles {
+    /// The mechanical system of this folder, named `name`, with displacements
+    /// `x1 .. xn`; `rayleigh = [alpha, beta]` gives `C = alpha M + beta K` when
+    /// the folder has no `C.mtx`. An error (naming the output) when an output
+    /// of `outputs.csv` takes the name of a state with another meaning.
+    pub fn into_mechanical(
+        self,
+        name: &str,
+        rayleigh: Option<[f64; 2]>,
+    ) -> Result<MechanicalSystem, String> {
+        let n = self.n_dof();
+        let nc = self.n_constraints();
+        let dof_names: Vec<String> = (1..=n).map(|i| format!("x{i}")).collect();
+        let refs: Vec<&str> = dof_names.iter().map(String::as_str).collect();
+        let mut sys = MechanicalSystem::new(name, &refs);
+        let damping = match (self.damping, rayleigh) {
+            (Some(c), _) => c,
+            (None, Some([alpha, beta])) => {
+                let mut c = SparseMatrix::zeros(n, n);
+                for (i, j, v) in self.mass.iter() {
+                    c.push(i, j, alpha * v);
+                }
+                for (i, j, v) in self.stiffness.iter() {
+                    c.push(i, j, beta * v);
+                }
+                c
+            }
+            (None, None) => SparseMatrix::zeros(n, n),
+        };
+        sys.damping = damping;
+        sys.mass = self.mass;
+        sys.stiffness = self.stiffness;
+        sys.internal_force = PolyVector {
+            n_vars: 2 * n as u32,
+            ..self.internal_force
+        };
+        if let Some(g0) = self.constraint_jacobian {
+            let mut g = self.constraint_terms;
+            for (j, i, v) in g0.iter() {
+                g.push(j, v, &[(i, 1)]);
+            }
+            sys.constraints = Some(Constraints::polynomial(g));
+        }
+        if let Some(load) = self.load {
+            let mut cos = PolyVector::zeros(n, 2 * n);
+            for (i, &f) in load.iter().enumerate() {
+                cos.push(i, f, &[]);
+            }
+            sys.forcing = vec![Harmonic {
+                multiple: 1.0,
+                cos,
+                sin: PolyVector::zeros(n, 2 * n),
+            }];
+        }
+        for (out, weights) in self.outputs {
+            if let Some(state) = state_named(&out, n, nc) {
+                if weights.len() == 1 && weights[0] == (state, 1.0) {
+                    continue;
+                }
+                return Err(format!(
+                    "output '{out}' is the name of a state of the model (displacements \
+                     x1..x{n}, velocities x1_dot.., multipliers mu1..); choose another name"
+                ));
+            }
+            sys.extra_outputs.push((out, weights));
+        }
+        Ok(sys)
+    }
+
+    /// The folder of a model the mechanical builder made; also the notes on
+    /// what was left out (outputs that read velocities or multipliers).
+    pub fn from_model(model: &Model) -> Result<(Self, Vec<String>), ExportError> {
+        let unsupported = |reason: String| ExportError::Unsupported {
+            model: model.name.to_string(),
+            reason,
+        };
+        let info = match (model.mechanical.as_ref().into_option(), model.time) {
+            (Some(info), TimeKind::Flow) => info,
+            _ => {
+                return Err(unsupported(
+                    "it is not a mechanical system (the plugin built it in first-order form \
+                     or as a map, not through the mechanical builder)"
+                        .to_owned(),
+                ))
+            }
+        };
+        if !model.expressions.terms.is_empty() || !model.equilibrium.is_empty() {
+            return Err(unsupported(
+                "it has non-polynomial terms (recast expressions such as sin) or an \
+                 equilibrium away from the origin; the files hold polynomial models about \
+                 the origin"
+                    .to_owned(),
+            ));
+        }
+        let n = info.n_dof as usize;
+        let nc = info.n_constraints as usize;
+        if *info != MechanicalInfo::canonical(n, nc, info.mass.clone()) {
+            return Err(unsupported(
+                "its states are not in the builder's order (x, x', mu)".to_owned(),
+            ));
+        }
+        let blocks = Blocks::split(model, n, nc);
+        let layout = |what: &str| {
+            unsupported(format!(
+                "{what} does not have the builder's block form (eq. 5): the model was not \
+                 built from (M, C, K, f, g)"
+            ))
+        };
+        if !same(&blocks.b_momentum_v, &info.mass)
+            || !same(&blocks.b_kinematic_x, &info.mass)
+            || !same(&blocks.a_kinematic_v, &info.mass)
+            || !blocks.other.is_empty()
+        {
+            return Err(layout("A or B"));
+        }
+        let mut minus_g0t = SparseMatrix::zeros(n, nc);
+        for (j, i, v) in blocks.g0.iter() {
+            minus_g0t.push(i, j, -v);
+        }
+        if !same(&blocks.a_momentum_mu, &minus_g0t) {
+            return Err(layout("the multiplier columns of A"));
+        }
+        let (internal_force, constraint_terms) =
+            split_nonlinearity(model, n, nc).map_err(&unsupported)?;
+        let load = load_shape(model, n).map_err(&unsupported)?;
+        let mut notes = Vec::new();
+        let mut outputs = Vec::new();
+        for out in model.outputs.iter() {
+            let w: Vec<(usize, f64)> = out
+                .weights
+                .iter()
+                .map(|w| (w.state as usize, w.value))
+                .collect();
+            if w.iter().any(|&(s, _)| s >= n) {
+                if model.states.iter().all(|s| s.name != out.name) {
+                    notes.push(format!(
+                        "output '{}' reads velocities or multipliers; the files name \
+                         displacement outputs only, so it is not written",
+                        out.name
+                    ));
+                }
+                continue;
+            }
+            outputs.push((out.name.to_string(), w));
+        }
+        let files = Self {
+            mass: info.mass.clone(),
+            stiffness: blocks.minus_k,
+            damping: Some(blocks.c).filter(|c| !c.entries.is_empty()),
+            constraint_jacobian: Some(blocks.g0).filter(|_| nc > 0),
+            internal_force,
+            constraint_terms,
+            load,
+            outputs,
+        };
+        Ok((files, notes))
+    }
+}
+
+/// The blocks of `A` and `B` in the builder's layout.
+struct Blocks {
+    minus_k: SparseMatrix,
+    c: SparseMatrix,
+    g0: SparseMatrix,
+    b_momentum_v: SparseMatrix,
+    b_kinematic_x: SparseMatrix,
+    a_kinematic_v: SparseMatrix,
+    a_momentum_mu: SparseMatrix,
+    /// Entries outside every block the builder fills.
+    other: Vec<(usize, usize, f64)>,
+}
+
+impl Blocks {
+    fn split(model: &Model, n: usize, nc: usize) -> Self {
+        let mut b = Blocks {
+            minus_k: SparseMatrix::zeros(n, n),
+            c: SparseMatrix::zeros(n, n),
+            g0: SparseMatrix::zeros(nc, n),
+            b_momentum_v: SparseMatrix::zeros(n, n),
+            b_kinematic_x: SparseMatrix::zeros(n, n),
+            a_kinematic_v: SparseMatrix::zeros(n, n),
+            a_momentum_mu: SparseMatrix::zeros(n, nc),
+            other: Vec::new(),
+        };
+        // explicit zeros kept: the pattern is part of what the engine factorizes
+        let put = |m: &mut SparseMatrix, i: usize, j: usize, value: f64| {
+            m.entries.push(ssm_api::Triplet {
+                row: i as u32,
+                col: j as u32,
+                value,
+            })
+        };
+        let block = |i: usize| (i / n).min(2);
+        let local = |i: usize| if i >= 2 * n { i - 2 * n } else { i % n };
+        for (i, j, v) in model.a.iter() {
+            let (li, lj) = (local(i), local(j));
+            match (block(i), block(j)) {
+                (0, 0) => put(&mut b.minus_k, li, lj, -v),
+                (0, 2) => put(&mut b.a_momentum_mu, li, lj, v),
+                (1, 1) => put(&mut b.a_kinematic_v, li, lj, v),
+                (2, 0) => put(&mut b.g0, li, lj, v),
+                _ => b.other.push((i, j, v)),
+            }
+        }
+        for (i, j, v) in model.b.iter() {
+            let (li, lj) = (local(i), local(j));
+            match (block(i), block(j)) {
+                (0, 0) => put(&mut b.c, li, lj, v),
+                (0, 1) => put(&mut b.b_momentum_v, li, lj, v),
+                (1, 0) => put(&mut b.b_kinematic_x, li, lj, v),
+                _ => b.other.push((i, j, v)),
+            }
+        }
+        b.other.retain(|&(_, _, v)| v != 0.0);
+        b
+    }
+}
+
+/// Equal values at every position (explicit zeros aside).
+fn same(a: &SparseMatrix, b: &SparseMatrix) -> bool {
+    let nonzero = |m: &SparseMatrix| {
+        let mut e = summed(m);
+        e.retain(|x| x.2 != 0.0);
+        e
+    };
+    nonzero(a) == nonzero(b)
+}
+
+/// `f(x)` from rows `0..n` of `F` (negated; the `-(dg/dx)^T mu` terms, which
+/// the builder makes again from `g`, dropped) and `g_nl(x)` from rows `2n..`.
+fn split_nonlinearity(
+    model: &Model,
+    n: usize,
+    nc: usize,
+) -> Result<(PolyVector, PolyVector), String> {
+    let mut f = PolyVector::zeros(n, n);
+    let mut g = PolyVector::zeros(nc, n);
+    let in_x = |t: &PolyTerm| t.factors.iter().all(|p| (p.var as usize) < n);
+    let has_mu = |t: &PolyTerm| t.factors.iter().any(|p| p.var as usize >= 2 * n);
+    for t in model.nonlinearity.terms.iter() {
+        let eq = t.eq as usize;
+        let degree = t.degree();
+        let factors: Vec<(usize, u32)> = t
+            .factors
+            .iter()
+            .map(|p| (p.var as usize, p.power))
+            .collect();
+        if eq < n && has_mu(t) {
+            continue;
+        }
+        if !in_x(t) {
+            return Err(format!(
+                "equation {} has a term in velocities or multipliers; the files hold f(x) \
+                 and g(x) only",
+                eq + 1
+            ));
+        }
+        if !(2..=3).contains(&degree) {
+            return Err(format!(
+                "equation {} has a term of degree {degree}; the files hold degrees 2 and 3 \
+                 (f2.coo, f3.coo, g2.coo, g3.coo)",
+                eq + 1
+            ));
+        }
+        match eq {
+            _ if eq < n => f.push(eq, -t.coeff, &factors),
+            _ if eq >= 2 * n => g.push(eq - 2 * n, t.coeff, &factors),
+            _ => {
+                return Err(format!(
+                    "kinematic equation {} has a nonlinear term",
+                    eq + 1
+                ))
+            }
+        }
+    }
+    Ok((f, g))
+}
+
+/// The load shape from the forcing `fext cos(Omega t)` with constant `fext`.
+fn load_shape(model: &Model, n: usize) -> Result<Option<Vec<f64>>, String> {
+    let h = match model.forcing.as_slice() {
+        [] => return Ok(None),
+        [h] => h,
+        _ => {
+            return Err(format!(
+                "its forcing has {} harmonics; the files hold one, fext cos(Omega t)",
+                model.forcing.len()
+            ))
+        }
+    };
+    if h.multiple != 1.0 || !h.sin.terms.is_empty() {
+        return Err(
+            "its forcing is not fext cos(Omega t) (another multiple of Omega, or a sine part)"
+                .to_owned(),
+        );
+    }
+    let mut load = vec![0.0; n];
+    for t in h.cos.terms.iter() {
+        if t.degree() != 0 || t.eq as usize >= n {
+            return Err(
+                "its forcing depends on the state or enters a kinematic or constraint row; \
+                 the files hold a constant load shape"
+                    .to_owned(),
+            );
+        }
+        load[t.eq as usize] += t.coeff;
+    }
+    Ok(Some(load))
+}
+
+/// The state index of the builder's state named `name`, if any.
+fn state_named(name: &str, n: usize, nc: usize) -> Option<usize> {
+    let number = |rest: &str, count: usize| {
+        rest.parse::<usize>()
+            .ok()
+            .filter(|&k| (1..=count).contains(&k))
+    };
+    if let Some(rest) = name.strip_prefix("mu") {
+        return number(rest, nc).map(|k| 2 * n + k - 1);
+    }
+    let rest = name.strip_prefix('x')?;
+    match rest.strip_suffix("_dot") {
+        Some(v) => number(v, n).map(|k| n + k - 1),
+        None => number(rest, n).map(|k| k - 1),
+    }
+}

@@ -1,0 +1,122 @@
+//! Line-by-line reading of a text file with the line number at hand, so that
+//! every parse error names its file and line; the files are streamed, never
+//! held whole in memory.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+
+use crate::error::FileError;
+
+/// Bytes read so far (over all files of a folder), for a progress display.
+pub type Progress<'a> = dyn FnMut(u64) + 'a;
+
+/// A text file read one line at a time.
+pub(crate) struct LineReader<'p> {
+    file: PathBuf,
+    reader: BufReader<File>,
+    buf: String,
+    line: usize,
+    progress: &'p mut Progress<'p>,
+}
+
+impl<'p> LineReader<'p> {
+    /// Opens `path`.
+    pub(crate) fn open(path: &Path, progress: &'p mut Progress<'_>) -> Result<Self, FileError> {
+        let file = File::open(path).map_err(|source| FileError::Io {
+            file: path.to_owned(),
+            source,
+        })?;
+        Ok(Self {
+            file: path.to_owned(),
+            reader: BufReader::with_capacity(1 << 16, file),
+            buf: String::new(),
+            line: 0,
+            progress,
+        })
+    }
+
+    /// The next line without its line end (`None` at the end of the file).
+    pub(crate) fn next_line(&mut self) -> Result<Option<&str>, FileError> {
+        self.buf.clear();
+        let n = self
+            .reader
+            .read_line(&mut self.buf)
+            .map_err(|source| match source.kind() {
+                std::io::ErrorKind::InvalidData => FileError::Line {
+                    file: self.file.clone(),
+                    line: self.line + 1,
+                    message: "not UTF-8 text".to_owned(),
+                },
+                _ => FileError::Io {
+                    file: self.file.clone(),
+                    source,
+                },
+            })?;
+        if n == 0 {
+            return Ok(None);
+        }
+        self.line += 1;
+        (self.progress)(n as u64);
+        Ok(Some(self.buf.trim_end_matches(['\n', '\r'])))
+    }
+
+    /// The next line that is neither blank nor a comment starting with one of
+    /// `comments`.
+    pub(crate) fn next_data(&mut self, comments: &[char]) -> Result<Option<&str>, FileError> {
+        loop {
+            // re-borrow per iteration: the returned line lives in self.buf
+            let skip = match self.next_line()? {
+                None => return Ok(None),
+                Some(l) => {
+                    let t = l.trim();
+                    t.is_empty() || t.starts_with(comments)
+                }
+            };
+            if !skip {
+                return Ok(Some(self.buf.trim()));
+            }
+        }
+    }
+
+    /// An error at the current line.
+    pub(crate) fn error(&self, message: impl Into<String>) -> FileError {
+        FileError::Line {
+            file: self.file.clone(),
+            line: self.line,
+            message: message.into(),
+        }
+    }
+
+    /// An error about the whole file.
+    pub(crate) fn content_error(&self, message: impl Into<String>) -> FileError {
+        FileError::Content {
+            file: self.file.clone(),
+            message: message.into(),
+        }
+    }
+}
+
+/// A 1-based index `tok` in `1..=max`, returned 0-based.
+pub(crate) fn index(tok: &str, max: usize, what: &str) -> Result<usize, String> {
+    let i: usize = tok
+        .parse()
+        .map_err(|_| format!("{what} '{tok}' is not a positive integer"))?;
+    if i == 0 || i > max {
+        return Err(format!(
+            "{what} {i} is outside 1..={max} (indices are 1-based)"
+        ));
+    }
+    Ok(i - 1)
+}
+
+/// A finite real number.
+pub(crate) fn value(tok: &str) -> Result<f64, String> {
+    let x: f64 = tok
+        .parse()
+        .map_err(|_| format!("value '{tok}' is not a number"))?;
+    if !x.is_finite() {
+        return Err(format!("value '{tok}' is not finite"));
+    }
+    Ok(x)
+}
