@@ -24,6 +24,16 @@ use crate::ModelFiles;
 /// entry that is not positive. `None` when no such defect shows.
 pub fn mass_defect(m: &SparseMatrix, constrained: bool) -> Option<String> {
     let n = m.nrows as usize;
+    if m.entries.len() < n {
+        // checked before any O(n) memory: a declared size far beyond the entries
+        return Some(format!(
+            "M is singular: it has {} entries for {n} degrees of freedom, so at least {} \
+             have no mass; each massless degree of freedom turns a pair of the pencil's \
+             eigenvalues infinite (a mode without inertia)",
+            m.entries.len(),
+            n - m.entries.len()
+        ));
+    }
     let mut row = vec![false; n];
     let mut col = vec![false; n];
     let mut diag = vec![0.0; n];
@@ -194,8 +204,10 @@ impl ModelFiles {
                 .iter()
                 .map(|w| (w.state as usize, w.value))
                 .collect();
+            let is_state = matches!(w.as_slice(), [(s, v)] if *v == 1.0
+                && model.states.get(*s).is_some_and(|st| st.name == out.name));
             if w.iter().any(|&(s, _)| s >= n) {
-                if model.states.iter().all(|s| s.name != out.name) {
+                if !is_state {
                     notes.push(format!(
                         "output '{}' reads velocities or multipliers; the files name \
                          displacement outputs only, so it is not written",

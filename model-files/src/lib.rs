@@ -101,7 +101,8 @@ impl ModelFiles {
             .map_or(0, |g| g.nrows as usize)
     }
 
-    /// Reads the model folder `dir`; `progress` is told the bytes read.
+    /// Reads the model folder `dir` (and checks that `M` gives every degree
+    /// of freedom mass, [`mass_defect`]); `progress` is told the bytes read.
     pub fn read(dir: &Path, progress: &mut Progress<'_>) -> Result<Self, FileError> {
         let path = |name: &str| dir.join(name);
         let required = |name: &str, what: &'static str| {
@@ -134,6 +135,14 @@ impl ModelFiles {
                 })
             }
         };
+        // before any O(n) memory: a size line far beyond the entries read is
+        // refused here
+        if let Some(message) = mass_defect(&mass, optional(names::G).is_some()) {
+            return Err(FileError::Content {
+                file: path(names::M),
+                message,
+            });
+        }
         let k_path = required(names::K, "the stiffness matrix K")?;
         let stiffness = square(names::K, read_matrix(&k_path, progress)?)?;
         let damping = match optional(names::C) {

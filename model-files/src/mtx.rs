@@ -61,7 +61,9 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
     match format {
         Format::Coordinate => {
             let nnz = count(dims[2])?;
-            m.entries.reserve(if symmetric { 2 * nnz } else { nnz });
+            // the declared count is not trusted with memory: the vector grows
+            // with the entries actually read
+            m.entries.reserve(nnz.min(1 << 20));
             let mut found = 0usize;
             while let Some(line) = r.next_data(&['%'])? {
                 if found == nnz {

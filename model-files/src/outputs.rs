@@ -3,6 +3,7 @@
 //! so an output may be a weighted sum of displacements. A first row
 //! `name,dof[,weight]` is a header; `#` and `%` lines are comments.
 
+use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
@@ -20,6 +21,7 @@ pub fn read_outputs(
 ) -> Result<Vec<NamedOutput>, FileError> {
     let mut r = LineReader::open(path, progress)?;
     let mut outputs: Vec<NamedOutput> = Vec::new();
+    let mut position: HashMap<String, usize> = HashMap::new();
     let mut first = true;
     while let Some(line) = r.next_data(&['#', '%'])? {
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
@@ -28,9 +30,12 @@ pub fn read_outputs(
         }
         let parsed = row(&fields, n_dof);
         let (name, dof, w) = parsed.map_err(|msg| r.error(msg))?;
-        match outputs.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, weights)) => weights.push((dof, w)),
-            None => outputs.push((name, vec![(dof, w)])),
+        match position.get(&name) {
+            Some(&k) => outputs[k].1.push((dof, w)),
+            None => {
+                position.insert(name.clone(), outputs.len());
+                outputs.push((name, vec![(dof, w)]));
+            }
         }
     }
     Ok(outputs)

@@ -52,3 +52,22 @@ fn the_documented_format_is_a_scene_the_parser_accepts() {
     let bad = FORMAT.replace("order = 13 ", "orderr = 13");
     assert!(SceneFile::parse(Path::new("format.toml"), bad).is_err());
 }
+
+/// The README's "Bring your own model" shows the Python example that the
+/// test suite runs (`zoo/files/write_beam.py`), not a copy that may drift.
+#[test]
+fn readme_shows_the_python_model_example() {
+    let readme = std::fs::read_to_string(repo_root().join("README.md")).expect("README.md");
+    let script =
+        std::fs::read_to_string(repo_root().join("zoo/files/write_beam.py")).expect("script");
+    let start = readme
+        .find("```python\n")
+        .expect("README has a python block")
+        + "```python\n".len();
+    let len = readme[start..].find("```").expect("the block is closed");
+    assert_eq!(
+        &readme[start..start + len],
+        script,
+        "README's Python example differs from zoo/files/write_beam.py"
+    );
+}

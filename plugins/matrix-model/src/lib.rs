@@ -15,7 +15,7 @@ use std::io::IsTerminal;
 use std::path::Path;
 
 use ssm_api::{ErrorKind, Model, ModelInfo, ParamSpec, Params, PluginError};
-use ssm_model_files::{mass_defect, names, FileError, ModelFiles};
+use ssm_model_files::{names, FileError, ModelFiles};
 
 const MODEL: &str = "files";
 
@@ -80,12 +80,6 @@ fn build(name: &str, params: &str) -> Result<Model, PluginError> {
                 names::C
             ),
         ));
-    }
-    if let Some(defect) = mass_defect(&files.mass, files.constraint_jacobian.is_some()) {
-        return Err(file_error(FileError::Content {
-            file: dir.join(names::M),
-            message: defect,
-        }));
     }
     let sys = files.into_mechanical(MODEL, rayleigh).map_err(|message| {
         file_error(FileError::Content {

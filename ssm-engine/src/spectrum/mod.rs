@@ -91,7 +91,7 @@ pub enum SpectrumError {
     #[error("normalization = \"mass\" needs a model with a mass matrix (built with the mechanical builder); use \"unit\"")]
     NoMassMatrix,
     /// Inverse iteration produced a non-finite or zero vector.
-    #[error("eigenvector of lambda = {lambda} could not be computed ({detail})")]
+    #[error("eigenvector of lambda = {:.6e} {:+.6e}i could not be computed ({detail}); the model's entries may span more magnitudes than double precision resolves (rescale its units)", lambda.re, lambda.im)]
     Eigenvector {
         /// Eigenvalue.
         lambda: C64,
