@@ -24,12 +24,20 @@ use crate::ModelFiles;
 /// entry that is not positive. `None` when no such defect shows.
 pub fn mass_defect(m: &SparseMatrix, constrained: bool) -> Option<String> {
     let n = m.nrows as usize;
+    let hint = if constrained {
+        "a massless degree of freedom that a constraint fixes belongs out of the model \
+         (eliminate it); give every other one mass"
+    } else {
+        "the model has no constraints (no G.mtx), so M must be non-singular: give every \
+         degree of freedom mass, or write the relation that fixes a massless one as a \
+         constraint in G.mtx"
+    };
     if m.entries.len() < n {
         // checked before any O(n) memory: a declared size far beyond the entries
         return Some(format!(
             "M is singular: it has {} entries for {n} degrees of freedom, so at least {} \
              have no mass; each massless degree of freedom turns a pair of the pencil's \
-             eigenvalues infinite (a mode without inertia)",
+             eigenvalues infinite (a mode without inertia); {hint}",
             m.entries.len(),
             n - m.entries.len()
         ));
@@ -44,14 +52,6 @@ pub fn mass_defect(m: &SparseMatrix, constrained: bool) -> Option<String> {
             diag[i] = v;
         }
     }
-    let hint = if constrained {
-        "a massless degree of freedom that a constraint fixes belongs out of the model \
-         (eliminate it); give every other one mass"
-    } else {
-        "the model has no constraints (no G.mtx), so M must be non-singular: give every \
-         degree of freedom mass, or write the relation that fixes a massless one as a \
-         constraint in G.mtx"
-    };
     if let Some(i) = (0..n).find(|&i| !row[i] || !col[i]) {
         return Some(format!(
             "M is singular: degree of freedom {} has no mass (its row or column is empty); \

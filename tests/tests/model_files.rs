@@ -317,7 +317,25 @@ fn each_bad_file_is_named_with_its_line_and_problem() {
             "singular M without constraints",
             vec![("M.mtx", "%%MatrixMarket matrix coordinate real general\n2 2 1\n1 1 1.0\n".into())],
             "",
-            vec!["M.mtx", "degree of freedom 2 has no mass", "infinite", "G.mtx"],
+            vec!["M.mtx", "1 have no mass", "infinite", "G.mtx"],
+        ),
+        (
+            "massless degree of freedom",
+            vec![(
+                "M.mtx",
+                "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1.0\n1 2 0.5\n".into(),
+            )],
+            "",
+            vec!["M.mtx", "degree of freedom 2 has no mass", "infinite"],
+        ),
+        (
+            "negative mass",
+            vec![(
+                "M.mtx",
+                "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1.0\n2 2 -2.0\n".into(),
+            )],
+            "",
+            vec!["M.mtx", "M(2, 2) = -2", "positive definite"],
         ),
         (
             "fewer entries than declared",
