@@ -17,6 +17,7 @@ use ssm_api::{
 
 use crate::error::ExportError;
 use crate::mtx::summed;
+use crate::outputs::{valid_name, NamedOutput};
 use crate::ModelFiles;
 
 /// What makes `M` singular or not a mass matrix, checked on its entries: a
@@ -196,28 +197,7 @@ impl ModelFiles {
         let (internal_force, constraint_terms) =
             split_nonlinearity(model, n, nc).map_err(&unsupported)?;
         let load = load_shape(model, n).map_err(&unsupported)?;
-        let mut notes = Vec::new();
-        let mut outputs = Vec::new();
-        for out in model.outputs.iter() {
-            let w: Vec<(usize, f64)> = out
-                .weights
-                .iter()
-                .map(|w| (w.state as usize, w.value))
-                .collect();
-            let is_state = matches!(w.as_slice(), [(s, v)] if *v == 1.0
-                && model.states.get(*s).is_some_and(|st| st.name == out.name));
-            if w.iter().any(|&(s, _)| s >= n) {
-                if !is_state {
-                    notes.push(format!(
-                        "output '{}' reads velocities or multipliers; the files name \
-                         displacement outputs only, so it is not written",
-                        out.name
-                    ));
-                }
-                continue;
-            }
-            outputs.push((out.name.to_string(), w));
-        }
+        let (outputs, notes) = displacement_outputs(model, n, nc);
         let files = Self {
             mass: info.mass.clone(),
             stiffness: blocks.minus_k,
@@ -228,8 +208,113 @@ impl ModelFiles {
             load,
             outputs,
         };
+        files.rebuilds(model).map_err(&unsupported)?;
         Ok((files, notes))
     }
+}
+
+/// The outputs a folder can name (weighted sums of displacements, under
+/// names `outputs.csv` allows and the read-back model does not already
+/// give), and a note for each one left out.
+fn displacement_outputs(model: &Model, n: usize, nc: usize) -> (Vec<NamedOutput>, Vec<String>) {
+    let mut outputs = Vec::new();
+    let mut notes = Vec::new();
+    for out in model.outputs.iter() {
+        let name = out.name.as_str();
+        let w: Vec<(usize, f64)> = out
+            .weights
+            .iter()
+            .map(|w| (w.state as usize, w.value))
+            .collect();
+        let is_state = matches!(w.as_slice(), [(s, v)] if *v == 1.0
+            && model.states.get(*s).is_some_and(|st| st.name == out.name));
+        let skip = if w.iter().any(|&(s, _)| s >= n) {
+            // the read-back model has its own velocity and multiplier states
+            (!is_state).then(|| "reads velocities or multipliers".to_owned())
+        } else if w.is_empty() {
+            Some("has no weights".to_owned())
+        } else if !valid_name(name) {
+            Some("has a name outputs.csv cannot hold (letters, digits, '_', '.', '-')".to_owned())
+        } else {
+            match state_named(name, n, nc) {
+                Some(s) if w == [(s, 1.0)] => None,
+                Some(_) => Some(format!(
+                    "is named like a state of the read-back model ({name}) but is another one"
+                )),
+                None => {
+                    outputs.push((name.to_owned(), w));
+                    None
+                }
+            }
+        };
+        if let Some(why) = skip {
+            notes.push(format!("output '{name}' {why}; it is not written"));
+        }
+    }
+    (outputs, notes)
+}
+
+impl ModelFiles {
+    /// `Ok` when this folder, read back, builds exactly `model`'s `A`, `B`,
+    /// `F` and forcing (so nothing the plugin put in the model is lost or
+    /// changed on the way); what differs otherwise.
+    fn rebuilds(&self, model: &Model) -> Result<(), String> {
+        let sys = self.clone().into_mechanical(model.name.as_str(), None)?;
+        let rebuilt = sys.into_model().map_err(|e| e.to_string())?;
+        let differs = |what: &str| {
+            Err(format!(
+                "{what} would not be rebuilt from the files: the model was not built from \
+                 (M, C, K, f(x), g(x), fext) by the mechanical builder"
+            ))
+        };
+        if rebuilt.states.len() != model.states.len() {
+            return differs("the number of states");
+        }
+        for (what, x, y) in [("A", &model.a, &rebuilt.a), ("B", &model.b, &rebuilt.b)] {
+            if !same(x, y) {
+                return differs(what);
+            }
+        }
+        if canonical(&model.nonlinearity) != canonical(&rebuilt.nonlinearity) {
+            return differs("the nonlinearity F");
+        }
+        let forcing = |m: &Model| {
+            m.forcing
+                .iter()
+                .map(|h| canonical(&h.cos))
+                .collect::<Vec<_>>()
+        };
+        if forcing(model) != forcing(&rebuilt) {
+            return differs("the forcing");
+        }
+        Ok(())
+    }
+}
+
+/// A polynomial term as `(eq, [(var, power)], coefficient)`.
+type Term = (u32, Vec<(u32, u32)>, f64);
+
+/// The terms of `p` as `(eq, factors, coefficient)` sorted by equation and
+/// monomial, repeated monomials summed in the order given, zero sums dropped.
+fn canonical(p: &PolyVector) -> Vec<Term> {
+    let mut terms: Vec<Term> = p
+        .terms
+        .iter()
+        .map(|t| {
+            let f = t.factors.iter().map(|f| (f.var, f.power)).collect();
+            (t.eq, f, t.coeff)
+        })
+        .collect();
+    terms.sort_by(|x, y| (x.0, &x.1).cmp(&(y.0, &y.1)));
+    let mut merged: Vec<Term> = Vec::with_capacity(terms.len());
+    for t in terms {
+        match merged.last_mut() {
+            Some(last) if last.0 == t.0 && last.1 == t.1 => last.2 += t.2,
+            _ => merged.push(t),
+        }
+    }
+    merged.retain(|t| t.2 != 0.0);
+    merged
 }
 
 /// The blocks of `A` and `B` in the builder's layout.
@@ -385,10 +470,11 @@ fn load_shape(model: &Model, n: usize) -> Result<Option<Vec<f64>>, String> {
 
 /// The state index of the builder's state named `name`, if any.
 fn state_named(name: &str, n: usize, nc: usize) -> Option<usize> {
+    // exactly the names the builder gives: "x7", not "x07"
     let number = |rest: &str, count: usize| {
         rest.parse::<usize>()
             .ok()
-            .filter(|&k| (1..=count).contains(&k))
+            .filter(|&k| (1..=count).contains(&k) && k.to_string() == rest)
     };
     if let Some(rest) = name.strip_prefix("mu") {
         return number(rest, nc).map(|k| 2 * n + k - 1);

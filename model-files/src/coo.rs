@@ -13,6 +13,9 @@ use crate::lines::{index, value, LineReader, Progress};
 
 /// Adds the terms of the degree-`degree` tensor in `path` to `poly` (rows `i`
 /// in `1..=poly.n_eq`, variables in `1..=n_vars`).
+///
+/// # Panics
+/// When `degree` is not 2 or 3 (the files hold those only).
 pub fn read_tensor(
     path: &Path,
     degree: usize,
@@ -20,6 +23,10 @@ pub fn read_tensor(
     poly: &mut PolyVector,
     progress: &mut Progress<'_>,
 ) -> Result<(), FileError> {
+    assert!(
+        (2..=3).contains(&degree),
+        "force tensors have degree 2 or 3, not {degree}"
+    );
     let mut r = LineReader::open(path, progress)?;
     let n_eq = poly.n_eq as usize;
     let mut factors: Vec<(usize, u32)> = Vec::with_capacity(degree);

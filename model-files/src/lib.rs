@@ -116,12 +116,15 @@ impl ModelFiles {
         let optional = |name: &str| Some(path(name)).filter(|p| p.exists());
         let mass = read_matrix(&required(names::M, "the mass matrix M")?, progress)?;
         let n = mass.nrows as usize;
-        if n == 0 || mass.ncols as usize != n {
+        // the first-order model has 2 n + n_c <= 3 n states, indexed by u32
+        if n == 0 || mass.ncols as usize != n || n > (u32::MAX / 3) as usize {
             return Err(FileError::Content {
                 file: path(names::M),
                 message: format!(
-                    "M is {}x{}; it must be square with at least one row",
-                    mass.nrows, mass.ncols
+                    "M is {}x{}; it must be square with 1 to {} rows",
+                    mass.nrows,
+                    mass.ncols,
+                    u32::MAX / 3
                 ),
             });
         }
@@ -152,12 +155,27 @@ impl ModelFiles {
         let constraint_jacobian = match optional(names::G) {
             Some(p) => {
                 let g = read_matrix(&p, progress)?;
-                if g.ncols as usize != n || g.nrows == 0 {
+                if g.ncols as usize != n || g.nrows == 0 || g.nrows as usize > n {
                     return Err(FileError::Content {
                         file: p,
                         message: format!(
-                            "is {}x{}; G0 must have n_c >= 1 rows and n = {n} columns (M.mtx is {n}x{n})",
+                            "is {}x{}; G0 must have 1 <= n_c <= n rows and n = {n} columns (M.mtx is {n}x{n})",
                             g.nrows, g.ncols
+                        ),
+                    });
+                }
+                let mut has_linear = vec![false; g.nrows as usize];
+                for (j, _, v) in g.iter() {
+                    has_linear[j] |= v != 0.0;
+                }
+                if let Some(j) = has_linear.iter().position(|h| !h) {
+                    return Err(FileError::Content {
+                        file: p,
+                        message: format!(
+                            "row {} is empty: constraint {} has no linear part, so G0 is rank \
+                             deficient (a redundant or degenerate constraint)",
+                            j + 1,
+                            j + 1
                         ),
                     });
                 }
@@ -225,7 +243,11 @@ impl ModelFiles {
     /// The folder's files as `(name, contents)`, only those the model needs
     /// (written to memory; the caller places them, e.g. as one atomic set).
     pub fn encode(&self, source: &str) -> std::io::Result<Vec<(&'static str, Vec<u8>)>> {
-        let comment = format!("written by ssm-engine export from {source}");
+        // one comment line whatever the source's name holds
+        let comment: String = format!("written by ssm-engine export from {source}")
+            .chars()
+            .map(|c| if c.is_control() { ' ' } else { c })
+            .collect();
         let mut files = Vec::new();
         let mut file = |name: &'static str, body: &dyn Fn(&mut Vec<u8>) -> std::io::Result<()>| {
             let mut w = Vec::new();

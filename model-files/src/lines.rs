@@ -3,10 +3,14 @@
 //! held whole in memory.
 
 use std::fs::File;
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use crate::error::FileError;
+
+/// The longest line read (1 MiB): a file without line ends is an error, not
+/// a buffer the size of the file.
+pub(crate) const MAX_LINE: usize = 1 << 20;
 
 /// Bytes read so far (over all files of a folder), for a progress display.
 pub type Progress<'a> = dyn FnMut(u64) + 'a;
@@ -15,6 +19,7 @@ pub type Progress<'a> = dyn FnMut(u64) + 'a;
 pub(crate) struct LineReader<'p> {
     file: PathBuf,
     reader: BufReader<File>,
+    bytes: Vec<u8>,
     buf: String,
     line: usize,
     progress: &'p mut Progress<'p>,
@@ -30,6 +35,7 @@ impl<'p> LineReader<'p> {
         Ok(Self {
             file: path.to_owned(),
             reader: BufReader::with_capacity(1 << 16, file),
+            bytes: Vec::new(),
             buf: String::new(),
             line: 0,
             progress,
@@ -37,27 +43,37 @@ impl<'p> LineReader<'p> {
     }
 
     /// The next line without its line end (`None` at the end of the file).
+    /// A comment line (`%` or `#` first) that is not UTF-8 (a Latin-1 unit
+    /// symbol, say) reads as an empty comment; any other such line is an error,
+    /// as is a line longer than [`MAX_LINE`] bytes.
     pub(crate) fn next_line(&mut self) -> Result<Option<&str>, FileError> {
-        self.buf.clear();
-        let n = self
-            .reader
-            .read_line(&mut self.buf)
-            .map_err(|source| match source.kind() {
-                std::io::ErrorKind::InvalidData => FileError::Line {
-                    file: self.file.clone(),
-                    line: self.line + 1,
-                    message: "not UTF-8 text".to_owned(),
-                },
-                _ => FileError::Io {
-                    file: self.file.clone(),
-                    source,
-                },
+        self.bytes.clear();
+        let n = (&mut self.reader)
+            .take(MAX_LINE as u64 + 1)
+            .read_until(b'\n', &mut self.bytes)
+            .map_err(|source| FileError::Io {
+                file: self.file.clone(),
+                source,
             })?;
         if n == 0 {
             return Ok(None);
         }
         self.line += 1;
+        if n > MAX_LINE {
+            return Err(self.error(format!("line longer than {MAX_LINE} bytes")));
+        }
         (self.progress)(n as u64);
+        self.buf.clear();
+        match std::str::from_utf8(&self.bytes) {
+            Ok(text) => self.buf.push_str(text),
+            Err(_) => {
+                let first = self.bytes.iter().find(|b| !b.is_ascii_whitespace());
+                if !matches!(first, Some(b'%' | b'#')) {
+                    return Err(self.error("not UTF-8 text"));
+                }
+                self.buf.push('%');
+            }
+        }
         Ok(Some(self.buf.trim_end_matches(['\n', '\r'])))
     }
 

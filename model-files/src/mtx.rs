@@ -1,5 +1,5 @@
 //! Matrix Market files (`coordinate` or `array`, `real` or `integer`,
-//! `general` or `symmetric`), read streaming and written exactly.
+//! `general`, `symmetric` or `skew-symmetric`), read streaming and written exactly.
 //!
 //! Written by hand rather than taken from a sparse-matrix crate: the engine
 //! needs errors that name the file and line, a progress count, checks of the
@@ -24,11 +24,35 @@ enum Format {
     Array,
 }
 
-/// Reads the matrix in `path` (duplicates summed, a symmetric file's lower
-/// triangle mirrored).
+/// Symmetry of a Matrix Market file: the part stored and how the rest follows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Symmetry {
+    General,
+    /// Lower triangle with the diagonal; `a_ji = a_ij`.
+    Symmetric,
+    /// Strict lower triangle; `a_ji = -a_ij`, zero diagonal.
+    Skew,
+}
+
+impl Symmetry {
+    /// The mirrored value of `v`, when the file stores half the matrix.
+    fn mirror(self, v: f64) -> Option<f64> {
+        match self {
+            Self::General => None,
+            Self::Symmetric => Some(v),
+            Self::Skew => Some(-v),
+        }
+    }
+}
+
+/// Reads the matrix in `path` (duplicates summed, the stored triangle of a
+/// symmetric or skew-symmetric file mirrored). A `coordinate` file keeps its
+/// explicit zeros (they are part of its pattern); an `array` file is dense
+/// text with no pattern, so its zeros are dropped.
 pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMatrix, FileError> {
     let mut r = LineReader::open(path, progress)?;
-    let (format, symmetric) = header(&mut r)?;
+    let (format, symmetry) = header(&mut r)?;
+    let half = symmetry != Symmetry::General;
     let size = match r.next_data(&['%'])? {
         Some(line) => line.to_owned(),
         None => return Err(r.content_error("ends before the size line")),
@@ -49,12 +73,12 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
         tok.parse::<usize>()
             .ok()
             .filter(|&k| k < u32::MAX as usize)
-            .ok_or_else(|| r.error(format!("size '{tok}' is not an integer below 2^32")))
+            .ok_or_else(|| r.error(format!("size '{tok}' is not an integer below 2^32 - 1")))
     };
     let (rows, cols) = (count(dims[0])?, count(dims[1])?);
-    if symmetric && rows != cols {
+    if half && rows != cols {
         return Err(r.error(format!(
-            "a symmetric matrix must be square, the size line says {rows}x{cols}"
+            "a symmetric or skew-symmetric matrix must be square, the size line says {rows}x{cols}"
         )));
     }
     let mut m = SparseMatrix::zeros(rows, cols);
@@ -71,11 +95,11 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
                         "more entries than the {nnz} the size line declares"
                     )));
                 }
-                let entry = coordinate_entry(line, rows, cols, symmetric);
+                let entry = coordinate_entry(line, rows, cols, symmetry);
                 let (i, j, v) = entry.map_err(|msg| r.error(msg))?;
                 store(&mut m, i, j, v);
-                if symmetric && i != j {
-                    store(&mut m, j, i, v);
+                if let Some(w) = symmetry.mirror(v).filter(|_| i != j) {
+                    store(&mut m, j, i, w);
                 }
                 found += 1;
             }
@@ -86,16 +110,18 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
             }
         }
         Format::Array => {
-            // column-major; a symmetric array stores the lower triangle only
-            let positions: Box<dyn Iterator<Item = (usize, usize)>> = if symmetric {
-                Box::new((0..cols).flat_map(move |j| (j..rows).map(move |i| (i, j))))
-            } else {
-                Box::new((0..cols).flat_map(move |j| (0..rows).map(move |i| (i, j))))
+            // column-major; a symmetric array stores the lower triangle, a
+            // skew-symmetric one the strict lower triangle
+            let first = move |j: usize| match symmetry {
+                Symmetry::General => 0,
+                Symmetry::Symmetric => j,
+                Symmetry::Skew => j + 1,
             };
-            let total = if symmetric {
-                rows * (rows + 1) / 2
-            } else {
-                rows * cols
+            let positions = (0..cols).flat_map(move |j| (first(j)..rows).map(move |i| (i, j)));
+            let total = match symmetry {
+                Symmetry::General => rows * cols,
+                Symmetry::Symmetric => rows * (rows + 1) / 2,
+                Symmetry::Skew => rows * rows.saturating_sub(1) / 2,
             };
             let mut positions = positions.peekable();
             let mut found = 0usize;
@@ -112,9 +138,11 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
                     return Err(r.error(msg));
                 }
                 let v = value(toks[0]).map_err(|msg| r.error(msg))?;
-                store(&mut m, i, j, v);
-                if symmetric && i != j {
-                    store(&mut m, j, i, v);
+                if v != 0.0 {
+                    store(&mut m, i, j, v);
+                    if let Some(w) = symmetry.mirror(v).filter(|_| i != j) {
+                        store(&mut m, j, i, w);
+                    }
                 }
                 found += 1;
             }
@@ -137,7 +165,7 @@ fn store(m: &mut SparseMatrix, i: usize, j: usize, value: f64) {
     });
 }
 
-fn header(r: &mut LineReader<'_>) -> Result<(Format, bool), FileError> {
+fn header(r: &mut LineReader<'_>) -> Result<(Format, Symmetry), FileError> {
     let line = match r.next_line()? {
         Some(line) => line.to_ascii_lowercase(),
         None => return Err(r.content_error("empty file (expected a %%MatrixMarket header)")),
@@ -145,7 +173,7 @@ fn header(r: &mut LineReader<'_>) -> Result<(Format, bool), FileError> {
     let toks: Vec<&str> = line.split_ascii_whitespace().collect();
     if toks.first() != Some(&"%%matrixmarket") || toks.len() != 5 || toks[1] != "matrix" {
         return Err(r.error(
-            "expected the header '%%MatrixMarket matrix coordinate|array real general|symmetric'",
+            "expected the header '%%MatrixMarket matrix coordinate|array real general|symmetric|skew-symmetric'",
         ));
     }
     let format = match toks[2] {
@@ -161,19 +189,24 @@ fn header(r: &mut LineReader<'_>) -> Result<(Format, bool), FileError> {
             )))
         }
     }
-    let symmetric = match toks[4] {
-        "general" => false,
-        "symmetric" => true,
-        other => return Err(r.error(format!("symmetry '{other}': expected general or symmetric"))),
+    let symmetry = match toks[4] {
+        "general" => Symmetry::General,
+        "symmetric" => Symmetry::Symmetric,
+        "skew-symmetric" => Symmetry::Skew,
+        other => {
+            return Err(r.error(format!(
+                "symmetry '{other}': expected general, symmetric or skew-symmetric"
+            )))
+        }
     };
-    Ok((format, symmetric))
+    Ok((format, symmetry))
 }
 
 fn coordinate_entry(
     line: &str,
     rows: usize,
     cols: usize,
-    symmetric: bool,
+    symmetry: Symmetry,
 ) -> Result<(usize, usize, f64), String> {
     let toks: Vec<&str> = line.split_ascii_whitespace().collect();
     if toks.len() != 3 {
@@ -182,13 +215,28 @@ fn coordinate_entry(
     let i = index(toks[0], rows, "row")?;
     let j = index(toks[1], cols, "column")?;
     let v = value(toks[2])?;
-    if symmetric && i < j {
+    let above = match symmetry {
+        Symmetry::General => false,
+        Symmetry::Symmetric => i < j,
+        Symmetry::Skew => i <= j,
+    };
+    if above {
         return Err(format!(
-            "entry ({}, {}) lies above the diagonal, but the file is declared symmetric \
-             (a symmetric file stores the lower triangle only; declare it general if the \
-             matrix is not symmetric)",
+            "entry ({}, {}) lies {} the diagonal, but the file is declared {} (such a \
+             file stores the {}lower triangle only; declare it general if the matrix is not)",
             i + 1,
-            j + 1
+            j + 1,
+            if i == j { "on" } else { "above" },
+            if symmetry == Symmetry::Skew {
+                "skew-symmetric"
+            } else {
+                "symmetric"
+            },
+            if symmetry == Symmetry::Skew {
+                "strict "
+            } else {
+                ""
+            },
         ));
     }
     Ok((i, j, v))
@@ -289,5 +337,46 @@ mod tests {
             e.contains("declares 4000000000 entries, the file has 1"),
             "{e}"
         );
+    }
+
+    /// Skew-symmetric files (scipy writes them for small skew matrices, e.g. a
+    /// gyroscopic matrix) mirror with the opposite sign; an entry on the
+    /// diagonal of such a file is an error.
+    #[test]
+    fn skew_symmetric_coordinate_and_array() {
+        let c = "%%MatrixMarket matrix coordinate real skew-symmetric\n2 2 1\n2 1 3.0\n";
+        assert_eq!(read("skew-c", c).unwrap(), vec![(1, 0, 3.0), (0, 1, -3.0)]);
+        let a = "%%MatrixMarket matrix array real skew-symmetric\n3 3\n1\n0\n2\n";
+        assert_eq!(
+            read("skew-a", a).unwrap(),
+            vec![(1, 0, 1.0), (0, 1, -1.0), (2, 1, 2.0), (1, 2, -2.0)]
+        );
+        let d = "%%MatrixMarket matrix coordinate real skew-symmetric\n2 2 1\n1 1 3.0\n";
+        let e = read("skew-d", d).unwrap_err().to_string();
+        assert!(e.contains("line 3") && e.contains("on the diagonal"), "{e}");
+    }
+
+    /// A Latin-1 byte in a comment (a unit written by an older scipy) is
+    /// skipped; in a data line it is an error at that line; a line without
+    /// end beyond 1 MiB is refused at its line instead of being buffered.
+    #[test]
+    fn non_utf8_comment_and_endless_line() {
+        let path = std::env::temp_dir().join(format!("ssm-mtx-{}-latin1", std::process::id()));
+        let mut text =
+            b"%%MatrixMarket matrix coordinate real general\n% units \xb5m\n1 1 1\n1 1 2.5\n"
+                .to_vec();
+        std::fs::write(&path, &text).unwrap();
+        let m = read_matrix(&path, &mut |_| {}).unwrap();
+        assert_eq!(summed(&m), vec![(0, 0, 2.5)]);
+        text.extend_from_slice(b"1 1 \xb5\n");
+        std::fs::write(&path, &text).unwrap();
+        let e = read_matrix(&path, &mut |_| {}).unwrap_err().to_string();
+        assert!(e.contains("line 5") && e.contains("not UTF-8"), "{e}");
+        let mut long = b"%%MatrixMarket matrix coordinate real general\n1 1 1\n".to_vec();
+        long.resize(long.len() + (1 << 21), b' ');
+        std::fs::write(&path, &long).unwrap();
+        let e = read_matrix(&path, &mut |_| {}).unwrap_err().to_string();
+        assert!(e.contains("line 3") && e.contains("longer than"), "{e}");
+        let _ = std::fs::remove_file(&path);
     }
 }

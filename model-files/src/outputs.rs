@@ -41,6 +41,14 @@ pub fn read_outputs(
     Ok(outputs)
 }
 
+/// A name `outputs.csv` can hold: non-empty letters, digits, `_`, `.`, `-`.
+pub(crate) fn valid_name(name: &str) -> bool {
+    !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_alphanumeric() || "_.-".contains(c))
+}
+
 fn row(fields: &[&str], n_dof: usize) -> Result<(String, usize, f64), String> {
     if !(2..=3).contains(&fields.len()) {
         return Err(format!(
@@ -49,11 +57,7 @@ fn row(fields: &[&str], n_dof: usize) -> Result<(String, usize, f64), String> {
         ));
     }
     let name = fields[0];
-    if name.is_empty()
-        || !name
-            .chars()
-            .all(|c| c.is_alphanumeric() || "_.-".contains(c))
-    {
+    if !valid_name(name) {
         return Err(format!(
             "output name '{name}' must be non-empty letters, digits, '_', '.' or '-'"
         ));

@@ -205,7 +205,9 @@ impl Params {
                 },
                 ParamKind::Floats(len) => {
                     let items = match value {
-                        toml::Value::Array(items) if items.len() == len => items,
+                        toml::Value::Array(items) if items.is_empty() || items.len() == len => {
+                            items
+                        }
                         _ => return Err(bad(&format!("a list of {len} numbers"))),
                     };
                     let mut v = Vec::with_capacity(len);
@@ -300,7 +302,7 @@ mod tests {
         let p = Params::parse("dir = \"model\"\nrayleigh = [0.5, 1]", &specs()).unwrap();
         assert_eq!(p.text("dir"), "model");
         assert_eq!(p.floats("rayleigh"), &[0.5, 1.0]);
-        let p = Params::parse("", &specs()).unwrap();
+        let p = Params::parse("rayleigh = []", &specs()).unwrap();
         assert_eq!(p.text("dir"), "");
         assert!(p.floats("rayleigh").is_empty());
         for bad in [

@@ -392,7 +392,16 @@ fn each_bad_file_is_named_with_its_line_and_problem() {
                 ("g2.coo", "2 1 2 1.0\n".into()),
             ],
             "",
-            vec!["constraint 2 has no linear term", "rank deficient"],
+            vec!["G.mtx", "row 2 is empty", "rank deficient"],
+        ),
+        (
+            "more constraints than degrees of freedom",
+            vec![(
+                "G.mtx",
+                "%%MatrixMarket matrix coordinate real general\n3 2 3\n1 1 1.0\n2 2 1.0\n3 1 1.0\n".into(),
+            )],
+            "",
+            vec!["G.mtx", "is 3x2", "1 <= n_c <= n"],
         ),
         ("Rayleigh with one value", vec![], "rayleigh = [0.1]", vec!["rayleigh", "a list of 2 numbers"]),
     ];

@@ -92,7 +92,7 @@ fn model_params_toml(
     let mut resolved = table.clone();
     for key in paths {
         if let Some(toml::Value::String(s)) = resolved.get_mut().get_mut(key) {
-            if Path::new(s.as_str()).is_relative() {
+            if !s.is_empty() && Path::new(s.as_str()).is_relative() {
                 *s = dir.join(s.as_str()).to_string_lossy().into_owned();
             }
         }

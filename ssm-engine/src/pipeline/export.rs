@@ -6,6 +6,7 @@ use ssm_model_files::{ExportError, ModelFiles};
 
 use crate::model::plugin::Registry;
 use crate::model::source::{build_model, SourceError};
+use crate::model::system::{ModelError, System};
 use crate::output::OutputSet;
 use crate::scene::SceneFile;
 
@@ -21,6 +22,9 @@ pub enum ExportFailure {
     /// The plugin could not build the model.
     #[error(transparent)]
     Source(#[from] SourceError),
+    /// The plugin's model fails the engine's checks (sizes, indices, values).
+    #[error(transparent)]
+    Model(#[from] ModelError),
     /// The model is not in the form the files hold.
     #[error(transparent)]
     Export(#[from] ExportError),
@@ -43,6 +47,9 @@ pub fn export(
             path: scene.path.display().to_string(),
         })?;
     let (plugin, model) = build_model(scene, section, registry)?;
+    // the engine's checks first: nothing is written that the engine (or the
+    // reader) would refuse
+    System::from_model(&plugin, model.clone())?;
     let (files, notes) = ModelFiles::from_model(&model)?;
     let source = format!(
         "plugin '{plugin}', model '{}' of {}",
