@@ -579,3 +579,38 @@ fn readme_python_beam_example_runs() {
     assert!(fields[4] < 0.01, "O(7) error estimate {}", fields[4]);
     let _ = std::fs::remove_dir_all(&root);
 }
+
+/// Export never replaces a folder that is not an earlier export or result
+/// set (a user's own files there stay untouched), and refuses a model the
+/// files cannot hold with the reason.
+#[test]
+fn export_refuses_a_foreign_folder_and_a_non_polynomial_model() {
+    let dir = tmp_dir("export-foreign");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+    let export = |scene: &str, to: &Path| {
+        Command::new(engine_binary())
+            .arg("export")
+            .arg(scene)
+            .arg(to)
+            .current_dir(repo_root())
+            .output()
+            .unwrap()
+    };
+    let o = export("zoo/spatial_oscillator_cubic.toml", &dir);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("not replaced"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    assert!(!dir.join("M.mtx").exists());
+    let o = export("zoo/pendulum_simple_fig7_c0.1.toml", &dir.join("pendulum"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("non-polynomial terms"),
+        "{err}"
+    );
+    assert!(!dir.join("pendulum").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -161,7 +161,7 @@ fn check_replaceable(dir: &Path) -> Result<(), OutputError> {
     if !meta.is_dir() {
         return Err(refuse(
             dir,
-            "exists and is not a directory; choose another --out",
+            "exists and is not a directory; choose another output directory (--out, or the DIR of export)",
         ));
     }
     let mut entries = fs::read_dir(dir).map_err(|e| error(dir, e))?;
@@ -172,7 +172,7 @@ fn check_replaceable(dir: &Path) -> Result<(), OutputError> {
     }
     Err(refuse(
         dir,
-        "is not empty and holds no ssm-engine result set; it is not replaced: choose another --out",
+        "is not empty and holds no ssm-engine result set (or model export); it is not replaced: choose another output directory (--out, or the DIR of export)",
     ))
 }
 
