@@ -275,13 +275,13 @@ impl ModelFiles {
                 return differs(what);
             }
         }
-        if canonical(&model.nonlinearity) != canonical(&rebuilt.nonlinearity) {
+        if model.nonlinearity.clone().canonical() != rebuilt.nonlinearity.clone().canonical() {
             return differs("the nonlinearity F");
         }
         let forcing = |m: &Model| {
             m.forcing
                 .iter()
-                .map(|h| canonical(&h.cos))
+                .map(|h| h.cos.clone().canonical())
                 .collect::<Vec<_>>()
         };
         if forcing(model) != forcing(&rebuilt) {
@@ -289,32 +289,6 @@ impl ModelFiles {
         }
         Ok(())
     }
-}
-
-/// A polynomial term as `(eq, [(var, power)], coefficient)`.
-type Term = (u32, Vec<(u32, u32)>, f64);
-
-/// The terms of `p` as `(eq, factors, coefficient)` sorted by equation and
-/// monomial, repeated monomials summed in the order given, zero sums dropped.
-fn canonical(p: &PolyVector) -> Vec<Term> {
-    let mut terms: Vec<Term> = p
-        .terms
-        .iter()
-        .map(|t| {
-            let f = t.factors.iter().map(|f| (f.var, f.power)).collect();
-            (t.eq, f, t.coeff)
-        })
-        .collect();
-    terms.sort_by(|x, y| (x.0, &x.1).cmp(&(y.0, &y.1)));
-    let mut merged: Vec<Term> = Vec::with_capacity(terms.len());
-    for t in terms {
-        match merged.last_mut() {
-            Some(last) if last.0 == t.0 && last.1 == t.1 => last.2 += t.2,
-            _ => merged.push(t),
-        }
-    }
-    merged.retain(|t| t.2 != 0.0);
-    merged
 }
 
 /// The blocks of `A` and `B` in the builder's layout.
@@ -342,32 +316,26 @@ impl Blocks {
             a_momentum_mu: SparseMatrix::zeros(n, nc),
             other: Vec::new(),
         };
-        // explicit zeros kept: the pattern is part of what the engine factorizes
-        let put = |m: &mut SparseMatrix, i: usize, j: usize, value: f64| {
-            m.entries.push(ssm_api::Triplet {
-                row: i as u32,
-                col: j as u32,
-                value,
-            })
-        };
+        // explicit zeros kept (push_entry): the pattern is part of what the
+        // engine factorizes
         let block = |i: usize| (i / n).min(2);
         let local = |i: usize| if i >= 2 * n { i - 2 * n } else { i % n };
         for (i, j, v) in model.a.iter() {
             let (li, lj) = (local(i), local(j));
             match (block(i), block(j)) {
-                (0, 0) => put(&mut b.minus_k, li, lj, -v),
-                (0, 2) => put(&mut b.a_momentum_mu, li, lj, v),
-                (1, 1) => put(&mut b.a_kinematic_v, li, lj, v),
-                (2, 0) => put(&mut b.g0, li, lj, v),
+                (0, 0) => b.minus_k.push_entry(li, lj, -v),
+                (0, 2) => b.a_momentum_mu.push_entry(li, lj, v),
+                (1, 1) => b.a_kinematic_v.push_entry(li, lj, v),
+                (2, 0) => b.g0.push_entry(li, lj, v),
                 _ => b.other.push((i, j, v)),
             }
         }
         for (i, j, v) in model.b.iter() {
             let (li, lj) = (local(i), local(j));
             match (block(i), block(j)) {
-                (0, 0) => put(&mut b.c, li, lj, v),
-                (0, 1) => put(&mut b.b_momentum_v, li, lj, v),
-                (1, 0) => put(&mut b.b_kinematic_x, li, lj, v),
+                (0, 0) => b.c.push_entry(li, lj, v),
+                (0, 1) => b.b_momentum_v.push_entry(li, lj, v),
+                (1, 0) => b.b_kinematic_x.push_entry(li, lj, v),
                 _ => b.other.push((i, j, v)),
             }
         }

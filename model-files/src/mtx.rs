@@ -12,7 +12,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use ssm_api::{SparseMatrix, Triplet};
+use ssm_api::SparseMatrix;
 
 use crate::error::FileError;
 use crate::lines::{index, value, LineReader, Progress};
@@ -97,9 +97,9 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
                 }
                 let entry = coordinate_entry(line, rows, cols, symmetry);
                 let (i, j, v) = entry.map_err(|msg| r.error(msg))?;
-                store(&mut m, i, j, v);
+                m.push_entry(i, j, v);
                 if let Some(w) = symmetry.mirror(v).filter(|_| i != j) {
-                    store(&mut m, j, i, w);
+                    m.push_entry(j, i, w);
                 }
                 found += 1;
             }
@@ -139,9 +139,9 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
                 }
                 let v = value(toks[0]).map_err(|msg| r.error(msg))?;
                 if v != 0.0 {
-                    store(&mut m, i, j, v);
+                    m.push_entry(i, j, v);
                     if let Some(w) = symmetry.mirror(v).filter(|_| i != j) {
-                        store(&mut m, j, i, w);
+                        m.push_entry(j, i, w);
                     }
                 }
                 found += 1;
@@ -154,15 +154,6 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
         }
     }
     Ok(m)
-}
-
-/// Adds an entry, keeping explicit zeros (they are part of the pattern).
-fn store(m: &mut SparseMatrix, i: usize, j: usize, value: f64) {
-    m.entries.push(Triplet {
-        row: i as u32,
-        col: j as u32,
-        value,
-    });
 }
 
 fn header(r: &mut LineReader<'_>) -> Result<(Format, Symmetry), FileError> {

@@ -10,7 +10,7 @@ use abi_stable::std_types::{RString, RVec};
 use crate::expr::{Expr, ExprVector};
 use crate::model::{
     Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyVector, SparseMatrix, StateInfo,
-    StateKind, TimeKind, Triplet, Weight,
+    StateKind, TimeKind, Weight,
 };
 
 /// Configuration constraints `g(x) = 0` (eq. 2) in the `n` displacements: the
@@ -305,15 +305,15 @@ impl MechanicalSystem {
         // entries copied as given, explicit zeros included: they are part of
         // the sparsity pattern the engine factorizes
         for (i, k, v) in self.stiffness.iter() {
-            put(&mut a, i, k, -v);
+            a.push_entry(i, k, -v);
         }
         for (i, k, v) in self.mass.iter() {
-            put(&mut a, n + i, n + k, v);
-            put(&mut b, i, n + k, v);
-            put(&mut b, n + i, k, v);
+            a.push_entry(n + i, n + k, v);
+            b.push_entry(i, n + k, v);
+            b.push_entry(n + i, k, v);
         }
         for (i, k, v) in self.damping.iter() {
-            put(&mut b, i, k, v);
+            b.push_entry(i, k, v);
         }
         let mut f = PolyVector::zeros(big_n, big_n);
         for t in self.internal_force.terms.iter() {
@@ -441,15 +441,6 @@ impl MechanicalSystem {
             equilibrium,
         })
     }
-}
-
-/// Stores an entry, an explicit zero included.
-fn put(m: &mut SparseMatrix, row: usize, col: usize, value: f64) {
-    m.entries.push(Triplet {
-        row: row as u32,
-        col: col as u32,
-        value,
-    });
 }
 
 fn state(name: &str, kind: StateKind, motion: MotionKind) -> StateInfo {

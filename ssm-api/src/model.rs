@@ -60,6 +60,16 @@ impl SparseMatrix {
         }
     }
 
+    /// Stores `value` at `(row, col)` even when it is zero: an explicit zero
+    /// is part of the sparsity pattern the engine factorizes.
+    pub fn push_entry(&mut self, row: usize, col: usize, value: f64) {
+        self.entries.push(Triplet {
+            row: row as u32,
+            col: col as u32,
+            value,
+        });
+    }
+
     /// Iterates over the stored entries as `(row, col, value)`.
     pub fn iter(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
         self.entries
@@ -70,7 +80,7 @@ impl SparseMatrix {
 
 /// A variable raised to a power inside a monomial.
 #[repr(C)]
-#[derive(StableAbi, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(StableAbi, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub struct VarPower {
     /// 0-based variable index.
     pub var: u32,
@@ -145,6 +155,27 @@ impl PolyVector {
             coeff,
             factors: merged.into_iter().collect(),
         });
+    }
+
+    /// The same polynomials with the terms sorted by equation and monomial,
+    /// repeated monomials summed in the order given and zero sums dropped:
+    /// every sum over the terms then runs in one order, so equal models give
+    /// equal digits however their terms were ordered.
+    pub fn canonical(mut self) -> Self {
+        let mut terms: Vec<PolyTerm> = std::mem::take(&mut self.terms).into_iter().collect();
+        terms.sort_by(|x, y| (x.eq, x.factors.as_slice()).cmp(&(y.eq, y.factors.as_slice())));
+        let mut merged: Vec<PolyTerm> = Vec::with_capacity(terms.len());
+        for t in terms {
+            match merged.last_mut() {
+                Some(last) if last.eq == t.eq && last.factors == t.factors => {
+                    last.coeff += t.coeff;
+                }
+                _ => merged.push(t),
+            }
+        }
+        merged.retain(|t| t.coeff != 0.0);
+        self.terms = merged.into_iter().collect();
+        self
     }
 
     /// Highest total degree of any term (0 when empty).
@@ -322,5 +353,39 @@ impl Model {
     /// Number of states `N`.
     pub fn n_states(&self) -> usize {
         self.states.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `(equation, coefficient, factors)` of one pushed term.
+    type Term = (usize, f64, &'static [(usize, u32)]);
+
+    /// The same polynomial pushed in two orders is equal once canonical;
+    /// repeated monomials are summed and zero sums dropped.
+    #[test]
+    fn canonical_terms_do_not_depend_on_their_order() {
+        let terms: [Term; 4] = [
+            (1, 2.0, &[(0, 1), (1, 2)]),
+            (0, 1.5, &[(1, 3)]),
+            (1, -0.5, &[(1, 2), (0, 1)]),
+            (0, 4.0, &[(0, 2)]),
+        ];
+        let mut forward = PolyVector::zeros(2, 2);
+        let mut backward = PolyVector::zeros(2, 2);
+        for &(eq, c, f) in &terms {
+            forward.push(eq, c, f);
+        }
+        for &(eq, c, f) in terms.iter().rev() {
+            backward.push(eq, c, f);
+        }
+        backward.push(0, 1.0, &[(1, 1), (0, 1)]);
+        backward.push(0, -1.0, &[(0, 1), (1, 1)]);
+        let (f, b) = (forward.canonical(), backward.canonical());
+        assert_eq!(f, b);
+        assert_eq!(f.terms.len(), 3);
+        assert_eq!(f.terms[2].coeff, 1.5);
     }
 }

@@ -311,7 +311,7 @@ impl System {
                 name: model,
                 a,
                 b,
-                nonlinearity: canonical_terms(m.nonlinearity),
+                nonlinearity: m.nonlinearity.canonical(),
                 forcing,
                 states,
                 outputs,
@@ -352,7 +352,7 @@ impl System {
             name: model,
             a: rc.a,
             b: rc.b,
-            nonlinearity: canonical_terms(rc.nonlinearity),
+            nonlinearity: rc.nonlinearity.canonical(),
             forcing: rc.forcing,
             states,
             outputs,
@@ -470,29 +470,6 @@ fn check_matrix(
         }
     }
     Ok(())
-}
-
-/// The terms of `p` sorted by equation and monomial, repeated monomials
-/// summed in the order the model gave them, zero sums dropped. Every later
-/// sum over the terms then runs in one order, so a model gives the same
-/// digits however its plugin (or its files) ordered the terms.
-fn canonical_terms(mut p: PolyVector) -> PolyVector {
-    let mut terms: Vec<ssm_api::PolyTerm> = std::mem::take(&mut p.terms).into_iter().collect();
-    let key = |t: &ssm_api::PolyTerm| {
-        let f: Vec<(u32, u32)> = t.factors.iter().map(|f| (f.var, f.power)).collect();
-        (t.eq, f)
-    };
-    terms.sort_by_cached_key(key);
-    let mut merged: Vec<ssm_api::PolyTerm> = Vec::with_capacity(terms.len());
-    for t in terms {
-        match merged.last_mut() {
-            Some(last) if last.eq == t.eq && last.factors == t.factors => last.coeff += t.coeff,
-            _ => merged.push(t),
-        }
-    }
-    merged.retain(|t| t.coeff != 0.0);
-    p.terms = merged.into_iter().collect();
-    p
 }
 
 fn check_poly(model: &str, what: &str, p: &PolyVector, n: usize) -> Result<(), ModelError> {
