@@ -180,6 +180,14 @@ pub fn chain_with_sparse_spectrum(n: usize, modes: usize) -> (System, Spectrum) 
     (sys, sp)
 }
 
+/// The eigenvalues in the upper half plane (one of each pair), slowest
+/// frequency first.
+pub fn upper_half(eigenvalues: &[C64]) -> Vec<C64> {
+    let mut upper: Vec<C64> = eigenvalues.iter().copied().filter(|l| l.im > 0.0).collect();
+    upper.sort_by(|x, y| x.im.total_cmp(&y.im));
+    upper
+}
+
 /// Default parameters of the `oscillator-chain` plugin `(k, alpha, beta)`.
 pub const CHAIN_DEFAULTS: (f64, f64, f64) = (1.0, 1e-5, 1e-3);
 

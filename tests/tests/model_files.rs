@@ -191,13 +191,7 @@ fn two_dof_model_written_from_formulas_has_the_closed_form_eigenvalues() {
     let disc = (b * b - 4.0 * a * c).sqrt();
     let mut w2 = [(-b - disc) / (2.0 * a), (-b + disc) / (2.0 * a)];
     w2.sort_by(f64::total_cmp);
-    let mut found: Vec<C64> = sp
-        .eigenvalues
-        .iter()
-        .copied()
-        .filter(|l| l.im > 0.0)
-        .collect();
-    found.sort_by(|x, y| x.im.total_cmp(&y.im));
+    let found = ssm_tests::upper_half(&sp.eigenvalues);
     assert_eq!(found.len(), 2, "{:?}", sp.eigenvalues);
     for (l, w2) in found.iter().zip(w2) {
         let d = alpha + beta * w2;
@@ -497,13 +491,7 @@ fn chain_of_100000_masses_from_files_through_the_sparse_path() {
     let sp = spectrum_of(&read, Some(Method::Sparse), 6);
     let (k, alpha, beta) = ssm_tests::CHAIN_DEFAULTS;
     let exact = ssm_tests::chain_eigenvalues(n, k, alpha, beta, 3);
-    let mut found: Vec<C64> = sp
-        .eigenvalues
-        .iter()
-        .copied()
-        .filter(|l| l.im > 0.0)
-        .collect();
-    found.sort_by(|x, y| x.im.total_cmp(&y.im));
+    let found = ssm_tests::upper_half(&sp.eigenvalues);
     for (l, e) in found.iter().zip(&exact) {
         assert!((l - e).norm() < 1e-9 * e.norm(), "{l} against {e}");
     }
@@ -526,9 +514,18 @@ fn chain_of_100000_masses_from_files_through_the_sparse_path() {
 /// natural frequency and mode shape*, table 8-1): consistent-mass Hermite
 /// elements bound it from above (Rayleigh-Ritz) and converge as `h^4`, so 8
 /// elements must lie above it by less than 2e-4 (measured: 8.4e-5). The
-/// Rayleigh pair is `-beta w^2 / 2 +- i w_d`. The stretching hardens the
-/// backbone: more than 5 % at the scene's largest amplitude, with an O(7)
-/// error estimate under 1 %.
+/// Rayleigh pair is `-beta w^2 / 2 +- i w_d`.
+///
+/// Backbone reference: the single-mode Galerkin projection on the exact
+/// clamped-clamped mode `phi` gives the Duffing equation
+/// `rho A |phi|^2 q'' + E I |phi''|^2 q + E A / (2 L) |phi'|^2^2 q^3 = 0`, so
+/// `omega = omega_0 + c a^2` in the midpoint amplitude `a` with
+/// `c = 3 gamma / (8 omega_0 phi(L/2)^2)`, `gamma = E A |phi'|^4 / (2 L rho A
+/// |phi|^2)` (integrals by Simpson's rule on the analytic mode shape). With
+/// a cubic force only, the O(3) SSM backbone coefficient is that projection on
+/// the FE mode, so at amplitudes up to 0.05 mm the engine's `(omega -
+/// omega_0) / a^2` must match `c` to 0.5 % (FE mode error and the `O(a^2)`
+/// terms of the amplitude map; measured 4e-4).
 #[test]
 fn readme_python_beam_example_runs() {
     let python = Command::new("python3")
@@ -573,11 +570,50 @@ fn readme_python_beam_example_runs() {
         "Rayleigh damping {re}"
     );
     let csv = std::fs::read_to_string(root.join("out/backbone.csv")).unwrap();
-    let last7 = csv.lines().rfind(|r| r.starts_with("7,")).unwrap();
-    let fields: Vec<f64> = last7.split(',').map(|x| x.parse().unwrap()).collect();
-    assert!(fields[2] > 1.05 * im, "backbone {last7} does not harden");
-    assert!(fields[4] < 0.01, "O(7) error estimate {}", fields[4]);
+    let c = galerkin_backbone_coefficient(l, e, i, rho_a, 10.0);
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|r| r.split(',').map(|x| x.parse().unwrap()).collect())
+        .filter(|v: &Vec<f64>| v[0] == 3.0)
+        .collect();
+    let w0 = rows[0][2];
+    let mut checked = 0;
+    for v in rows.iter().filter(|v| v[3] > 0.0 && v[3] <= 0.05) {
+        let coefficient = (v[2] - w0) / (v[3] * v[3]);
+        assert!(
+            (coefficient / c - 1.0).abs() < 5e-3,
+            "backbone {coefficient} against {c}"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 3, "{checked} backbone rows checked");
     let _ = std::fs::remove_dir_all(&root);
+}
+
+/// The single-mode Galerkin backbone coefficient of a clamped-clamped beam
+/// with immovable ends (length `l`, modulus `e`, moment of inertia `i`, mass
+/// per length `rho_a`, section area `area`): `omega = omega_0 + c a^2` in the
+/// midpoint amplitude `a` (see `readme_python_beam_example_runs`).
+fn galerkin_backbone_coefficient(l: f64, e: f64, i: f64, rho_a: f64, area: f64) -> f64 {
+    let bl = 4.730_040_745f64;
+    let b = bl / l;
+    let s = (bl.cosh() - bl.cos()) / (bl.sinh() - bl.sin());
+    let phi = |x: f64| (b * x).cosh() - (b * x).cos() - s * ((b * x).sinh() - (b * x).sin());
+    let dphi = |x: f64| b * ((b * x).sinh() + (b * x).sin() - s * ((b * x).cosh() - (b * x).cos()));
+    let simpson = |f: &dyn Fn(f64) -> f64| {
+        let n = 4000;
+        let h = l / n as f64;
+        let inner: f64 = (1..n)
+            .map(|k| if k % 2 == 1 { 4.0 } else { 2.0 } * f(k as f64 * h))
+            .sum();
+        h / 3.0 * (f(0.0) + f(l) + inner)
+    };
+    let phi2 = simpson(&|x| phi(x) * phi(x));
+    let dphi2 = simpson(&|x| dphi(x) * dphi(x));
+    let w0 = b * b * (e * i / rho_a).sqrt();
+    let gamma = e * area / (2.0 * l) * dphi2 * dphi2 / (rho_a * phi2);
+    3.0 * gamma / (8.0 * w0 * phi(l / 2.0).powi(2))
 }
 
 /// Export never replaces a folder that is not an earlier export or result

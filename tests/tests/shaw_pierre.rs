@@ -18,13 +18,7 @@ fn spectrum_matches_the_closed_form() {
             &spectrum_options(None, 0),
         )
         .unwrap();
-        let mut upper: Vec<C64> = sp
-            .eigenvalues
-            .iter()
-            .copied()
-            .filter(|l| l.im > 0.0)
-            .collect();
-        upper.sort_by(|x, y| x.im.total_cmp(&y.im));
+        let upper = ssm_tests::upper_half(&sp.eigenvalues);
         let exact = [
             C64::new(-c / 2.0, (k0 * (1.0 - c * c / (4.0 * k0))).sqrt()),
             C64::new(
