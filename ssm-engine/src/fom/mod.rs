@@ -53,11 +53,13 @@
 pub mod consistent;
 pub mod problem;
 pub mod radau;
+pub mod sample;
 pub mod steady;
 
 pub use consistent::{consistent_initial, consistent_initial_keeping, Consistent};
 pub use problem::DaeProblem;
 pub use radau::{Radau, RadauOptions, RadauStats};
+pub use sample::{add_noise, sample_run, SampledRun, Simulation};
 pub use steady::{steady_state, SteadyOptions, SteadyState};
 
 /// Why a full-system simulation failed. Every variant names the time reached.

@@ -7,6 +7,7 @@ mod files;
 pub mod frc;
 pub mod plot;
 pub mod report;
+pub mod simulation;
 pub mod ssm;
 pub mod summary;
 pub mod validation;
@@ -78,6 +79,14 @@ pub fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
         }
         if let Some(r) = steady {
             out.add("steady_state.csv", validation::steady_csv(r));
+        }
+    }
+    if let Some(sim) = s.simulation {
+        for (k, run) in sim.runs.iter().enumerate() {
+            out.add(
+                &simulation::file_name(k),
+                simulation::run_csv(run, &sim.outputs),
+            );
         }
     }
     if let Some(f) = s.frc {

@@ -3,9 +3,10 @@
 
 use serde_json::{json, Value};
 
-use super::{frc, report, ssm, validation};
+use super::{frc, report, simulation, ssm, validation};
 use crate::compare::report::Report;
 use crate::compare::validation::Validation;
+use crate::fom::Simulation;
 use crate::model::plugin::PluginOrigin;
 use crate::model::system::System;
 use crate::reduce::Reduction;
@@ -69,6 +70,8 @@ pub struct Summary<'a> {
     pub validation: Option<&'a Validation>,
     /// Speed-against-error report.
     pub report: Option<&'a Report>,
+    /// Sampled full-system runs of `[simulate]`.
+    pub simulation: Option<&'a Simulation>,
     /// The accuracy target, the order and every answer's estimate.
     pub accuracy: &'a Accuracy,
     /// Warnings of the run.
@@ -125,6 +128,7 @@ pub fn summary_json(s: &Summary<'_>) -> String {
         "frc": s.frc.map(frc::frc_json),
         "validation": s.validation.map(validation::validation_json),
         "report": s.report.map(report::json),
+        "simulation": s.simulation.map(simulation::simulation_json),
         "accuracy": accuracy_json(s.accuracy),
         "warnings": s.warnings,
         "timing_s": {

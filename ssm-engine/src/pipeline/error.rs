@@ -48,6 +48,14 @@ pub enum JobError {
     /// A full-system reference failed.
     #[error("validation: {0}")]
     Validate(#[from] ValidateError),
+    /// A `[simulate]` run failed.
+    #[error("[simulate] run {run}: {source}")]
+    Simulate {
+        /// 1-based run.
+        run: usize,
+        /// What failed.
+        source: crate::fom::SimError,
+    },
     /// The speed-against-error report failed.
     #[error(transparent)]
     Report(#[from] ReportError),

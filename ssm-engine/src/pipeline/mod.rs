@@ -12,6 +12,7 @@ pub mod budget;
 mod checks;
 mod error;
 pub mod export;
+mod simulate;
 mod spectral;
 
 use std::path::PathBuf;
@@ -393,6 +394,14 @@ pub fn run(
         progress,
     };
     let mut warnings = sp.warnings.clone();
+    if let Some(r) = &reduction {
+        warnings.extend(
+            r.diagnostics
+                .iter()
+                .filter(|d| d.name.starts_with("warning"))
+                .map(|d| format!("reducer '{}': {}", r.reducer, d.text)),
+        );
+    }
     let tolerance = *sc.ssm.tolerance.get_ref();
     let (reduced, tried) = match &sc.ssm.order {
         Some(_) => (stage.at(ceiling)?, Vec::new()),
@@ -464,6 +473,20 @@ pub fn run(
     };
     timing.report = t.elapsed().as_secs_f64();
 
+    let simulation = match &sc.simulate {
+        Some(sec) => {
+            progress.stage("sampling full-system runs");
+            Some(simulate::simulate(
+                scene,
+                sec,
+                &system,
+                &expansion,
+                &coordinates,
+            )?)
+        }
+        None => None,
+    };
+
     if let Some(f) = &frc {
         warnings.extend(f.warnings.iter().cloned());
     }
@@ -497,6 +520,7 @@ pub fn run(
             frc: frc.as_ref(),
             validation: checked.as_ref(),
             report: speed.as_ref(),
+            simulation: simulation.as_ref(),
             accuracy: &accuracy,
             warnings: &warnings,
             timing,

@@ -13,10 +13,12 @@ use serde::Deserialize;
 use toml::Spanned;
 
 mod reduce;
+mod simulate;
 mod validate;
 
 pub use crate::spectrum::Normalization;
 pub use reduce::{DataSection, ReduceSection};
+pub use simulate::{SimulateRun, SimulateSection, MAX_SAMPLES};
 pub use validate::{ReportSection, SteadyStart, SteadyStateSection, ValidateSection};
 
 /// The annotated scene format, every section and key with its default: the
@@ -158,6 +160,9 @@ pub struct Scene {
     /// Speed-against-error report.
     #[serde(default)]
     pub report: Option<ReportSection>,
+    /// Sampled full-system runs written as `[data]` CSV files.
+    #[serde(default)]
+    pub simulate: Option<SimulateSection>,
 }
 
 /// `[forcing]`: forced response curves of the periodic SSM. The load's shape is
@@ -503,6 +508,7 @@ impl SceneFile {
         self.check_outputs()?;
         self.check_forcing()?;
         self.check_validate()?;
+        self.check_simulate()?;
         if let Some(m) = &self.scene.spectrum.modes {
             if *m.get_ref() == 0 {
                 return Err(self.invalid(m.span(), "spectrum.modes", "must be at least 1".into()));

@@ -1,0 +1,132 @@
+//! Uniformly sampled full-system runs: the data a data-driven reducer (the
+//! NAR identifier) is given, made from a known model.
+//!
+//! A flow is integrated by Radau IIA ([`super::Radau`]) and sampled at
+//! `t_k = k T` through its collocation polynomial (dense output), so the
+//! step size follows the error control and not the sampling period; a map is
+//! iterated, one sample per iterate.
+
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use ssm_api::TimeKind;
+
+use super::{consistent_initial_keeping, DaeProblem, Radau, RadauOptions, SimError};
+use crate::model::system::{OutputMap, System};
+
+/// The sampled runs of `[simulate]`.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    /// Output names (the CSV columns after `t`).
+    pub outputs: Vec<String>,
+    /// The runs, noise included.
+    pub runs: Vec<SampledRun>,
+    /// Noise level (relative to each output's largest value in its run).
+    pub noise: f64,
+    /// Seed of the noise.
+    pub seed: u64,
+    /// Standard deviation of the noise added, per run and output.
+    pub noise_sigma: Vec<Vec<f64>>,
+}
+
+/// One sampled run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampledRun {
+    /// Sample times `k T`.
+    pub times: Vec<f64>,
+    /// `values[j][k]`: output `j` at sample `k`.
+    pub values: Vec<Vec<f64>>,
+    /// Largest change the consistent start made to a displacement.
+    pub start_correction: f64,
+    /// Integrator steps accepted (iterates for a map).
+    pub steps: usize,
+}
+
+/// Samples `outputs` of the unforced system from `z0` (displacements `keep`
+/// held where the constraints allow) at `samples` times `k period`.
+pub fn sample_run(
+    sys: &System,
+    z0: &[f64],
+    keep: &[usize],
+    period: f64,
+    samples: usize,
+    outputs: &[&OutputMap],
+    opts: RadauOptions,
+) -> Result<SampledRun, SimError> {
+    if !(period.is_finite() && period > 0.0) || samples < 2 {
+        return Err(SimError::Settings(format!(
+            "sampling period {period} and {samples} samples: the period must be positive and the samples at least 2"
+        )));
+    }
+    let problem = DaeProblem::new(sys, 0.0, 0.0);
+    let times: Vec<f64> = (0..samples).map(|k| k as f64 * period).collect();
+    let observe = |z: &[f64], values: &mut [Vec<f64>]| {
+        for (o, v) in outputs.iter().zip(values.iter_mut()) {
+            v.push(o.weights.iter().map(|&(s, w)| w * z[s]).sum());
+        }
+    };
+    let mut values = vec![Vec::with_capacity(samples); outputs.len()];
+    match sys.time {
+        TimeKind::Map { period: map_period } => {
+            if (map_period - period).abs() > 1e-9 * map_period {
+                return Err(SimError::Settings(format!(
+                    "the model is a map with period {map_period}: sample it with that period, not {period}"
+                )));
+            }
+            let mut z = z0.to_vec();
+            let mut next = vec![0.0; z.len()];
+            observe(&z, &mut values);
+            for &t in &times[1..] {
+                problem.autonomous_rhs(&z, &mut next);
+                if let Some(i) = next.iter().position(|v| !v.is_finite()) {
+                    return Err(SimError::NonFinite {
+                        t,
+                        state: problem.state_name(i).to_owned(),
+                    });
+                }
+                std::mem::swap(&mut z, &mut next);
+                observe(&z, &mut values);
+            }
+            Ok(SampledRun {
+                times,
+                values,
+                start_correction: 0.0,
+                steps: samples - 1,
+            })
+        }
+        TimeKind::Flow => {
+            let initial = consistent_initial_keeping(&problem, 0.0, z0, keep)?;
+            let t_end = times[samples - 1];
+            let mut radau = Radau::new(&problem, 0.0, &initial.z, t_end, opts)?;
+            observe(&initial.z, &mut values);
+            let mut zt = vec![0.0; sys.n_states()];
+            let mut next = 1;
+            while next < samples {
+                radau.step(t_end)?;
+                while next < samples && times[next] <= radau.t() * (1.0 + 1e-14) {
+                    radau.dense(times[next], &mut zt);
+                    observe(&zt, &mut values);
+                    next += 1;
+                }
+            }
+            Ok(SampledRun {
+                times,
+                values,
+                start_correction: initial.position_correction,
+                steps: radau.stats.accepted,
+            })
+        }
+    }
+}
+
+/// Adds Gaussian noise of standard deviation `level * max |v|` to `v`
+/// (a sensor's noise relative to its full scale); returns that deviation.
+pub fn add_noise(v: &mut [f64], level: f64, rng: &mut ChaCha8Rng) -> f64 {
+    let sigma = level * v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if sigma > 0.0 {
+        for x in v.iter_mut() {
+            let e: f64 = StandardNormal.sample(rng);
+            *x += sigma * e;
+        }
+    }
+    sigma
+}

@@ -1,0 +1,107 @@
+//! `[simulate]`: the full model sampled from given starts, with optional
+//! additive Gaussian noise, for data-driven reducers.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use ssm_api::StateKind;
+
+use super::JobError;
+use crate::fom::{add_noise, sample_run, RadauOptions, Simulation};
+use crate::model::system::{OutputMap, System};
+use crate::rom::autonomous::polar_point;
+use crate::scene::{SceneFile, SimulateSection};
+use crate::ssm::SsmExpansion;
+
+/// Runs `[simulate]` on the full system; starts on the SSM use `ssm` at its order.
+pub fn simulate(
+    scene: &SceneFile,
+    sec: &SimulateSection,
+    sys: &System,
+    ssm: &SsmExpansion,
+    coordinates: &[&OutputMap],
+) -> Result<Simulation, JobError> {
+    let outputs: Vec<&OutputMap> = match &sec.outputs {
+        None => coordinates.to_vec(),
+        Some(names) => names
+            .get_ref()
+            .iter()
+            .map(|n| {
+                sys.outputs.iter().find(|o| &o.name == n).ok_or_else(|| {
+                    let have: Vec<&str> = sys.outputs.iter().map(|o| o.name.as_str()).collect();
+                    scene.invalid(
+                        names.span(),
+                        "simulate.outputs",
+                        format!("no output '{n}'; the model has: {}", have.join(", ")),
+                    )
+                })
+            })
+            .collect::<Result<_, _>>()?,
+    };
+    if outputs.is_empty() {
+        return Err(scene
+            .invalid(
+                sec.run.span(),
+                "simulate.outputs",
+                "no output to sample: name them here or in [outputs] coordinates".into(),
+            )
+            .into());
+    }
+    let opts = RadauOptions {
+        rtol: *sec.rtol.get_ref(),
+        atol: *sec.atol.get_ref(),
+        ..RadauOptions::default()
+    };
+    let period = *sec.period.get_ref();
+    let samples = *sec.samples.get_ref();
+    let mut rng = ChaCha8Rng::seed_from_u64(*sec.seed.get_ref());
+    let noise = *sec.noise.get_ref();
+    let mut runs = Vec::new();
+    let mut noise_sigma = Vec::new();
+    for (k, run) in sec.run.get_ref().iter().enumerate() {
+        let (z0, keep) = match &run.rho0 {
+            Some(rho0) => {
+                let theta0 = run.theta0.clone().unwrap_or_else(|| vec![0.0; rho0.len()]);
+                let p0 = polar_point(rho0, &theta0);
+                let w = ssm.w_at(&ssm.set.monomials(&p0, ssm.order), ssm.order);
+                (w.iter().map(|c| c.re).collect::<Vec<f64>>(), Vec::new())
+            }
+            None => {
+                let mut z = vec![0.0; sys.n_states()];
+                let mut keep = Vec::new();
+                for (name, value) in run.given_start() {
+                    let i = sys
+                        .states
+                        .iter()
+                        .position(|s| s.name.as_str() == name)
+                        .ok_or_else(|| {
+                            scene.invalid(
+                                sec.run.span(),
+                                &format!("simulate.run[{}]", k + 1),
+                                format!("the model has no state '{name}'"),
+                            )
+                        })?;
+                    z[i] = value;
+                    if sys.states[i].kind == StateKind::Displacement {
+                        keep.push(i);
+                    }
+                }
+                (z, keep)
+            }
+        };
+        let mut r = sample_run(sys, &z0, &keep, period, samples, &outputs, opts)
+            .map_err(|source| JobError::Simulate { run: k + 1, source })?;
+        let mut sigmas = Vec::with_capacity(outputs.len());
+        for v in r.values.iter_mut() {
+            sigmas.push(add_noise(v, noise, &mut rng));
+        }
+        noise_sigma.push(sigmas);
+        runs.push(r);
+    }
+    Ok(Simulation {
+        outputs: outputs.iter().map(|o| o.name.clone()).collect(),
+        runs,
+        noise,
+        seed: *sec.seed.get_ref(),
+        noise_sigma,
+    })
+}
