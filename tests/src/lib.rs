@@ -74,6 +74,7 @@ pub fn registry() -> ssm_engine::model::plugin::Registry {
         plugin_path("divider"),
         plugin_path("matrix-model"),
         plugin_path("shaw-pierre"),
+        plugin_path("nar-identifier"),
         plugin_path("ssm-fixture-modal-truncation"),
         plugin_path("ssm-fixture-api-1-0"),
     ])
