@@ -398,3 +398,40 @@ fn zoo_scenes_identify_the_first_pair() {
     assert_eq!(diag(&s, "spectral_quotients")[0], 3.0);
     assert!(root.join("out/nar/backbone.svg").exists());
 }
+
+/// Fig. 4's independent backbones: the zero-crossing and Hilbert backbones
+/// read off the first decaying signal (`data_backbone.csv`, drawn into
+/// `backbone.svg`) agree with the engine's model-based O(7) SSM backbone of
+/// (9.1) within 1 % of the frequency at amplitudes 0.05 to 0.3 of x1'
+/// (measured 5e-3; above, the second mode's decaying remainder in a signal
+/// started in the linear modal subspace makes them oscillate by up to 2 %).
+/// The second signal's points near omega_2 are left out of the overlay.
+#[test]
+fn data_backbones_match_the_model_based_one() {
+    let dir = tmp_dir("nar-data-backbones");
+    let files = shaw_pierre_data(&dir, 0.0, 1);
+    let (model, _) = model_backbone(7, 0.5);
+    let list: Vec<String> = files.iter().map(|f| format!("{:?}", f)).collect();
+    let scene = format!(
+        "[reduce]\nplugin = \"nar-identifier\"\nreducer = \"nar\"\n[reduce.params]\nnu = 2\norder = 5\n\
+         [data]\nfiles = [{}]\n[ssm]\norder = 5\n[outputs]\ncoordinates = [\"x1_dot\"]\n\
+         [outputs.backbone]\nrho_max = 0.5\npoints = 11\norders = [5]\n",
+        list.join(", ")
+    );
+    let r = run_scene_text(&scene).unwrap();
+    let csv = String::from_utf8(r.outputs.get("data_backbone.csv").unwrap().to_vec()).unwrap();
+    let mut checked = [0usize; 2];
+    for line in csv.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let (amp, w): (f64, f64) = (f[2].parse().unwrap(), f[3].parse().unwrap());
+        assert!((w - 1.0).abs() < 0.25, "{line}: a point far from omega_1");
+        if f[1].ends_with("simulation_1.csv") && (0.05..=0.3).contains(&amp) {
+            let wm = omega_at(&model, amp).unwrap();
+            assert!(((w - wm) / wm).abs() < 0.01, "{line}: model {wm}");
+            checked[usize::from(f[0] == "hilbert")] += 1;
+        }
+    }
+    assert!(checked[0] > 100 && checked[1] > 100, "{checked:?}");
+    let svg = String::from_utf8(r.outputs.get("backbone.svg").unwrap().to_vec()).unwrap();
+    assert!(svg.contains("zero crossings of simulation_1.csv") && svg.contains("hilbert of"));
+}

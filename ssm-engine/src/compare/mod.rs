@@ -8,6 +8,7 @@
 //! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sects.
 //! 5.1.1, 5.2.2, 5.2.3, Appendix G.1, eq. (47).
 
+pub mod instantaneous;
 pub mod report;
 pub mod validation;
 

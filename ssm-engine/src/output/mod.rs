@@ -12,6 +12,7 @@ pub mod ssm;
 pub mod summary;
 pub mod validation;
 
+use crate::compare::instantaneous::DataBackbone;
 use crate::rom::autonomous::{BackboneCurve, LiftedTransient};
 use crate::spectrum::ModalFigures;
 pub use files::{OutputError, OutputSet, MARKER};
@@ -47,6 +48,8 @@ pub struct Products<'a> {
     pub coordinates: &'a [String],
     /// Backbone curves.
     pub backbone: Option<&'a [BackboneCurve]>,
+    /// Backbones read off the `[data]` signals (zero crossings, Hilbert).
+    pub data_backbones: &'a [DataBackbone],
     /// Reduced transient.
     pub transient: Option<&'a LiftedTransient>,
     /// The finite spectrum's frequencies and damping ratios.
@@ -62,7 +65,16 @@ pub fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
     let mut out = OutputSet::default();
     if let Some(b) = p.backbone {
         out.add("backbone.csv", ssm::backbone_csv(b, p.coordinates));
-        out.add("backbone.svg", ssm::backbone_svg(b, p.coordinates)?);
+        out.add(
+            "backbone.svg",
+            ssm::backbone_svg(b, p.data_backbones, p.coordinates)?,
+        );
+        if !p.data_backbones.is_empty() {
+            out.add(
+                "data_backbone.csv",
+                ssm::data_backbone_csv(p.data_backbones),
+            );
+        }
     }
     if let Some(t) = p.transient {
         out.add("rom_trajectory.csv", ssm::transient_csv(t, p.coordinates));

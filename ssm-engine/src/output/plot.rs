@@ -92,13 +92,13 @@ pub fn line_plot(
     let xs = range(
         curves
             .iter()
-            .flat_map(|c| c.points.iter().filter(keep).map(|p| p.0)),
+            .flat_map(|c| c.points.iter().chain(&c.markers).filter(keep).map(|p| p.0)),
         log,
     );
     let ys = range(
         curves
             .iter()
-            .flat_map(|c| c.points.iter().filter(keep).map(|p| p.1)),
+            .flat_map(|c| c.points.iter().chain(&c.markers).filter(keep).map(|p| p.1)),
         log,
     );
     let mut svg = String::new();

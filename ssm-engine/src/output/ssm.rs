@@ -5,6 +5,7 @@
 use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::compare::instantaneous::{DataBackbone, Method};
 use crate::rom::accuracy::percent;
 use crate::rom::autonomous::{BackboneCurve, InvarianceEntry, LiftedTransient};
 use crate::ssm::analysis::Polar;
@@ -122,10 +123,32 @@ fn estimate_label(order: usize, estimate: Option<f64>, untrusted: bool) -> Strin
     label
 }
 
+/// `data_backbone.csv`: `method,source,amplitude,omega`, the backbones read
+/// off the `[data]` signals.
+pub fn data_backbone_csv(data: &[DataBackbone]) -> String {
+    let mut csv = String::from("method,source,amplitude,omega\n");
+    for d in data {
+        for (a, w) in &d.points {
+            csv.push_str(&format!(
+                "{},{},{a:.10e},{w:.10e}\n",
+                d.method.as_str(),
+                d.source.replace(',', ";")
+            ));
+        }
+    }
+    csv
+}
+
 /// `backbone.svg`: omega against the amplitude of the first output (or
-/// against `rho` without outputs), one curve per order.
-pub fn backbone_svg(curves: &[BackboneCurve], outputs: &[String]) -> Result<String, PlotError> {
-    let drawn: Vec<Curve> = curves
+/// against `rho` without outputs), one curve per order, and the backbones
+/// read off the `[data]` signals (zero crossings as markers, Hilbert dashed).
+pub fn backbone_svg(
+    curves: &[BackboneCurve],
+    data: &[DataBackbone],
+    outputs: &[String],
+) -> Result<String, PlotError> {
+    let n = curves.len();
+    let mut drawn: Vec<Curve> = curves
         .iter()
         .map(|c| Curve {
             label: estimate_label(c.order, c.error_estimate, c.untrusted),
@@ -137,6 +160,27 @@ pub fn backbone_svg(curves: &[BackboneCurve], outputs: &[String]) -> Result<Stri
             ..Curve::default()
         })
         .collect();
+    for (k, d) in data.iter().enumerate() {
+        let file = std::path::Path::new(&d.source)
+            .file_name()
+            .map_or(d.source.clone(), |f| f.to_string_lossy().into_owned());
+        let label = format!("{} of {file}", d.method.as_str().replace('_', " "));
+        drawn.push(match d.method {
+            Method::ZeroCrossings => Curve {
+                label,
+                markers: d.points.clone(),
+                color: Some(n + k),
+                ..Curve::default()
+            },
+            Method::Hilbert => Curve {
+                label,
+                points: d.points.clone(),
+                dashed: true,
+                color: Some(n + k),
+                ..Curve::default()
+            },
+        });
+    }
     let x_label = outputs
         .first()
         .map_or_else(|| "rho".to_owned(), |o| format!("amplitude of {o}"));

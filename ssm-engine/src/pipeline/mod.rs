@@ -21,6 +21,7 @@ use std::time::Instant;
 pub use error::JobError;
 pub use spectral::Spectral;
 
+use crate::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
 use crate::compare::report::{report, Report, ReportInputs};
 use crate::compare::validation::{validation, Validation};
 use crate::model::plugin::{PluginOrigin, Registry};
@@ -491,6 +492,19 @@ pub fn run(
         warnings.extend(f.warnings.iter().cloned());
     }
     warnings.extend(untrusted_warnings(&accuracy.answers, tolerance));
+    // the signals' own backbones, those decaying near the master pair's frequency
+    let data_backbones = match (&reduction, answers.backbone.as_deref()) {
+        (Some(r), Some([first, ..])) => r
+            .signals
+            .as_ref()
+            .map(|sig| {
+                let all = signal_backbones(sig, coordinates.first().map(|o| o.name.as_str()));
+                let omega0 = first.points.first().map_or(0.0, |p| p.omega);
+                near_frequency(all, omega0, 0.25)
+            })
+            .unwrap_or_default(),
+        _ => Vec::new(),
+    };
     progress.stage("writing outputs");
     let polar_form = (expansion.dynamics == Dynamics::Flow)
         .then(|| polar(&expansion).ok())
@@ -503,6 +517,7 @@ pub fn run(
         coordinates: &names,
         modal: &modal,
         backbone: answers.backbone.as_deref(),
+        data_backbones: &data_backbones,
         transient: answers.transient.as_ref(),
         summary: Summary {
             system: &system,
@@ -538,6 +553,21 @@ pub fn run(
         plugins,
         outputs,
     })
+}
+
+/// The zero-crossing and Hilbert backbones of each `[data]` signal of the
+/// observable `name` (the backbone's first output), when the data have it.
+fn signal_backbones(sig: &ssm_api::Signals, name: Option<&str>) -> Vec<DataBackbone> {
+    let Some(j) = name.and_then(|n| sig.names.iter().position(|c| c.as_str() == n)) else {
+        return Vec::new();
+    };
+    let series: Vec<(String, Vec<f64>)> = (0..sig.trajectories.len())
+        .map(|k| {
+            let y = (0..sig.n_samples(k)).map(|i| sig.sample(k, i)[j]).collect();
+            (sig.trajectories[k].source.to_string(), y)
+        })
+        .collect();
+    data_backbones(&series, sig.period)
 }
 
 /// The model the analyses run on: the plugin's model of `[model]`, or the

@@ -245,6 +245,8 @@ pub struct Reduction {
     pub diagnostics: Vec<Diagnostic>,
     /// Outputs composed through the lift from the full model's.
     pub lifted_outputs: Vec<String>,
+    /// The `[data]` signals the reducer was given.
+    pub signals: Option<Signals>,
 }
 
 /// Adds to `reduced` every output of `full` it lacks, as `w^T V` through the

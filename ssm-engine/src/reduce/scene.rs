@@ -135,6 +135,7 @@ pub fn reduce_scene(
         lift,
         diagnostics: reduced.diagnostics.into_iter().collect(),
         lifted_outputs,
+        signals: input.signals.into_option(),
     };
     Ok((system, reduction))
 }
