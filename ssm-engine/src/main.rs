@@ -17,8 +17,8 @@ const SCENE_HELP: &str = concat!(
     "\n\
 OUTPUTS (in --out DIR, default ./out/<scene file stem>): summary.json, spectrum.csv,
 backbone.csv/.svg, rom_trajectory.csv, frc.csv/.svg, validation.csv/.svg,
-steady_state.csv (also drawn into frc.svg), report.csv/.md/.svg, data_backbone.csv,
-simulation_<k>.csv (as requested).
+steady_state.csv (also drawn into frc.svg), report.csv/.md/.svg, identified.json,
+data_backbone.csv, simulation_<k>.csv (as requested).
 The new result set replaces the old one as a whole (a fresh private directory swapped in
 with one rename): never a mix, never stale files; a failed run changes nothing. A non-empty
 directory that is not a result set is never replaced.

@@ -5,7 +5,7 @@
 //! Plugins are `cdylib`s: build them first (`cargo build --release --workspace`);
 //! the tests look for them next to the test executable's profile directory.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use num_complex::Complex64 as C64;
 use ssm_engine::model::plugin::Plugin;
@@ -467,4 +467,49 @@ pub fn conservative_frequency(a: f64) -> f64 {
         (x, y) = (0.5 * (x + y), (x * y).sqrt());
     }
     x
+}
+
+/// The decaying signals of `x1'` of the modified Shaw-Pierre oscillator
+/// (Szalai, Ehrhardt & Haller 2017, Sect. 9a) from the initial conditions
+/// (9.2), 8000 samples at `T = 0.8`, with additive noise `noise` (relative to
+/// each signal's peak, seeded), written by `[simulate]` into `dir`; returns
+/// the two files.
+pub fn shaw_pierre_data(dir: &Path, noise: f64, seed: u64) -> Vec<PathBuf> {
+    let x1 = 2.0 / 3f64.sqrt();
+    let scene = format!(
+        "[model]\nplugin = \"shaw-pierre\"\n[ssm]\norder = 3\n[outputs]\ncoordinates = [\"x1\"]\n\
+         [simulate]\nperiod = 0.8\nsamples = 8000\noutputs = [\"x1_dot\"]\nnoise = {noise}\nseed = {seed}\n\
+         [[simulate.run]]\nx0 = {{ x1 = {x1}, x2 = {x1} }}\n\
+         [[simulate.run]]\nx0 = {{ x1 = {}, x2 = {} }}\n",
+        -2.0 / 3.0,
+        2.0 / 3.0
+    );
+    let r = run_scene_text(&scene).expect("data scene runs");
+    r.outputs.write(dir).expect("data written");
+    vec![dir.join("simulation_1.csv"), dir.join("simulation_2.csv")]
+}
+
+/// The decaying signals of `x1'` of the chain of three cubic oscillators
+/// (plugin `oscillator-chain`, `n = 3`, defaults otherwise), one started on
+/// each linear mode shape `sin(j k pi / 4)` with amplitude 0.5, 8000 samples
+/// at `T = 0.8`: data whose delay embedding needs `2 nu = 6`.
+pub fn chain3_data(dir: &Path) -> Vec<PathBuf> {
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    let mut scene = String::from(
+        "[model]\nplugin = \"oscillator-chain\"\n[model.params]\nn = 3\n[ssm]\norder = 3\n\
+         [outputs]\ncoordinates = [\"x1\"]\n[simulate]\nperiod = 0.8\nsamples = 8000\noutputs = [\"x1_dot\"]\n",
+    );
+    for shape in [[s, 1.0, s], [1.0, 0.0, -1.0], [s, -1.0, s]] {
+        scene.push_str(&format!(
+            "[[simulate.run]]\nx0 = {{ x1 = {}, x2 = {}, x3 = {} }}\n",
+            0.5 * shape[0],
+            0.5 * shape[1],
+            0.5 * shape[2]
+        ));
+    }
+    let r = run_scene_text(&scene).expect("chain data scene runs");
+    r.outputs.write(dir).expect("data written");
+    (1..=3)
+        .map(|k| dir.join(format!("simulation_{k}.csv")))
+        .collect()
 }

@@ -11,27 +11,10 @@
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
-use ssm_tests::{run_scene_text, tmp_dir};
+use ssm_tests::{run_scene_text, shaw_pierre_data, tmp_dir};
 
 const C: f64 = 0.003;
 const KAPPA: f64 = 0.5;
-
-/// Writes the two decaying signals of (9.2) with noise `noise` into `dir`
-/// and returns the file paths.
-fn shaw_pierre_data(dir: &Path, noise: f64, seed: u64) -> Vec<PathBuf> {
-    let x1 = 2.0 / 3f64.sqrt();
-    let scene = format!(
-        "[model]\nplugin = \"shaw-pierre\"\n[ssm]\norder = 3\n[outputs]\ncoordinates = [\"x1\"]\n\
-         [simulate]\nperiod = 0.8\nsamples = 8000\noutputs = [\"x1_dot\"]\nnoise = {noise}\nseed = {seed}\n\
-         [[simulate.run]]\nx0 = {{ x1 = {x1}, x2 = {x1} }}\n\
-         [[simulate.run]]\nx0 = {{ x1 = {}, x2 = {} }}\n",
-        -2.0 / 3.0,
-        2.0 / 3.0
-    );
-    let r = run_scene_text(&scene).expect("data scene runs");
-    r.outputs.write(dir).expect("data written");
-    vec![dir.join("simulation_1.csv"), dir.join("simulation_2.csv")]
-}
 
 /// The identification scene on `files` with the reducer parameters `params`,
 /// backbone of pair `pair` up to `rho_max` at `orders`.
@@ -367,7 +350,8 @@ fn bad_data_gives_clear_errors() {
 /// scene writes the signals where the identification scene reads them
 /// (`../out/shaw_pierre_data` from `zoo/`, here inside a scratch copy), and
 /// the identified first pair has the closed-form frequency of Sect. 9a,
-/// `omega_1 = sqrt(k0) = 1`, to 1e-5 with `sigma(E_1) = 3`.
+/// `omega_1 = sqrt(k0) = 1`, to 1e-5 with `sigma(E_1) = 3`; the map written
+/// to `identified.json` predicts the data one step ahead.
 #[test]
 fn zoo_scenes_identify_the_first_pair() {
     let root = tmp_dir("nar-zoo");
@@ -397,6 +381,51 @@ fn zoo_scenes_identify_the_first_pair() {
     assert!((w[0] - 1.0).abs() < 1e-5, "{w:?}");
     assert_eq!(diag(&s, "spectral_quotients")[0], 3.0);
     assert!(root.join("out/nar/backbone.svg").exists());
+    // identified.json holds the fitted map: its one-step predictions of the
+    // first signal match the next samples to 1e-4 of the signal's peak
+    let id: Value =
+        serde_json::from_slice(&std::fs::read(root.join("out/nar/identified.json")).unwrap())
+            .unwrap();
+    assert_eq!(id["map_period"].as_f64(), Some(0.8));
+    let states: Vec<String> = id["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_owned())
+        .collect();
+    assert_eq!(states.len(), 4);
+    let last_row: Vec<f64> = id["linear_part"][3]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let y: Vec<f64> = std::fs::read_to_string(root.join("out/shaw_pierre_data/simulation_1.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let peak = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut worst = 0.0f64;
+    for k in (0..y.len() - 4).step_by(97) {
+        let xi = &y[k..k + 4];
+        let mut next: f64 = (0..4).map(|j| last_row[j] * xi[j]).sum();
+        for t in id["nonlinear_terms"].as_array().unwrap() {
+            assert_eq!(t["equation"].as_str(), Some(states[3].as_str()));
+            let mut m = t["coefficient"].as_f64().unwrap();
+            for (name, p) in t["monomial"].as_object().unwrap() {
+                let j = states.iter().position(|s| s == name).unwrap();
+                m *= xi[j].powi(p.as_i64().unwrap() as i32);
+            }
+            next += m;
+        }
+        worst = worst.max((next - y[k + 4]).abs() / peak);
+    }
+    assert!(
+        worst < 1e-4,
+        "one-step prediction error {worst:.2e} of the peak"
+    );
 }
 
 /// Fig. 4's independent backbones: the zero-crossing and Hilbert backbones

@@ -5,6 +5,7 @@
 
 mod files;
 pub mod frc;
+pub mod identified;
 pub mod plot;
 pub mod report;
 pub mod simulation;
@@ -112,6 +113,9 @@ pub fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
             report::markdown(&s.system.name, s.system.n_states(), r),
         );
         out.add("report.svg", report::svg(r)?);
+    }
+    if let Some(r) = s.reduction.filter(|r| r.signals.is_some()) {
+        out.add("identified.json", identified::identified_json(r, s.system));
     }
     let pair_index: Vec<(usize, usize)> = s.masters.iter().map(|m| (m.pair, m.index)).collect();
     out.add("spectrum.csv", spectrum_csv(p.modal, &pair_index));

@@ -184,9 +184,9 @@ fn accuracy_json(a: &Accuracy) -> Value {
     })
 }
 
-fn reduction_json(r: &Reduction) -> Value {
-    let diagnostics: serde_json::Map<String, Value> = r
-        .diagnostics
+/// A reducer's diagnostics as a JSON object: a number, a list, or text each.
+pub fn diagnostics_json(list: &[ssm_api::Diagnostic]) -> Value {
+    let map: serde_json::Map<String, Value> = list
         .iter()
         .map(|d| {
             let v = match (d.values.len(), d.text.is_empty()) {
@@ -198,6 +198,11 @@ fn reduction_json(r: &Reduction) -> Value {
             (d.name.to_string(), v)
         })
         .collect();
+    Value::Object(map)
+}
+
+fn reduction_json(r: &Reduction) -> Value {
+    let diagnostics = diagnostics_json(&r.diagnostics);
     json!({
         "plugin": r.plugin,
         "reducer": r.reducer,
