@@ -20,10 +20,15 @@
 //! `w_hori_mid` and `w_vert_mid` are the transverse deflections at the beams'
 //! midpoints (Figs. 19 and 22).
 //!
+//! The model `beam` ([`beam`]) is one clamped-clamped beam of the same
+//! element, the stand-in for the experiment of the NAR paper (Sect. 9b).
+//!
 //! # References
 //! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical systems
 //! via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sect. 5.3 and
 //! Appendix G.2.
+
+mod beam;
 
 use ssm_api::{
     Constraints, ErrorKind, Harmonic, MechanicalSystem, Model, ModelInfo, MotionKind, ParamSpec,
@@ -68,11 +73,18 @@ fn specs() -> Vec<ParamSpec> {
 }
 
 fn models() -> Vec<ModelInfo> {
-    vec![ModelInfo {
-        name: "divider".into(),
-        description: "two von Karman cantilevers joined by a revolute joint, 1:2 internal resonance (Li, Jain & Haller 2023, Sect. 5.3)".into(),
-        params: specs().iter().map(ParamSpec::info).collect(),
-    }]
+    vec![
+        ModelInfo {
+            name: "divider".into(),
+            description: "two von Karman cantilevers joined by a revolute joint, 1:2 internal resonance (Li, Jain & Haller 2023, Sect. 5.3)".into(),
+            params: specs().iter().map(ParamSpec::info).collect(),
+        },
+        ModelInfo {
+            name: "beam".into(),
+            description: "one clamped-clamped von Karman beam, the stand-in for the experiment of Szalai, Ehrhardt & Haller (2017), Sect. 9b".into(),
+            params: beam::specs().iter().map(ParamSpec::info).collect(),
+        },
+    ]
 }
 
 fn invalid(name: &str, why: String) -> PluginError {
@@ -121,11 +133,14 @@ fn beams(p: &Params) -> Result<(Mesh, Mesh), PluginError> {
 }
 
 fn build(name: &str, params: &str) -> Result<Model, PluginError> {
+    if name == "beam" {
+        return beam::build(&Params::parse(params, &beam::specs())?);
+    }
     if !name.is_empty() && name != "divider" {
         return Err(PluginError::new(
             ErrorKind::UnknownModel,
             name,
-            "this plugin offers only 'divider'",
+            "this plugin offers 'divider' (the default) and 'beam'",
         ));
     }
     let p = Params::parse(params, &specs())?;
