@@ -249,7 +249,8 @@ fn shaw_pierre_backbone_degrades_smoothly_with_noise() {
 /// NaN and Inf values, non-uniform sampling and a missing column (the
 /// engine's [data] reader), a signal shorter than one delay vector and its
 /// successor, fewer rows than unknowns, a rank-deficient regression, an
-/// unstable identified map and two observables where one is needed.
+/// unstable identified map, two observables where one is needed, too many
+/// unknowns and a regression too large to hold.
 #[test]
 fn bad_data_gives_clear_errors() {
     let dir = tmp_dir("nar-bad");
@@ -344,6 +345,11 @@ fn bad_data_gives_clear_errors() {
         e.contains("one scalar observable") && e.contains("a, b"),
         "{e}"
     );
+    // too many unknowns, and a regression too large to hold
+    let e = run("big.csv", &decay(8000, 1.0), "nu = 16\norder = 3", "");
+    assert!(e.contains("unknowns") && e.contains("at most 5000"), "{e}");
+    let e = run("big2.csv", &decay(250_000, 1.0), "nu = 4\norder = 5", "");
+    assert!(e.contains("GB") && e.contains("decimate"), "{e}");
 }
 
 /// The two zoo scenes as the README runs them, through the binary: the data

@@ -37,6 +37,10 @@ const REDUCER: &str = "nar";
 /// has one column each, and beyond this the dense QR takes minutes.
 pub const MAX_UNKNOWNS: usize = 5000;
 
+/// Largest regression matrix accepted, in entries (2 GB of doubles): the
+/// dense QR holds it whole.
+pub const MAX_ENTRIES: usize = 250_000_000;
+
 fn specs() -> Vec<ParamSpec> {
     vec![
         ParamSpec::count(
@@ -185,6 +189,18 @@ fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, Plu
         ));
     }
     let series = Series::new(signals, 0, skip, decimate);
+    let rows: usize = (0..series.values.len()).map(|p| series.rows(p, dim)).sum();
+    if rows.saturating_mul(basis.len() + 1) > MAX_ENTRIES {
+        return Err(PluginError::new(
+            ErrorKind::InvalidInput,
+            "data",
+            &format!(
+                "the regression would have {rows} rows by {} unknowns ({:.1} GB); use decimate or skip, fewer signals, or a lower order or nu",
+                basis.len(),
+                (rows as f64) * (basis.len() + 1) as f64 * 8e-9
+            ),
+        ));
+    }
     let fitted = fit::fit(
         &series,
         &basis,
