@@ -31,6 +31,20 @@ fn identify_pair(
     rho_max: f64,
     pair: usize,
 ) -> (Value, String) {
+    let r = identify_run(files, params, order, rho_max, pair);
+    let summary: Value = serde_json::from_slice(r.outputs.get("summary.json").unwrap()).unwrap();
+    let backbone = String::from_utf8(r.outputs.get("backbone.csv").unwrap().to_vec()).unwrap();
+    (summary, backbone)
+}
+
+/// The identification run itself (every output file).
+fn identify_run(
+    files: &[PathBuf],
+    params: &str,
+    order: usize,
+    rho_max: f64,
+    pair: usize,
+) -> ssm_engine::pipeline::JobResult {
     let list: Vec<String> = files.iter().map(|f| format!("{:?}", f)).collect();
     let scene = format!(
         "[reduce]\nplugin = \"nar-identifier\"\nreducer = \"nar\"\n[reduce.params]\n{params}\n\
@@ -38,10 +52,13 @@ fn identify_pair(
          [outputs]\ncoordinates = [\"x1_dot\"]\n[outputs.backbone]\nrho_max = {rho_max}\npoints = 41\norders = [{order}]\n",
         list.join(", ")
     );
-    let r = run_scene_text(&scene).expect("identification runs");
-    let summary: Value = serde_json::from_slice(r.outputs.get("summary.json").unwrap()).unwrap();
-    let backbone = String::from_utf8(r.outputs.get("backbone.csv").unwrap().to_vec()).unwrap();
-    (summary, backbone)
+    run_scene_text(&scene).expect("identification runs")
+}
+
+/// The noise-free signals of (9.2), made once for every test of this file.
+fn clean_data() -> &'static [PathBuf] {
+    static DATA: std::sync::OnceLock<Vec<PathBuf>> = std::sync::OnceLock::new();
+    DATA.get_or_init(|| shaw_pierre_data(&tmp_dir("nar-clean"), 0.0, 1))
 }
 
 /// `(amplitude of the output, omega)` rows of `order` in a backbone.csv.
@@ -100,12 +117,11 @@ fn diag(summary: &Value, name: &str) -> Vec<f64> {
 /// limits them: at order 5 they are 20 and 500 times worse (checked below).
 #[test]
 fn shaw_pierre_linear_figures_from_noise_free_data() {
-    let dir = tmp_dir("nar-linear");
-    let files = shaw_pierre_data(&dir, 0.0, 1);
+    let files = clean_data();
     let exact_w = [1.0, 3f64.sqrt()];
     let exact_z = [C / 2.0, 3f64.sqrt() * C / 2.0];
     let errors = |params: &str, order: usize| {
-        let (s, _) = identify(&files, params, order, 0.1);
+        let (s, _) = identify(files, params, order, 0.1);
         let w = diag(&s, "frequencies");
         let z = diag(&s, "damping_ratios");
         assert_eq!(w.len(), 2, "two pairs identified: {w:?}");
@@ -145,8 +161,7 @@ fn shaw_pierre_linear_figures_from_noise_free_data() {
 /// largest amplitudes biases its cubic term, less at higher order.
 #[test]
 fn shaw_pierre_backbone_from_data_matches_the_model_based_one() {
-    let dir = tmp_dir("nar-backbone");
-    let files = shaw_pierre_data(&dir, 0.0, 1);
+    let files = clean_data();
     let (model, trusted) = model_backbone(7, 0.8);
     let rho_ok = trusted.unwrap_or(0.8);
     let amp_max = model
@@ -159,7 +174,7 @@ fn shaw_pierre_backbone_from_data_matches_the_model_based_one() {
     let mut worst_by_order = Vec::new();
     for (order, closed_tol) in [(5usize, 0.05), (7, 0.01)] {
         let params = format!("nu = 2\norder = {order}\nweighting = \"relative\"\nfloor = 1e-8");
-        let (_, csv) = identify(&files, &params, order, 0.8);
+        let (_, csv) = identify(files, &params, order, 0.8);
         let id = curve(&csv, order);
         let mut worst = 0.0f64;
         for &(amp, w) in id.iter().filter(|p| p.0 > 0.0 && p.0 <= amp_max) {
@@ -443,17 +458,9 @@ fn zoo_scenes_identify_the_first_pair() {
 /// The second signal's points near omega_2 are left out of the overlay.
 #[test]
 fn data_backbones_match_the_model_based_one() {
-    let dir = tmp_dir("nar-data-backbones");
-    let files = shaw_pierre_data(&dir, 0.0, 1);
+    let files = clean_data();
     let (model, _) = model_backbone(7, 0.5);
-    let list: Vec<String> = files.iter().map(|f| format!("{:?}", f)).collect();
-    let scene = format!(
-        "[reduce]\nplugin = \"nar-identifier\"\nreducer = \"nar\"\n[reduce.params]\nnu = 2\norder = 5\n\
-         [data]\nfiles = [{}]\n[ssm]\norder = 5\n[outputs]\ncoordinates = [\"x1_dot\"]\n\
-         [outputs.backbone]\nrho_max = 0.5\npoints = 11\norders = [5]\n",
-        list.join(", ")
-    );
-    let r = run_scene_text(&scene).unwrap();
+    let r = identify_run(files, "nu = 2\norder = 5", 5, 0.5, 1);
     let csv = String::from_utf8(r.outputs.get("data_backbone.csv").unwrap().to_vec()).unwrap();
     let mut checked = [0usize; 2];
     for line in csv.lines().skip(1) {

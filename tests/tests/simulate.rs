@@ -528,8 +528,19 @@ fn simulate_refuses_bad_settings() {
         ),
         (
             "period = 0.1\nsamples = 10\n[[simulate.run]]\nx0 = { q9 = 0.1 }\n".to_owned(),
-            "simulate.run[1]",
-            "no state 'q9'",
+            "simulate.run[1].x0",
+            "no Displacement state 'q9'",
+        ),
+        (
+            "period = 0.1\nsamples = 10\n[[simulate.run]]\nv0 = { x1 = 0.1 }\n".to_owned(),
+            "simulate.run[1].v0",
+            "no Velocity state 'x1'",
+        ),
+        (format!("period = 1e306\nsamples = 1000\n{run}"), "simulate.period", "not a time"),
+        (
+            format!("period = 0.1\nsamples = 2000000\noutputs = [\"x1\", \"x2\", \"x1_dot\", \"x2_dot\"] \n{run}"),
+            "simulate.samples",
+            "exceed",
         ),
         (
             format!("period = 0.1\nsamples = 10\noutputs = [\"nope\"]\n{run}"),

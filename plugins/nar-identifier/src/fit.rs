@@ -106,6 +106,15 @@ pub enum FitError {
         /// Polynomial order.
         order: usize,
     },
+    /// The data's scale puts the highest-order coefficients outside double
+    /// precision (they scale as `scale^(1 - r)`).
+    #[error("the signals' largest value {scale:e} makes the order-{order} coefficients scale like {scale:e}^{} (outside double precision); give the signals in units that put them near 1 (e.g. mm/s instead of km/s)", 1i64 - *order as i64)]
+    Scale {
+        /// Largest `|y|`.
+        scale: f64,
+        /// Polynomial order.
+        order: usize,
+    },
     /// The factorization produced non-finite numbers.
     #[error(
         "the least-squares solution is not finite (SVD did not converge or the data overflow)"
@@ -130,6 +139,10 @@ pub fn fit(series: &Series, basis: &MonomialBasis, set: &FitSettings) -> Result<
     let scale = series.scale();
     if scale == 0.0 {
         return Err(FitError::ZeroData);
+    }
+    let order = (0..n).map(|k| basis.degree(k)).max().unwrap_or(1) as usize;
+    if !(scale.powi(1 - order as i32).is_normal() && scale.is_normal()) {
+        return Err(FitError::Scale { scale, order });
     }
     // the delay vectors kept (above the floor), per trajectory
     let delay = |v: &[f64], k: usize, xi: &mut [f64]| {
@@ -207,7 +220,6 @@ pub fn fit(series: &Series, basis: &MonomialBasis, set: &FitSettings) -> Result<
     }
     let s_min = s.last().copied().unwrap_or(0.0);
     let condition = s_max / s_min;
-    let order = (0..n).map(|k| basis.degree(k)).max().unwrap_or(0) as usize;
     if set.ridge == 0.0 && set.rcond == 0.0 && (condition.is_nan() || condition > MAX_CONDITION) {
         return Err(FitError::RankDeficient {
             condition,
@@ -256,6 +268,17 @@ pub fn fit(series: &Series, basis: &MonomialBasis, set: &FitSettings) -> Result<
 mod tests {
     use super::*;
 
+    /// Uniform weighting, no floor, no ridge, 2 nu = 2, truncation `rcond`.
+    fn plain(rcond: f64) -> FitSettings {
+        FitSettings {
+            dim: 2,
+            ridge: 0.0,
+            rcond,
+            relative: false,
+            floor: 0.0,
+        }
+    }
+
     fn series(values: Vec<Vec<f64>>) -> Series {
         Series {
             sources: (0..values.len()).map(|p| format!("s{p}.csv")).collect(),
@@ -280,18 +303,7 @@ mod tests {
         };
         let s = series(vec![mk(0.3, 0.1), mk(-0.2, 0.25)]);
         let basis = MonomialBasis::new(2, 2);
-        let f = fit(
-            &s,
-            &basis,
-            &FitSettings {
-                dim: 2,
-                ridge: 0.0,
-                rcond: 0.0,
-                relative: false,
-                floor: 0.0,
-            },
-        )
-        .unwrap();
+        let f = fit(&s, &basis, &plain(0.0)).unwrap();
         let want = |e: &[u32]| match e {
             [1, 0] => -0.9,
             [0, 1] => 1.6,
@@ -317,33 +329,26 @@ mod tests {
     fn refuses_a_rank_deficient_regression() {
         let s = series(vec![vec![0.5; 200]]);
         let basis = MonomialBasis::new(2, 3);
-        let e = fit(
-            &s,
-            &basis,
-            &FitSettings {
-                dim: 2,
-                ridge: 0.0,
-                rcond: 0.0,
-                relative: false,
-                floor: 0.0,
-            },
-        )
-        .unwrap_err();
+        let e = fit(&s, &basis, &plain(0.0)).unwrap_err();
         assert!(matches!(e, FitError::RankDeficient { .. }), "{e}");
         // with truncation the same data give a (minimum-norm) answer
-        let f = fit(
-            &s,
-            &basis,
-            &FitSettings {
-                dim: 2,
-                ridge: 0.0,
-                rcond: 1e-10,
-                relative: false,
-                floor: 0.0,
-            },
-        )
-        .unwrap();
+        let f = fit(&s, &basis, &plain(1e-10)).unwrap();
         assert!(f.rank < basis.len());
         assert!(f.relative_residual < 1e-10);
+    }
+
+    /// Signals of scale 1e-150 or 1e150 put order-5 coefficients (scale^-4)
+    /// outside double precision: refused with the units advice, never
+    /// returned as infinite or silently zero coefficients.
+    #[test]
+    fn refuses_data_whose_scale_overflows_the_coefficients() {
+        for scale in [1e-150, 1e150] {
+            let v: Vec<f64> = (0..300)
+                .map(|k| scale * (-0.01 * k as f64).exp() * (0.9 * k as f64).cos())
+                .collect();
+            let e = fit(&series(vec![v]), &MonomialBasis::new(2, 5), &plain(0.0)).unwrap_err();
+            assert!(matches!(e, FitError::Scale { order: 5, .. }), "{e}");
+            assert!(e.to_string().contains("units"), "{e}");
+        }
     }
 }

@@ -215,7 +215,7 @@ fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, Plu
     .map_err(|e| {
         let (kind, ctx) = match &e {
             FitError::ShortSignal { file, .. } => (ErrorKind::InvalidInput, file.clone()),
-            FitError::Underdetermined { .. } | FitError::ZeroData => {
+            FitError::Underdetermined { .. } | FitError::ZeroData | FitError::Scale { .. } => {
                 (ErrorKind::InvalidInput, "data".to_owned())
             }
             FitError::RankDeficient { .. } | FitError::NotFinite => {

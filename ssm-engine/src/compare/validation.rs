@@ -224,16 +224,7 @@ fn transient_comparison(
             (p0, None, start)
         }
         None => {
-            let mut z = vec![0.0; sys.n_states()];
-            let mut keep = Vec::new();
-            for (name, value) in sec.given_start() {
-                if let Some(i) = sys.states.iter().position(|s| s.name.as_str() == name) {
-                    z[i] = value;
-                    if sys.states[i].kind == StateKind::Displacement {
-                        keep.push(i);
-                    }
-                }
-            }
+            let (z, keep) = sys.given_state(&sec.given_start());
             let problem = DaeProblem::new(sys, 0.0, 0.0);
             let c = consistent_initial_keeping(&problem, 0.0, &z, &keep)?;
             let (p0, distance) = nearest_on_ssm(ssm, sys, order, masters, &c.z);

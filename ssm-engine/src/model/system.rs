@@ -387,6 +387,24 @@ impl System {
         self.states.len()
     }
 
+    /// The state with the given `(state name, value)` pairs set (the others
+    /// zero), and the displacements among them (to be kept where the
+    /// constraints allow). Names the model lacks are skipped: the scene
+    /// checks refuse them first.
+    pub fn given_state(&self, values: &[(String, f64)]) -> (Vec<f64>, Vec<usize>) {
+        let mut z = vec![0.0; self.n_states()];
+        let mut keep = Vec::new();
+        for (name, value) in values {
+            if let Some(i) = self.states.iter().position(|s| s.name.as_str() == name) {
+                z[i] = *value;
+                if self.states[i].kind == StateKind::Displacement {
+                    keep.push(i);
+                }
+            }
+        }
+        (z, keep)
+    }
+
     /// The output named `name`.
     pub fn output(&self, name: &str) -> Option<&OutputMap> {
         self.outputs.iter().find(|o| o.name == name)

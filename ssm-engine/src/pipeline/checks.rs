@@ -74,25 +74,9 @@ pub fn validation_outputs<'a>(
                 .into());
         }
     }
-    for (table, key, kind) in [
-        (&vsec.x0, "validate.x0", ssm_api::StateKind::Displacement),
-        (&vsec.v0, "validate.v0", ssm_api::StateKind::Velocity),
-    ] {
-        let Some(t) = table else { continue };
-        for name in t.get_ref().keys() {
-            if !system
-                .states
-                .iter()
-                .any(|s| s.name.as_str() == name && s.kind == kind)
-            {
-                return Err(scene
-                    .invalid(
-                        t.span(),
-                        key,
-                        format!("model '{}' has no {kind:?} state '{name}'", system.name),
-                    )
-                    .into());
-            }
+    for (table, key) in [(&vsec.x0, "validate.x0"), (&vsec.v0, "validate.v0")] {
+        if let Some(t) = table {
+            given_names(scene, system, t.get_ref(), t.span(), key)?;
         }
     }
     match &vsec.outputs {
@@ -113,4 +97,36 @@ pub fn validation_outputs<'a>(
             .collect(),
         None => Ok(coordinates.to_vec()),
     }
+}
+
+/// The keys of a given-start table name states of the model of the right
+/// kind: displacements in `x0`, velocities in `v0` (the last part of `key`).
+pub fn given_names(
+    scene: &SceneFile,
+    system: &System,
+    table: &toml::Table,
+    span: std::ops::Range<usize>,
+    key: &str,
+) -> Result<(), JobError> {
+    let kind = if key.ends_with("v0") {
+        ssm_api::StateKind::Velocity
+    } else {
+        ssm_api::StateKind::Displacement
+    };
+    for name in table.keys() {
+        if !system
+            .states
+            .iter()
+            .any(|s| s.name.as_str() == name && s.kind == kind)
+        {
+            return Err(scene
+                .invalid(
+                    span.clone(),
+                    key,
+                    format!("model '{}' has no {kind:?} state '{name}'", system.name),
+                )
+                .into());
+        }
+    }
+    Ok(())
 }

@@ -3,7 +3,6 @@
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use ssm_api::StateKind;
 
 use super::JobError;
 use crate::fom::{add_noise, sample_run, RadauOptions, Simulation};
@@ -11,6 +10,10 @@ use crate::model::system::{OutputMap, System};
 use crate::rom::autonomous::polar_point;
 use crate::scene::{SceneFile, SimulateSection};
 use crate::ssm::SsmExpansion;
+
+/// Most sampled values per run (samples times outputs; 40 MB of doubles,
+/// some 150 MB of CSV text).
+const MAX_VALUES: usize = 5_000_000;
 
 /// Runs `[simulate]` on the full system; starts on the SSM use `ssm` at its order.
 pub fn simulate(
@@ -46,13 +49,25 @@ pub fn simulate(
             )
             .into());
     }
+    let samples = *sec.samples.get_ref();
+    if samples.saturating_mul(outputs.len()) > MAX_VALUES {
+        return Err(scene
+            .invalid(
+                sec.samples.span(),
+                "simulate.samples",
+                format!(
+                    "{samples} samples of {} outputs per run exceed {MAX_VALUES} values: sample fewer points or outputs",
+                    outputs.len()
+                ),
+            )
+            .into());
+    }
     let opts = RadauOptions {
         rtol: *sec.rtol.get_ref(),
         atol: *sec.atol.get_ref(),
         ..RadauOptions::default()
     };
     let period = *sec.period.get_ref();
-    let samples = *sec.samples.get_ref();
     let mut rng = ChaCha8Rng::seed_from_u64(*sec.seed.get_ref());
     let noise = *sec.noise.get_ref();
     let mut runs = Vec::new();
@@ -66,26 +81,13 @@ pub fn simulate(
                 (w.iter().map(|c| c.re).collect::<Vec<f64>>(), Vec::new())
             }
             None => {
-                let mut z = vec![0.0; sys.n_states()];
-                let mut keep = Vec::new();
-                for (name, value) in run.given_start() {
-                    let i = sys
-                        .states
-                        .iter()
-                        .position(|s| s.name.as_str() == name)
-                        .ok_or_else(|| {
-                            scene.invalid(
-                                sec.run.span(),
-                                &format!("simulate.run[{}]", k + 1),
-                                format!("the model has no state '{name}'"),
-                            )
-                        })?;
-                    z[i] = value;
-                    if sys.states[i].kind == StateKind::Displacement {
-                        keep.push(i);
+                for (table, part) in [(&run.x0, "x0"), (&run.v0, "v0")] {
+                    if let Some(t) = table {
+                        let key = format!("simulate.run[{}].{part}", k + 1);
+                        super::checks::given_names(scene, sys, t, sec.run.span(), &key)?;
                     }
                 }
-                (z, keep)
+                sys.given_state(&run.given_start())
             }
         };
         let mut r = sample_run(sys, &z0, &keep, period, samples, &outputs, opts)

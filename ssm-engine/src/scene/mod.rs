@@ -518,6 +518,26 @@ impl SceneFile {
     }
 }
 
+/// The `(state name, value)` pairs of given-start tables (`x0`, `v0`);
+/// a value that is not a number comes out as NaN (the section checks refuse it).
+pub(crate) fn given_values<'a>(
+    tables: impl IntoIterator<Item = &'a toml::Table>,
+) -> Vec<(String, f64)> {
+    tables
+        .into_iter()
+        .flat_map(|t| {
+            t.iter().map(|(k, v)| {
+                (
+                    k.clone(),
+                    v.as_float()
+                        .or(v.as_integer().map(|i| i as f64))
+                        .unwrap_or(f64::NAN),
+                )
+            })
+        })
+        .collect()
+}
+
 impl SceneFile {
     /// The highest expansion order an answer of the scene names itself
     /// (`orders` lists, `order` keys, `nonautonomous_order + 1`); 1 when none

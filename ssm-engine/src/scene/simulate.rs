@@ -73,20 +73,7 @@ fn default_atol() -> Spanned<f64> {
 impl SimulateRun {
     /// Given initial values `(state name, value)` of `x0` and `v0`.
     pub fn given_start(&self) -> Vec<(String, f64)> {
-        [&self.x0, &self.v0]
-            .into_iter()
-            .flatten()
-            .flat_map(|t| {
-                t.iter().map(|(k, v)| {
-                    (
-                        k.clone(),
-                        v.as_float()
-                            .or(v.as_integer().map(|i| i as f64))
-                            .unwrap_or(f64::NAN),
-                    )
-                })
-            })
-            .collect()
+        super::given_values([&self.x0, &self.v0].into_iter().flatten())
     }
 }
 
@@ -102,6 +89,14 @@ impl SceneFile {
                 s.samples.span(),
                 "simulate.samples",
                 format!("must be 2 to {MAX_SAMPLES}, found {n}"),
+            ));
+        }
+        let span = *s.period.get_ref() * (n - 1) as f64;
+        if !span.is_finite() {
+            return Err(self.invalid(
+                s.period.span(),
+                "simulate.period",
+                format!("the runs would last {span} (period times samples - 1): not a time"),
             ));
         }
         let noise = *s.noise.get_ref();

@@ -98,20 +98,12 @@ pub enum SteadyStart {
 impl ValidateSection {
     /// Given initial values `(state name, value)` of `x0` and `v0`.
     pub fn given_start(&self) -> Vec<(String, f64)> {
-        [&self.x0, &self.v0]
-            .into_iter()
-            .flatten()
-            .flat_map(|t| {
-                t.get_ref().iter().map(|(k, v)| {
-                    (
-                        k.clone(),
-                        v.as_float()
-                            .or(v.as_integer().map(|i| i as f64))
-                            .unwrap_or(f64::NAN),
-                    )
-                })
-            })
-            .collect()
+        super::given_values(
+            [&self.x0, &self.v0]
+                .into_iter()
+                .flatten()
+                .map(|t| t.get_ref()),
+        )
     }
 }
 
