@@ -42,9 +42,13 @@ pub struct FitSettings {
     pub ridge: f64,
     /// Singular values below `rcond` times the largest are dropped (0: none).
     pub rcond: f64,
-    /// Relative weighting: each row is divided by `|xi_k| / scale`
-    /// (false: the uniform weighting of (7.2)).
-    pub relative: bool,
+    /// Relative weighting: each row is divided by `(|xi_k| / scale)^p`
+    /// with this exponent `p` (0: the uniform weighting of (7.2); 1: the
+    /// residual relative to the delay vector). The truncation error of an
+    /// order-r map grows like `|xi|^(r+1)` while the linear part acts like
+    /// `|xi|`, so `p > 1` lets the small-amplitude tail of decaying data pin
+    /// the linear part (multipliers, damping) against the truncation.
+    pub weight_power: f64,
     /// Delay vectors with `|xi_k| < floor * scale` are left out (below the
     /// noise they carry no information, and errors in the regressors bias
     /// the fit towards zero).
@@ -178,7 +182,7 @@ pub fn fit(series: &Series, basis: &MonomialBasis, set: &FitSettings) -> Result<
         for &k in ks {
             let norm = delay(v, k, &mut xi);
             basis.eval(&xi, &mut psi);
-            let w = if set.relative { w_p / norm } else { w_p };
+            let w = w_p / norm.powf(set.weight_power);
             for (j, &val) in psi.iter().enumerate() {
                 aug[(r, j)] = w * val;
             }
@@ -274,7 +278,7 @@ mod tests {
             dim: 2,
             ridge: 0.0,
             rcond,
-            relative: false,
+            weight_power: 0.0,
             floor: 0.0,
         }
     }

@@ -67,7 +67,12 @@ fn specs() -> Vec<ParamSpec> {
             "weighting",
             &["uniform", "relative"],
             "uniform",
-            "uniform: the residual of (7.2); relative: each delay vector's residual divided by its norm, so the decaying tail pins the linear part",
+            "uniform: the residual of (7.2); relative: each delay vector's residual divided by its norm to the power weight_power, so the decaying tail pins the linear part",
+        ),
+        ParamSpec::float(
+            "weight_power",
+            1.0,
+            "exponent p of the relative weighting 1/|xi|^p, 0 < p <= 4 (1: residuals relative to the delay vector; 2: the small-amplitude tail weighs more, which pins the multipliers and damping ratios against the map's truncation at large amplitude)",
         ),
         ParamSpec::float(
             "floor",
@@ -129,7 +134,15 @@ fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, Plu
             "must be in [0, 1) (relative to the data's largest value)",
         ));
     }
-    let relative = p.text("weighting") == "relative";
+    let weight_power = p.float("weight_power");
+    if !(weight_power.is_finite() && weight_power > 0.0 && weight_power <= 4.0) {
+        return Err(param_err("weight_power", "must be in (0, 4]"));
+    }
+    let weight_power = if p.text("weighting") == "relative" {
+        weight_power
+    } else {
+        0.0
+    };
     if !(1..=16).contains(&nu) {
         return Err(param_err(
             "nu",
@@ -208,7 +221,7 @@ fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, Plu
             dim,
             ridge,
             rcond,
-            relative,
+            weight_power,
             floor,
         },
     )
