@@ -155,6 +155,63 @@ fn shaw_pierre_linear_figures_from_noise_free_data() {
     assert!((0..2).all(|l| ew5[l] > 10.0 * ew[l]), "{ew5:?}");
 }
 
+/// Reference: the backbone of the same identified map (order 7, relative
+/// weighting) at O(17), used where it has converged: where its own error
+/// estimate is below a tenth of the error measured. The error estimate of a
+/// map's backbone (the invariance residual of (5.8), `B W(R(p)) - A W(p) -
+/// F(W(p))`, projected on the master pair and read in `log mu`) must never
+/// understate the truncation error of orders 3, 5 and 7 and overstate it at
+/// most 50-fold (measured: 2.9-3.4, 18-34 and 4.3-5.9 fold; O(9) is too
+/// close to the reference to be measured against it).
+#[test]
+fn map_backbone_error_estimate_tracks_the_truncation_error() {
+    let list: Vec<String> = clean_data().iter().map(|f| format!("{f:?}")).collect();
+    let scene = format!(
+        "[reduce]\nplugin = \"nar-identifier\"\nreducer = \"nar\"\n[reduce.params]\n\
+         nu = 2\norder = 7\nweighting = \"relative\"\nfloor = 1e-5\n\
+         [data]\nfiles = [{}]\n[ssm]\nmaster_pairs = [1]\norder = 17\n\
+         [outputs]\ncoordinates = [\"x1_dot\"]\n[outputs.backbone]\nrho_max = 0.6\npoints = 13\norders = [3, 5, 7, 17]\n",
+        list.join(", ")
+    );
+    let r = run_scene_text(&scene).expect("identification runs");
+    let csv = String::from_utf8(r.outputs.get("backbone.csv").unwrap().to_vec()).unwrap();
+    // (order, omega, error_estimate) per row, rows of one order in rho order
+    let rows: Vec<(usize, f64, f64)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let estimate = f[f.len() - 1].parse().expect("maps have error estimates");
+            (f[0].parse().unwrap(), f[2].parse().unwrap(), estimate)
+        })
+        .collect();
+    let of = |order: usize| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter(|r| r.0 == order)
+            .map(|r| (r.1, r.2))
+            .collect()
+    };
+    let reference = of(17);
+    assert_eq!(reference.len(), 13);
+    for order in [3, 5, 7] {
+        let mut compared = 0;
+        for ((omega, estimate), (omega_ref, estimate_ref)) in of(order).into_iter().zip(&reference)
+        {
+            let truth = (omega - omega_ref).abs() / omega_ref;
+            if truth < 1e-9 || *estimate_ref > 0.1 * truth {
+                continue;
+            }
+            compared += 1;
+            let ratio = estimate / truth;
+            assert!(
+                (1.0..=50.0).contains(&ratio),
+                "O({order}): estimate {estimate:.2e} against {truth:.2e}"
+            );
+        }
+        assert!(compared >= 4, "O({order}): {compared} points compared");
+    }
+}
+
 /// Reference: the engine's model-based SSM backbone of (9.1) (pair 1, O(7),
 /// amplitude of x1'), over the amplitudes where its own error estimate meets
 /// 1 %: the backbone of the identified map (2 nu = 4, order 5 and 7) agrees

@@ -36,7 +36,7 @@
 use crate::model::system::System;
 use crate::spectrum::MasterMode;
 use crate::ssm::modal_residual::ModalResidual;
-use crate::ssm::SsmExpansion;
+use crate::ssm::{Dynamics, SsmExpansion};
 use crate::C64;
 
 /// Phases of a master pair sampled per turn (resolves harmonics up to 16,
@@ -161,6 +161,14 @@ pub fn defect(modal: &[C64], co: usize, q0: C64, scale: f64, unit: f64) -> Defec
 /// reduced point `p` (conjugate pairs): the residual of eq. (42) with the
 /// phase of pair `j` swept over a turn, the other pairs held. `None` at
 /// `p_j = 0`.
+///
+/// For a map `lambda` is the multiplier `mu` and the residual perturbs the
+/// reduced map `p -> mu p + ...`: its co-rotating part `c` moves the
+/// multiplier to `mu (1 + c / (mu q))`, i.e. the exponent per step
+/// `log mu` by `c / (mu q)`. The samples are divided by `mu` and the
+/// detuning unit is `|log mu|`, so that the defect reads in the exponent
+/// [`exponent`] as a flow's reads in its eigenvalue (the detuning of a
+/// harmonic `h`, `|e^{i (h - 1) arg mu} - 1|`, is taken to first order).
 pub fn pair_defect(
     ssm: &SsmExpansion,
     modal: &ModalResidual,
@@ -173,15 +181,28 @@ pub fn pair_defect(
     if q0.norm() == 0.0 {
         return None;
     }
-    let samples = modal.on_circle(ssm, p, j, order, PHASES);
-    Some(defect(&samples, 1, q0, q0.norm(), lambda.norm()))
+    let mut samples = modal.on_circle(ssm, p, j, order, PHASES);
+    if ssm.dynamics != Dynamics::Flow {
+        samples.iter_mut().for_each(|s| *s /= lambda);
+    }
+    let unit = exponent(ssm, lambda).norm();
+    Some(defect(&samples, 1, q0, q0.norm(), unit))
+}
+
+/// The exponent a defect is measured against: the eigenvalue `lambda` of a
+/// flow, `log mu` (per step) of a map's multiplier `mu`.
+pub fn exponent(ssm: &SsmExpansion, lambda: C64) -> C64 {
+    match ssm.dynamics {
+        Dynamics::Flow => lambda,
+        Dynamics::Map { .. } => lambda.ln(),
+    }
 }
 
 /// Estimated relative error of a backbone point at polar amplitude `rho` of
-/// a one-pair SSM truncated at `order`, its master mode of eigenvalue
-/// `lambda` seen through `modal`: [`Defect::backbone`] at `order`, with its
-/// [`tail`] from the orders below; `None` at `rho = 0` (where the linear
-/// part is exact).
+/// a one-pair SSM truncated at `order`, its master mode of eigenvalue (or
+/// multiplier) `lambda` seen through `modal`: [`Defect::backbone`] at
+/// `order`, with its [`tail`] from the orders below; `None` at `rho = 0`
+/// (where the linear part is exact).
 pub fn backbone_error(
     ssm: &SsmExpansion,
     modal: &ModalResidual,
@@ -190,9 +211,10 @@ pub fn backbone_error(
     order: usize,
 ) -> Option<f64> {
     let p = [C64::new(rho, 0.0), C64::new(rho, 0.0)];
+    let reference = exponent(ssm, lambda);
     let figures = tail_orders(order)
         .into_iter()
-        .map(|o| pair_defect(ssm, modal, lambda, &p, 0, o).map(|d| d.backbone(lambda)))
+        .map(|o| pair_defect(ssm, modal, lambda, &p, 0, o).map(|d| d.backbone(reference)))
         .collect::<Option<Vec<f64>>>()?;
     Some(tail(&figures))
 }
@@ -210,13 +232,13 @@ pub fn transient_error(
     states: &[Vec<C64>],
     order: usize,
 ) -> Option<f64> {
-    if times.is_empty() {
+    if times.is_empty() || ssm.dynamics != Dynamics::Flow {
         return None;
     }
-    let modal = masters
+    let modal: Vec<(ModalResidual, C64)> = masters
         .iter()
-        .map(|m| ModalResidual::new(ssm, sys, &m.left).map(|r| (r, m.lambda)))
-        .collect::<Option<Vec<_>>>()?;
+        .map(|m| (ModalResidual::new(ssm, sys, &m.left), m.lambda))
+        .collect();
     let figures: Vec<f64> = tail_orders(order)
         .into_iter()
         .map(|o| drift(ssm, &modal, times, states, o))

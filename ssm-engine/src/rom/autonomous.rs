@@ -49,7 +49,7 @@ pub struct BackbonePoint {
     /// Amplitude of each requested output.
     pub amplitudes: Vec<f64>,
     /// Estimated relative error ([`accuracy::backbone_error`], interpolated
-    /// between the amplitudes where it is evaluated); `None` for maps.
+    /// between the amplitudes where it is evaluated).
     pub error_estimate: Option<f64>,
 }
 
@@ -60,7 +60,7 @@ pub struct BackboneCurve {
     pub order: usize,
     /// Points from `rho = 0` to `rho_max`.
     pub points: Vec<BackbonePoint>,
-    /// The largest estimated relative error on the curve; `None` for maps.
+    /// The largest estimated relative error on the curve.
     pub error_estimate: Option<f64>,
     /// The estimate exceeds the accuracy target (or is not finite).
     pub untrusted: bool,
@@ -120,7 +120,7 @@ pub fn backbone(
             });
         }
         let error_estimate = estimate_along(&mut points, |rho| {
-            accuracy::backbone_error(ssm, modal.as_ref()?, master.lambda, rho, order)
+            accuracy::backbone_error(ssm, &modal, master.lambda, rho, order)
         });
         let trusted_up_to = error_estimate.map(|_| {
             points

@@ -3,10 +3,13 @@
 //! residual `r`.
 //!
 //! With `W(p) = sum_k w_k p^k` the residual of a flow's expansion truncated at
-//! order `o` is `r = B DW(p) R(p) - A W(p) - F(W(p))`. Projected on the left
-//! vector `u` of a master mode:
+//! order `o` is `r = B DW(p) R(p) - A W(p) - F(W(p))`, that of a map's
+//! (`B z_{k+1} = A z_k + F(z_k)`, Szalai et al. eq. 5.8)
+//! `r = B W(R(p)) - A W(p) - F(W(p))`. Projected on the left vector `u` of a
+//! master mode:
 //!
-//! - `u^* B DW(p) R(p) = sum_k (u^* B w_k) sum_v k_v p^{k - e_v} R_v(p)` and
+//! - `u^* B DW(p) R(p) = sum_k (u^* B w_k) sum_v k_v p^{k - e_v} R_v(p)`,
+//!   `u^* B W(R(p)) = sum_k (u^* B w_k) R(p)^k` and
 //!   `u^* A W(p) = sum_k (u^* A w_k) p^k` need only the scalars `u^* B w_k`,
 //!   `u^* A w_k`, computed once;
 //! - `u^* F(W(p))` needs `W(p)` only on the states that `F` reads, and each
@@ -25,7 +28,9 @@
 //! # References
 //! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical
 //! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023), eqs. (42),
-//! (55).
+//! (55); G. Szalai, D. Ehrhardt, G. Haller, *Nonlinear model identification
+//! and spectral submanifolds for multi-degree-of-freedom mechanical
+//! vibrations*, Proc. R. Soc. A 473 (2017), eq. (5.8).
 
 use ssm_api::PolyVector;
 
@@ -34,9 +39,12 @@ use crate::spectrum::modes::spmv_t;
 use crate::ssm::{Dynamics, SsmExpansion};
 use crate::C64;
 
-/// `u^* r(p)` of one master mode for an autonomous flow expansion.
+/// `u^* r(p)` of one master mode for an autonomous expansion of a flow or a
+/// map.
 #[derive(Debug, Clone)]
 pub struct ModalResidual {
+    /// The expansion is of a map: `B W(R(p))` in place of `B DW(p) R(p)`.
+    map: bool,
     /// `u^* B w_k` per multi-index.
     bw: Vec<C64>,
     /// `u^* A w_k` per multi-index.
@@ -65,11 +73,7 @@ struct WeightedMonomial {
 impl ModalResidual {
     /// Projects the expansion `ssm` of `sys` on the left vector `left`
     /// (normalized `u^* B v = 1` for the master mode it belongs to).
-    /// `None` for maps, whose residual this does not cover.
-    pub fn new(ssm: &SsmExpansion, sys: &System, left: &[C64]) -> Option<Self> {
-        if ssm.dynamics != Dynamics::Flow {
-            return None;
-        }
+    pub fn new(ssm: &SsmExpansion, sys: &System, left: &[C64]) -> Self {
         let u_conj: Vec<C64> = left.iter().map(|c| c.conj()).collect();
         let ub = spmv_t(sys.b.as_ref(), &u_conj);
         let ua = spmv_t(sys.a.as_ref(), &u_conj);
@@ -82,7 +86,8 @@ impl ModalResidual {
         for &s in &reads {
             w_read.extend(ssm.w.iter().map(|w| w[s]));
         }
-        Some(Self {
+        Self {
+            map: ssm.dynamics != Dynamics::Flow,
             bw,
             aw,
             n_index,
@@ -90,7 +95,7 @@ impl ModalResidual {
             n_read: reads.len(),
             monomials,
             factors,
-        })
+        }
     }
 
     /// `u^* r` of the expansion truncated at `order` at the points
@@ -189,16 +194,21 @@ impl ModalResidual {
         out
     }
 
-    /// `u^* (B DW(p) R(p) - A W(p))` truncated at `order` (`end` multi-indices).
+    /// `u^* (B DW(p) R(p) - A W(p))` of a flow, `u^* (B W(R(p)) - A W(p))`
+    /// of a map, truncated at `order` (`end` multi-indices).
     fn linear_part(&self, ssm: &SsmExpansion, p: &[C64], order: usize, end: usize) -> C64 {
         let mono = ssm.set.monomials(p, order);
         let rp = ssm.r_at(&mono, order);
-        let mut acc = C64::new(0.0, 0.0);
-        for k in ssm.set.of_order(1).start..end {
-            let s = ssm.set.derivative_along(k, &mono, &rp);
-            acc += self.bw[k] * s - self.aw[k] * mono[k];
+        let range = ssm.set.of_order(1).start..end;
+        if self.map {
+            let image = ssm.set.monomials(&rp, order);
+            return range
+                .map(|k| self.bw[k] * image[k] - self.aw[k] * mono[k])
+                .sum();
         }
-        acc
+        range
+            .map(|k| self.bw[k] * ssm.set.derivative_along(k, &mono, &rp) - self.aw[k] * mono[k])
+            .sum()
     }
 }
 
