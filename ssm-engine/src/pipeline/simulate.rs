@@ -3,6 +3,7 @@
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 use super::JobError;
 use crate::fom::{add_noise, sample_run, RadauOptions, Simulation};
@@ -68,12 +69,9 @@ pub fn simulate(
         ..RadauOptions::default()
     };
     let period = *sec.period.get_ref();
-    let mut rng = ChaCha8Rng::seed_from_u64(*sec.seed.get_ref());
-    let noise = *sec.noise.get_ref();
-    let mut runs = Vec::new();
-    let mut noise_sigma = Vec::new();
+    let mut starts = Vec::with_capacity(sec.run.get_ref().len());
     for (k, run) in sec.run.get_ref().iter().enumerate() {
-        let (z0, keep) = match &run.rho0 {
+        starts.push(match &run.rho0 {
             Some(rho0) => {
                 let theta0 = run.theta0.clone().unwrap_or_else(|| vec![0.0; rho0.len()]);
                 let p0 = polar_point(rho0, &theta0);
@@ -89,16 +87,30 @@ pub fn simulate(
                 }
                 sys.given_state(&run.given_start())
             }
-        };
-        let mut r = sample_run(sys, &z0, &keep, period, samples, &outputs, opts)
-            .map_err(|source| JobError::Simulate { run: k + 1, source })?;
-        let mut sigmas = Vec::with_capacity(outputs.len());
-        for v in r.values.iter_mut() {
-            sigmas.push(add_noise(v, noise, &mut rng));
-        }
-        noise_sigma.push(sigmas);
-        runs.push(r);
+        });
     }
+    // the runs are independent: integrated in parallel (the first failed run
+    // is reported, as in sequence), the noise drawn afterwards in run order
+    // so that a seed gives the same files anyway
+    let results: Vec<_> = starts
+        .par_iter()
+        .map(|(z0, keep)| sample_run(sys, z0, keep, period, samples, &outputs, opts))
+        .collect();
+    let mut runs = Vec::with_capacity(results.len());
+    for (k, r) in results.into_iter().enumerate() {
+        runs.push(r.map_err(|source| JobError::Simulate { run: k + 1, source })?);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(*sec.seed.get_ref());
+    let noise = *sec.noise.get_ref();
+    let noise_sigma = runs
+        .iter_mut()
+        .map(|r| {
+            r.values
+                .iter_mut()
+                .map(|v| add_noise(v, noise, &mut rng))
+                .collect()
+        })
+        .collect();
     Ok(Simulation {
         outputs: outputs.iter().map(|o| o.name.clone()).collect(),
         runs,
