@@ -516,3 +516,18 @@ pub fn chain3_data(dir: &Path) -> Vec<PathBuf> {
         .map(|k| dir.join(format!("simulation_{k}.csv")))
         .collect()
 }
+
+/// The three noisy decaying signals of the quarter-span velocity of the
+/// clamped-clamped beam (plugin `divider`, model `beam`), one started on the
+/// SSM of each of the first three mode pairs, as `zoo/beam_data.toml` makes
+/// them (that scene is run here, so the test data and the zoo's are the
+/// same), written into `dir`; returns the three files.
+pub fn beam_data(dir: &Path) -> Vec<PathBuf> {
+    let text = std::fs::read_to_string(repo_root().join("zoo/beam_data.toml"))
+        .expect("zoo/beam_data.toml");
+    let r = run_scene_text(&text).expect("beam data scene runs");
+    r.outputs.write(dir).expect("data written");
+    (1..=3)
+        .map(|k| dir.join(format!("simulation_{k}.csv")))
+        .collect()
+}
