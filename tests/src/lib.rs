@@ -531,3 +531,12 @@ pub fn beam_data(dir: &Path) -> Vec<PathBuf> {
         .map(|k| dir.join(format!("simulation_{k}.csv")))
         .collect()
 }
+
+/// Reducer diagnostic `name` of a run's `summary.json` (`reduction.diagnostics`)
+/// as numbers (a scalar gives one).
+pub fn diagnostic(summary: &serde_json::Value, name: &str) -> Vec<f64> {
+    match &summary["reduction"]["diagnostics"][name] {
+        serde_json::Value::Array(a) => a.iter().map(|v| v.as_f64().unwrap()).collect(),
+        v => vec![v.as_f64().unwrap_or_else(|| panic!("{name}: {v}"))],
+    }
+}
