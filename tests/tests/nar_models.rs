@@ -203,9 +203,8 @@ fn constrained_oscillator_backbone_from_data_matches_the_model_based_one() {
 /// compared over 10 % to 90 % of the signal's peak, where the backbone
 /// stiffens by 0.8 %. Measured on 53 points: worst gap 4.9e-4 of the
 /// frequency against a tolerance of 5.0e-4 (nearly all of it the fit's: the
-/// regression leaves a relative residual of 2.5e-4 on these noise-free data,
-/// ten times the beam's without noise); the bend is 13 times the
-/// tolerance.
+/// regression leaves a relative residual of 2.5e-4 on these noise-free
+/// data); the bend is 13 times the tolerance.
 #[test]
 fn pendulum_chain_backbone_from_data_matches_the_model_based_one() {
     let text = std::fs::read_to_string(repo_root().join("zoo/pendulum_chain_data.toml")).unwrap();
