@@ -210,8 +210,9 @@ pub fn fit(series: &Series, basis: &MonomialBasis, set: &FitSettings) -> Result<
         let inv = 1.0 / *cn;
         aug.col_mut(j).iter_mut().for_each(|x| *x *= inv);
     }
-    let qr = aug.qr();
-    let rfac = qr.thin_R();
+    // Householder QR in place: the regression is the largest array of the
+    // identification, so it is neither copied nor split into Q and R
+    let rfac = qr_triangle(aug);
     let r11 = rfac.get(..n, ..n).to_owned();
     let c: Vec<f64> = (0..n).map(|i| rfac[(i, n)]).collect();
     let r_tail = rfac[(n, n)].abs();
@@ -266,6 +267,33 @@ pub fn fit(series: &Series, basis: &MonomialBasis, set: &FitSettings) -> Result<
         rows,
         scale,
     })
+}
+
+/// The triangle `R` (square, of the column count) of the Householder QR of
+/// `a`, factored in place with faer's blocked algorithm (in parallel for
+/// large problems).
+fn qr_triangle(mut a: Mat<f64>) -> Mat<f64> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::qr::no_pivoting::factor;
+    let (m, n) = a.shape();
+    // below some 1e9 flops the threads' synchronization costs more than
+    // the second core gains
+    let par = if (m as f64) * (n as f64).powi(2) < 5e8 {
+        faer::Par::Seq
+    } else {
+        faer::get_global_parallelism()
+    };
+    let block = factor::recommended_block_size::<f64>(m, n);
+    let mut householder = Mat::<f64>::zeros(block, m.min(n));
+    let scratch = factor::qr_in_place_scratch::<f64>(m, n, block, par, Default::default());
+    factor::qr_in_place(
+        a.as_mut(),
+        householder.as_mut(),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    );
+    Mat::from_fn(n, n, |i, j| if i <= j { a[(i, j)] } else { 0.0 })
 }
 
 #[cfg(test)]
