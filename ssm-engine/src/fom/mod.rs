@@ -51,6 +51,7 @@
 //! M. Li, S. Jain, G. Haller, Nonlinear Dyn. 111 (2023), Appendix E and eq. (47).
 
 pub mod consistent;
+pub mod hht;
 pub mod problem;
 pub mod radau;
 pub mod sample;
