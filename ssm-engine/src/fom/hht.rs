@@ -25,8 +25,9 @@
 //! keeps entries of order one as `h -> 0` (the scaling of the paper and of
 //! Negrut et al.; unscaled, its condition grows like `h^-2`). Newton uses
 //! the analytic sparse Jacobian of the polynomial model on one symbolic LU
-//! for the run; a step whose Newton iteration fails is halved, and the step
-//! grows back after five converged ones.
+//! for the run; a step whose Newton iteration fails is halved. Steps are
+//! fixed (growing back after five converged ones), or controlled by the
+//! local error of the positions, `(beta - 1/6) h^2 (a_{n+1} - a_n)`.
 //!
 //! Consistent starts come from [`consistent_initial`](super::consistent_initial)
 //! (positions, velocities and multipliers); the first accelerations from
@@ -53,8 +54,14 @@ use super::{consistent_initial, DaeProblem, SimError};
 pub struct HhtOptions {
     /// `alpha` in `[-1/3, 0]` (0: no numerical damping).
     pub alpha: f64,
-    /// Step size `h` (halved where Newton fails, never above this).
+    /// Step size `h`: fixed (halved where Newton fails), or the first and
+    /// largest step with [`HhtOptions::local_error`].
     pub step: f64,
+    /// Step-size control on the positions' local error, `(rtol, atol)`:
+    /// `(beta - 1/6) h^2 |a_{n+1} - a_n|` (the leading term of the Newmark
+    /// position formula's truncation error, Negrut et al. 2007, Sect. 4) kept
+    /// below `atol + rtol |q|`; `None`: fixed steps.
+    pub local_error: Option<(f64, f64)>,
     /// Newton stops when every correction is below `tol (1 + |value|)`.
     pub tol: f64,
     /// Newton iterations per attempt.
@@ -67,8 +74,18 @@ impl HhtOptions {
         Self {
             alpha,
             step,
+            local_error: None,
             tol: 1e-10,
             max_newton: 8,
+        }
+    }
+
+    /// [`HhtOptions::new`] with step-size control at `(rtol, atol)`, `step`
+    /// the first and largest step.
+    pub fn adaptive(alpha: f64, step: f64, rtol: f64, atol: f64) -> Self {
+        Self {
+            local_error: Some((rtol, atol)),
+            ..Self::new(alpha, step)
         }
     }
 
@@ -89,6 +106,13 @@ impl HhtOptions {
                 "HHT step {} must be positive",
                 self.step
             )));
+        }
+        if let Some((rtol, atol)) = self.local_error {
+            if !(rtol > 0.0 && rtol < 1.0 && atol > 0.0 && atol.is_finite()) {
+                return Err(SimError::Settings(format!(
+                    "HHT tolerances must satisfy 0 < rtol < 1 and atol > 0 (rtol = {rtol}, atol = {atol})"
+                )));
+            }
         }
         if !(self.tol.is_finite() && self.tol > 0.0) || self.max_newton == 0 {
             return Err(SimError::Settings(
@@ -493,6 +517,28 @@ pub fn integrate(
             }
             continue;
         }
+        if let Some((rtol, atol)) = o.local_error {
+            let c = (beta - 1.0 / 6.0) * hs * hs;
+            let err = (0..n)
+                .map(|i| {
+                    let scale = atol + rtol * z[i].abs().max(z1[i].abs());
+                    (c * (u[i] - a[i])).abs() / scale
+                })
+                .fold(0.0, f64::max);
+            // the error is O(h^3): the classic controller with safety 0.9
+            let factor = (0.9 * err.max(1e-10).powf(-1.0 / 3.0)).clamp(0.2, 2.0);
+            if err > 1.0 {
+                sol.stats.rejected += 1;
+                h = hs * factor.min(0.9);
+                continue;
+            }
+            // a growth below 20 % keeps the factored matrix
+            h = if (1.0..1.2).contains(&factor) {
+                hs
+            } else {
+                (hs * factor).min(o.step)
+            };
+        }
         t = t1;
         p.rhs(t, &z1, &mut f_old);
         momentum_force(p, &z1, &mut f_old, &mut bz, &mut acc, n);
@@ -503,7 +549,7 @@ pub fn integrate(
         sol.accelerations.push(a.clone());
         sol.stats.steps += 1;
         good += 1;
-        if h < o.step && good >= 5 {
+        if o.local_error.is_none() && h < o.step && good >= 5 {
             h = (2.0 * h).min(o.step);
             good = 0;
         }
