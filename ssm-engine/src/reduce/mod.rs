@@ -2,6 +2,7 @@
 //! reducer run through its plugin, and the reduced model's outputs completed
 //! through the lift `z ~ V y + z0` from the full model's.
 
+pub mod pod;
 pub mod scene;
 
 use std::path::{Path, PathBuf};
