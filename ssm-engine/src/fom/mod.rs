@@ -60,7 +60,7 @@ pub mod steady;
 pub use consistent::{consistent_initial, consistent_initial_keeping, Consistent};
 pub use problem::DaeProblem;
 pub use radau::{Radau, RadauOptions, RadauStats};
-pub use sample::{add_noise, sample_run, SampledRun, Simulation};
+pub use sample::{add_noise, sample_run, Integrator, SampledRun, Simulation};
 pub use steady::{steady_state, SteadyOptions, SteadyState};
 
 /// Why a full-system simulation failed. Every variant names the time reached.

@@ -3,13 +3,15 @@
 //!
 //! A flow is integrated by Radau IIA ([`super::Radau`]) and sampled at
 //! `t_k = k T` through its collocation polynomial (dense output), so the
-//! step size follows the error control and not the sampling period; a map is
+//! step size follows the error control and not the sampling period, or by
+//! HHT-alpha ([`super::hht`]) with its Hermite dense output; a map is
 //! iterated, one sample per iterate.
 
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use ssm_api::TimeKind;
 
+use super::hht::{self, HhtOptions};
 use super::{consistent_initial_keeping, DaeProblem, Radau, RadauOptions, SimError};
 use crate::model::system::{OutputMap, System};
 
@@ -41,6 +43,23 @@ pub struct SampledRun {
     pub steps: usize,
 }
 
+/// The integrator of a flow's runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Integrator {
+    /// Radau IIA (order 5) with these tolerances.
+    Radau(RadauOptions),
+    /// HHT-alpha at `alpha`, its step controlled at `(rtol, atol)` on the
+    /// positions' local error, the sampling period the largest step.
+    Hht {
+        /// `alpha` in `[-1/3, 0]`.
+        alpha: f64,
+        /// Relative tolerance.
+        rtol: f64,
+        /// Absolute tolerance.
+        atol: f64,
+    },
+}
+
 /// Samples `outputs` of the unforced system from `z0` (displacements `keep`
 /// held where the constraints allow) at `samples` times `k period`.
 pub fn sample_run(
@@ -50,7 +69,7 @@ pub fn sample_run(
     period: f64,
     samples: usize,
     outputs: &[&OutputMap],
-    opts: RadauOptions,
+    integrator: Integrator,
 ) -> Result<SampledRun, SimError> {
     if !(period.is_finite() && period > 0.0) || samples < 2 {
         return Err(SimError::Settings(format!(
@@ -96,23 +115,37 @@ pub fn sample_run(
         TimeKind::Flow => {
             let initial = consistent_initial_keeping(&problem, 0.0, z0, keep)?;
             let t_end = times[samples - 1];
-            let mut radau = Radau::new(&problem, 0.0, &initial.z, t_end, opts)?;
             observe(&initial.z, &mut values);
-            let mut zt = vec![0.0; sys.n_states()];
-            let mut next = 1;
-            while next < samples {
-                radau.step(t_end)?;
-                while next < samples && times[next] <= radau.t() * (1.0 + 1e-14) {
-                    radau.dense(times[next], &mut zt);
-                    observe(&zt, &mut values);
-                    next += 1;
+            let steps = match integrator {
+                Integrator::Radau(opts) => {
+                    let mut radau = Radau::new(&problem, 0.0, &initial.z, t_end, opts)?;
+                    let mut zt = vec![0.0; sys.n_states()];
+                    let mut next = 1;
+                    while next < samples {
+                        radau.step(t_end)?;
+                        while next < samples && times[next] <= radau.t() * (1.0 + 1e-14) {
+                            radau.dense(times[next], &mut zt);
+                            observe(&zt, &mut values);
+                            next += 1;
+                        }
+                    }
+                    radau.stats.accepted
                 }
-            }
+                Integrator::Hht { alpha, rtol, atol } => {
+                    let o = HhtOptions::adaptive(alpha, period, rtol, atol);
+                    let run = hht::integrate(&problem, &initial.z, 0.0, t_end, &o)?;
+                    let n_dof = sys.mechanical.as_ref().map_or(0, |m| m.n_dof);
+                    for &t in &times[1..] {
+                        observe(&run.at(t, n_dof), &mut values);
+                    }
+                    run.stats.steps
+                }
+            };
             Ok(SampledRun {
                 times,
                 values,
                 start_correction: initial.position_correction,
-                steps: radau.stats.accepted,
+                steps,
             })
         }
     }

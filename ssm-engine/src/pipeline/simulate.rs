@@ -6,7 +6,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::JobError;
-use crate::fom::{add_noise, sample_run, RadauOptions, Simulation};
+use crate::fom::{add_noise, sample_run, Integrator, RadauOptions, Simulation};
 use crate::model::system::{OutputMap, System};
 use crate::rom::autonomous::polar_point;
 use crate::scene::{SceneFile, SimulateSection};
@@ -63,10 +63,18 @@ pub fn simulate(
             )
             .into());
     }
-    let opts = RadauOptions {
-        rtol: *sec.rtol.get_ref(),
-        atol: *sec.atol.get_ref(),
-        ..RadauOptions::default()
+    let (rtol, atol) = (*sec.rtol.get_ref(), *sec.atol.get_ref());
+    let integrator = match &sec.hht_alpha {
+        Some(alpha) => Integrator::Hht {
+            alpha: *alpha.get_ref(),
+            rtol,
+            atol,
+        },
+        None => Integrator::Radau(RadauOptions {
+            rtol,
+            atol,
+            ..RadauOptions::default()
+        }),
     };
     let period = *sec.period.get_ref();
     let mut starts = Vec::with_capacity(sec.run.get_ref().len());
@@ -94,7 +102,7 @@ pub fn simulate(
     // so that a seed gives the same files anyway
     let results: Vec<_> = starts
         .par_iter()
-        .map(|(z0, keep)| sample_run(sys, z0, keep, period, samples, &outputs, opts))
+        .map(|(z0, keep)| sample_run(sys, z0, keep, period, samples, &outputs, integrator))
         .collect();
     let mut runs = Vec::with_capacity(results.len());
     for (k, r) in results.into_iter().enumerate() {

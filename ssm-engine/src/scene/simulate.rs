@@ -34,6 +34,10 @@ pub struct SimulateSection {
     /// Absolute tolerance of the integrator.
     #[serde(default = "default_atol")]
     pub atol: Spanned<f64>,
+    /// Integrate with HHT-alpha at this `alpha` (in `[-1/3, 0]`; `rtol` and
+    /// `atol` then control its positions' local error) instead of Radau.
+    #[serde(default)]
+    pub hht_alpha: Option<Spanned<f64>>,
     /// The runs, one file each.
     pub run: Spanned<Vec<SimulateRun>>,
 }
@@ -109,6 +113,16 @@ impl SceneFile {
         }
         for (tol, key) in [(&s.rtol, "simulate.rtol"), (&s.atol, "simulate.atol")] {
             self.check_positive(tol, key)?;
+        }
+        if let Some(alpha) = &s.hht_alpha {
+            let a = *alpha.get_ref();
+            if !(-1.0 / 3.0..=0.0).contains(&a) {
+                return Err(self.invalid(
+                    alpha.span(),
+                    "simulate.hht_alpha",
+                    format!("must lie in [-1/3, 0] (0: no numerical damping), found {a}"),
+                ));
+            }
         }
         if let Some(o) = &s.outputs {
             if o.get_ref().is_empty() {
