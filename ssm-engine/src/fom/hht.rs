@@ -47,6 +47,7 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::Mat;
 
+use super::problem::square_pattern;
 use super::{consistent_initial, DaeProblem, SimError};
 
 /// Settings of an HHT run.
@@ -162,27 +163,16 @@ impl HhtSolution {
         if self.times.len() < 2 {
             return self.states[0].clone();
         }
-        let (t0, t1) = (self.times[k], self.times[k + 1]);
-        let h = t1 - t0;
-        let s = (t - t0) / h;
-        let (h00, h10, h01, h11) = (
-            (1.0 + 2.0 * s) * (1.0 - s).powi(2),
-            s * (1.0 - s).powi(2),
-            s * s * (3.0 - 2.0 * s),
-            s * s * (s - 1.0),
-        );
-        let (z0, z1) = (&self.states[k], &self.states[k + 1]);
-        let (a0, a1) = (&self.accelerations[k], &self.accelerations[k + 1]);
-        let mut out = z0.clone();
-        for i in 0..n_dof {
-            let (v0, v1) = (z0[n_dof + i], z1[n_dof + i]);
-            out[i] = h00 * z0[i] + h * h10 * v0 + h01 * z1[i] + h * h11 * v1;
-            out[n_dof + i] = h00 * v0 + h * h10 * a0[i] + h01 * v1 + h * h11 * a1[i];
-        }
-        for i in 2 * n_dof..out.len() {
-            out[i] = (1.0 - s) * z0[i] + s * z1[i];
-        }
-        out
+        hermite(
+            t,
+            (self.times[k], &self.states[k], &self.accelerations[k]),
+            (
+                self.times[k + 1],
+                &self.states[k + 1],
+                &self.accelerations[k + 1],
+            ),
+            n_dof,
+        )
     }
 }
 
@@ -304,16 +294,7 @@ impl Iteration {
         cells.extend((0..n + n_c).map(|i| (i, i)));
         cells.sort_unstable();
         cells.dedup();
-        let size = n + n_c;
-        let mut col_ptr = vec![0usize; size + 1];
-        for &(c, _) in &cells {
-            col_ptr[c + 1] += 1;
-        }
-        for j in 0..size {
-            col_ptr[j + 1] += col_ptr[j];
-        }
-        let row_idx: Vec<usize> = cells.iter().map(|&(_, r)| r).collect();
-        let pattern = SymbolicSparseColMat::new_checked(size, size, col_ptr, None, row_idx);
+        let pattern = square_pattern(n + n_c, &cells);
         let scatter = entries
             .iter()
             .map(|&(c, r, k, kind)| Scatter {
@@ -386,11 +367,41 @@ impl Iteration {
     }
 }
 
-/// Most steps of one run.
-const MAX_STEPS: usize = 10_000_000;
+/// The state at `t` between the step ends `(t0, z0, a0)` and `(t1, z1, a1)`:
+/// `q` and `q'` by cubic Hermite interpolation from `(q, q')` and `(q', a)`
+/// (error `O(h^4)`, below the method's `O(h^2)`), `mu` linearly.
+pub fn hermite(
+    t: f64,
+    (t0, z0, a0): (f64, &[f64], &[f64]),
+    (t1, z1, a1): (f64, &[f64], &[f64]),
+    n_dof: usize,
+) -> Vec<f64> {
+    let h = t1 - t0;
+    let s = (t - t0) / h;
+    let (h00, h10, h01, h11) = (
+        (1.0 + 2.0 * s) * (1.0 - s).powi(2),
+        s * (1.0 - s).powi(2),
+        s * s * (3.0 - 2.0 * s),
+        s * s * (s - 1.0),
+    );
+    let mut out = z0.to_vec();
+    for i in 0..n_dof {
+        let (v0, v1) = (z0[n_dof + i], z1[n_dof + i]);
+        out[i] = h00 * z0[i] + h * h10 * v0 + h01 * z1[i] + h * h11 * v1;
+        out[n_dof + i] = h00 * v0 + h * h10 * a0[i] + h01 * v1 + h * h11 * a1[i];
+    }
+    for i in 2 * n_dof..out.len() {
+        out[i] = (1.0 - s) * z0[i] + s * z1[i];
+    }
+    out
+}
+
+/// Most steps of one run (the same budget as Radau's default).
+const MAX_STEPS: usize = 2_000_000;
 
 /// Integrates `p` from the start `guess` (made consistent first) over
-/// `[t0, t_end]` with HHT-alpha.
+/// `[t0, t_end]` with HHT-alpha and keeps every step end (memory grows with
+/// the steps: [`integrate_with`] streams them instead).
 pub fn integrate(
     p: &DaeProblem,
     guess: &[f64],
@@ -398,6 +409,30 @@ pub fn integrate(
     t_end: f64,
     o: &HhtOptions,
 ) -> Result<HhtSolution, SimError> {
+    let mut sol = HhtSolution {
+        times: Vec::new(),
+        states: Vec::new(),
+        accelerations: Vec::new(),
+        stats: HhtStats::default(),
+    };
+    sol.stats = integrate_with(p, guess, t0, t_end, o, |t, z, a| {
+        sol.times.push(t);
+        sol.states.push(z.to_vec());
+        sol.accelerations.push(a.to_vec());
+    })?;
+    Ok(sol)
+}
+
+/// [`integrate`] without keeping the run: `on_step(t, z, a)` sees the
+/// consistent start and then every step end, in order; returns the counters.
+pub fn integrate_with(
+    p: &DaeProblem,
+    guess: &[f64],
+    t0: f64,
+    t_end: f64,
+    o: &HhtOptions,
+    mut on_step: impl FnMut(f64, &[f64], &[f64]),
+) -> Result<HhtStats, SimError> {
     o.check()?;
     if !(t0.is_finite() && t_end.is_finite() && t_end > t0) {
         return Err(SimError::Settings(format!(
@@ -417,12 +452,8 @@ pub fn integrate(
     let a0 = initial_accelerations(p, &l, &f_old, t0)?;
     let (gamma, beta) = o.newmark();
     let w = 1.0 + o.alpha;
-    let mut sol = HhtSolution {
-        times: vec![t0],
-        states: vec![z0.clone()],
-        accelerations: vec![a0.clone()],
-        stats: HhtStats::default(),
-    };
+    let mut stats = HhtStats::default();
+    on_step(t0, &z0, &a0);
     let (mut t, mut z, mut a) = (t0, z0, a0);
     let mut h = o.step;
     // the step size the iteration matrix was factored for; NaN: refactor
@@ -431,10 +462,10 @@ pub fn integrate(
     let mut good = 0;
     let mut f_new = vec![0.0; big_n];
     while t < t_end {
-        if sol.stats.steps >= MAX_STEPS {
+        if stats.steps >= MAX_STEPS {
             return Err(SimError::TooManySteps {
                 t,
-                steps: sol.stats.steps,
+                steps: stats.steps,
                 t_end,
             });
         }
@@ -474,12 +505,12 @@ pub fn integrate(
             if k == 0 && hs != h_factored {
                 p.jacobian(t1, &z1, &mut jac);
                 it.factorize(p, &jac, hs, o, t1)?;
-                sol.stats.factorizations += 1;
+                stats.factorizations += 1;
                 h_factored = hs;
                 fresh = true;
             }
             it.solve(&mut r);
-            sol.stats.newton += 1;
+            stats.newton += 1;
             let mut small = true;
             for (ui, di) in u.iter_mut().zip(&r) {
                 if !di.is_finite() {
@@ -505,7 +536,7 @@ pub fn integrate(
             continue;
         }
         if !converged {
-            sol.stats.rejected += 1;
+            stats.rejected += 1;
             good = 0;
             h = 0.5 * hs;
             if h < o.step * 1e-8 {
@@ -528,7 +559,7 @@ pub fn integrate(
             // the error is O(h^3): the classic controller with safety 0.9
             let factor = (0.9 * err.max(1e-10).powf(-1.0 / 3.0)).clamp(0.2, 2.0);
             if err > 1.0 {
-                sol.stats.rejected += 1;
+                stats.rejected += 1;
                 h = hs * factor.min(0.9);
                 continue;
             }
@@ -544,17 +575,15 @@ pub fn integrate(
         momentum_force(p, &z1, &mut f_old, &mut bz, &mut acc, n);
         a.copy_from_slice(&u[..n]);
         z = z1;
-        sol.times.push(t);
-        sol.states.push(z.clone());
-        sol.accelerations.push(a.clone());
-        sol.stats.steps += 1;
+        on_step(t, &z, &a);
+        stats.steps += 1;
         good += 1;
         if o.local_error.is_none() && h < o.step && good >= 5 {
             h = (2.0 * h).min(o.step);
             good = 0;
         }
     }
-    Ok(sol)
+    Ok(stats)
 }
 
 /// `z1 = (q, q', mu)` of the Newmark formulas from the step start `(z, a)`

@@ -76,15 +76,7 @@ impl<'a> DaeProblem<'a> {
         }
         entries.sort_unstable();
         entries.dedup();
-        let mut col_ptr = vec![0usize; n + 1];
-        for &(c, _) in &entries {
-            col_ptr[c + 1] += 1;
-        }
-        for j in 0..n {
-            col_ptr[j + 1] += col_ptr[j];
-        }
-        let row_idx: Vec<usize> = entries.iter().map(|&(_, r)| r).collect();
-        let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let pattern = square_pattern(n, &entries);
         let slot = |row: usize, col: usize| -> u32 {
             let p = pattern.as_ref();
             let start = p.col_ptr()[col];
@@ -229,6 +221,20 @@ impl<'a> DaeProblem<'a> {
             }
         }
     }
+}
+
+/// The `n x n` sparse pattern of the cells `(col, row)`, sorted and without
+/// repeats.
+pub(crate) fn square_pattern(n: usize, cells: &[(usize, usize)]) -> SymbolicSparseColMat<usize> {
+    let mut col_ptr = vec![0usize; n + 1];
+    for &(c, _) in cells {
+        col_ptr[c + 1] += 1;
+    }
+    for j in 0..n {
+        col_ptr[j + 1] += col_ptr[j];
+    }
+    let row_idx: Vec<usize> = cells.iter().map(|&(_, r)| r).collect();
+    SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)
 }
 
 fn eval_into(p: &PolyVector, z: &[f64], scale: f64, out: &mut [f64]) {
