@@ -517,19 +517,25 @@ pub fn chain3_data(dir: &Path) -> Vec<PathBuf> {
         .collect()
 }
 
+/// Runs the zoo's data scene `scene` (a `[simulate]` section with `runs`
+/// runs) in-process and writes its files into `dir`; returns the
+/// `simulation_<k>.csv` files, so tests use the zoo's own data.
+pub fn zoo_data(scene: &str, dir: &Path, runs: usize) -> Vec<PathBuf> {
+    let text = std::fs::read_to_string(repo_root().join("zoo").join(scene))
+        .unwrap_or_else(|e| panic!("zoo/{scene}: {e}"));
+    let r = run_scene_text(&text).unwrap_or_else(|e| panic!("zoo/{scene}: {e}"));
+    r.outputs.write(dir).expect("data written");
+    (1..=runs)
+        .map(|k| dir.join(format!("simulation_{k}.csv")))
+        .collect()
+}
+
 /// The three noisy decaying signals of the quarter-span velocity of the
 /// clamped-clamped beam (plugin `divider`, model `beam`), one started on the
 /// SSM of each of the first three mode pairs, as `zoo/beam_data.toml` makes
-/// them (that scene is run here, so the test data and the zoo's are the
-/// same), written into `dir`; returns the three files.
+/// them, written into `dir`; returns the three files.
 pub fn beam_data(dir: &Path) -> Vec<PathBuf> {
-    let text = std::fs::read_to_string(repo_root().join("zoo/beam_data.toml"))
-        .expect("zoo/beam_data.toml");
-    let r = run_scene_text(&text).expect("beam data scene runs");
-    r.outputs.write(dir).expect("data written");
-    (1..=3)
-        .map(|k| dir.join(format!("simulation_{k}.csv")))
-        .collect()
+    zoo_data("beam_data.toml", dir, 3)
 }
 
 /// Reducer diagnostic `name` of a run's `summary.json` (`reduction.diagnostics`)

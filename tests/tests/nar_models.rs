@@ -19,7 +19,7 @@ use std::path::PathBuf;
 
 use serde_json::Value;
 use ssm_engine::pipeline::JobResult;
-use ssm_tests::{beam_data, diagnostic, repo_root, run_scene_text, tmp_dir};
+use ssm_tests::{beam_data, diagnostic, repo_root, run_scene_text, tmp_dir, zoo_data};
 
 /// `(amplitude, omega, error_estimate)` rows of a backbone.csv (one order)
 /// in the output `output`.
@@ -175,15 +175,7 @@ fn beam_backbones_from_noisy_data_match_the_model_based_ones() {
 /// bend reaches 31 times the tolerance.
 #[test]
 fn constrained_oscillator_backbone_from_data_matches_the_model_based_one() {
-    let text =
-        std::fs::read_to_string(repo_root().join("zoo/spatial_oscillator_data.toml")).unwrap();
-    let dir = tmp_dir("nar-spatial");
-    run_scene_text(&text)
-        .expect("data scene runs")
-        .outputs
-        .write(&dir)
-        .unwrap();
-    let files = vec![dir.join("simulation_1.csv")];
+    let files = zoo_data("spatial_oscillator_data.toml", &tmp_dir("nar-spatial"), 1);
     let p = peak(&files[0]);
     let id = identify("spatial_oscillator_nar.toml", &files, 1, 0.2);
     let model = run_scene_text(
@@ -207,14 +199,7 @@ fn constrained_oscillator_backbone_from_data_matches_the_model_based_one() {
 /// data); the bend is 13 times the tolerance.
 #[test]
 fn pendulum_chain_backbone_from_data_matches_the_model_based_one() {
-    let text = std::fs::read_to_string(repo_root().join("zoo/pendulum_chain_data.toml")).unwrap();
-    let dir = tmp_dir("nar-chain");
-    run_scene_text(&text)
-        .expect("data scene runs")
-        .outputs
-        .write(&dir)
-        .unwrap();
-    let files = vec![dir.join("simulation_1.csv")];
+    let files = zoo_data("pendulum_chain_data.toml", &tmp_dir("nar-chain"), 1);
     let p = peak(&files[0]);
     let id = identify("pendulum_chain_nar.toml", &files, 1, 1.0);
     let model = run_scene_text(
