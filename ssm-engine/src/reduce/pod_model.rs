@@ -1,0 +1,279 @@
+//! The `pod` reducer on a polynomial mechanical model: POD of the velocity
+//! snapshots of a training run per coordinate kind, the global projection
+//! `U`, the generalized constraint reduction of the projected constraint
+//! Jacobian over the run, and the reduced model of eq. (14)
+//! ([`super::galerkin`]).
+//!
+//! The constraint Jacobian `C_q(q)` of a nonlinear constraint changes along
+//! the motion, so the SVD of Sect. 3.4 is taken of the projected Jacobians
+//! `C_q(q_k) U` of many snapshots side by side, `[C_q(q_1) U, ..., C_q(q_K) U]`:
+//! its independent left singular vectors `L^i` span every combination of
+//! constraints the reduced motion ever feels, and a constraint is removed
+//! only when it is redundant along the whole training run.
+//!
+//! # References
+//! M. Stadlmayr, W. Witteveen, W. Steiner, *A generalized constraint reduction
+//! method for reduced order MBS models*, Multibody Syst. Dyn. (2017), Sects.
+//! 3.2-3.4, eqs. (7)-(14).
+
+use faer::Mat;
+use ssm_api::{Lift, Model, MotionKind};
+
+use super::galerkin::{project_mechanical, GalerkinError, ReducedCoordinates};
+use super::pod::{global_projection, pod, reduce_constraints, ConstraintReduction, PodBasis};
+use super::pod::{PodError, Truncation};
+use crate::fom::DaeProblem;
+use crate::model::system::System;
+
+/// Settings of the `pod` reducer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PodSettings {
+    /// Truncation of the POVs of every kind.
+    pub truncation: Truncation,
+    /// Singular values of the stacked projected constraint Jacobian below
+    /// this fraction of the largest count as zero (the constraint is redundant).
+    pub rank_tol: f64,
+    /// Snapshots (evenly spread over the run) at which `C_q(q) U` is stacked.
+    pub jacobian_samples: usize,
+}
+
+impl Default for PodSettings {
+    /// A drop of 6 decades, rank tolerance `1e-8`, 64 Jacobian samples.
+    fn default() -> Self {
+        Self {
+            truncation: Truncation::Drop { decades: 6.0 },
+            rank_tol: 1e-8,
+            jacobian_samples: 64,
+        }
+    }
+}
+
+/// Why a POD reduction failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PodReduceError {
+    /// The POD or the constraint reduction failed.
+    #[error(transparent)]
+    Pod(#[from] PodError),
+    /// The projection failed.
+    #[error(transparent)]
+    Galerkin(#[from] GalerkinError),
+    /// The training run is unusable.
+    #[error("training run: {0}")]
+    Training(String),
+}
+
+/// The POD of one coordinate kind.
+#[derive(Debug, Clone)]
+pub struct KindBasis {
+    /// The kind.
+    pub motion: MotionKind,
+    /// Its displacements (indices into `0..n`).
+    pub coordinates: Vec<usize>,
+    /// Its POVs and kept POMs.
+    pub basis: PodBasis,
+}
+
+/// What the `pod` reducer made.
+#[derive(Debug, Clone)]
+pub struct PodReduction {
+    /// POD per coordinate kind, in the order translational, rotational,
+    /// flexible, unspecified (kinds without coordinates left out).
+    pub kinds: Vec<KindBasis>,
+    /// The global projection `U` (`n x r`).
+    pub u: Mat<f64>,
+    /// The constraint reduction (`L^i`, singular values).
+    pub constraints: ConstraintReduction,
+    /// The reduced model `(q_r, q_r', mu_l)`.
+    pub model: Model,
+    /// `z = V y`, `V = blkdiag(U, U, L)`.
+    pub lift: Lift,
+    /// `|R_q0| / max_t |q|` and `|R_q'0| / max_t |q'|`: what `U` misses of
+    /// the training run's initial positions and velocities (eqs. 8-9).
+    pub initial_residual: [f64; 2],
+}
+
+fn kind_label(m: MotionKind) -> &'static str {
+    if m == MotionKind::Translational {
+        "trans"
+    } else if m == MotionKind::Rotational {
+        "rot"
+    } else if m == MotionKind::Flexible {
+        "flex"
+    } else {
+        "pom"
+    }
+}
+
+/// The `pod` reduction of the mechanical `sys` from the states `run` of a
+/// training simulation (`z = (q, q', mu)` at each snapshot, ideally
+/// uniformly spaced in time).
+pub fn pod_reduce(
+    sys: &System,
+    run: &[Vec<f64>],
+    settings: &PodSettings,
+) -> Result<PodReduction, PodReduceError> {
+    let mech = super::galerkin::supported(sys)?;
+    let n = mech.n_dof;
+    if run.len() < 2 {
+        return Err(PodReduceError::Training(format!(
+            "{} snapshots; POD needs at least two",
+            run.len()
+        )));
+    }
+    if let Some(k) = run.iter().position(|z| z.len() != sys.states.len()) {
+        return Err(PodReduceError::Training(format!(
+            "snapshot {k} has {} values, the model has {} states",
+            run[k].len(),
+            sys.states.len()
+        )));
+    }
+    if settings.jacobian_samples == 0 {
+        return Err(PodError::Truncation("jacobian_samples must be at least 1".into()).into());
+    }
+    let order = [
+        MotionKind::Translational,
+        MotionKind::Rotational,
+        MotionKind::Flexible,
+        MotionKind::Unspecified,
+    ];
+    let mut kinds = Vec::new();
+    for motion in order {
+        let coordinates: Vec<usize> = (0..n)
+            .filter(|&i| {
+                let m = sys.states[i].motion;
+                m == motion || (motion == MotionKind::Unspecified && !order[..3].contains(&m))
+            })
+            .collect();
+        if coordinates.is_empty() {
+            continue;
+        }
+        let x = Mat::from_fn(coordinates.len(), run.len(), |i, j| {
+            run[j][n + coordinates[i]]
+        });
+        let basis = pod(x.as_ref(), kind_label(motion), settings.truncation)?;
+        kinds.push(KindBasis {
+            motion,
+            coordinates,
+            basis,
+        });
+    }
+    let groups: Vec<(&[usize], &PodBasis)> = kinds
+        .iter()
+        .map(|k| (k.coordinates.as_slice(), &k.basis))
+        .collect();
+    let u = global_projection(n, &groups);
+    let r = u.ncols();
+    if r == 0 {
+        return Err(PodReduceError::Training(
+            "the velocities are zero throughout: nothing moves, so POD keeps no mode".into(),
+        ));
+    }
+    let mut coords = ReducedCoordinates {
+        names: Vec::with_capacity(r),
+        motion: Vec::with_capacity(r),
+    };
+    for k in &kinds {
+        for j in 0..k.basis.kept() {
+            coords
+                .names
+                .push(format!("{}{}", kind_label(k.motion), j + 1));
+            coords.motion.push(k.motion);
+        }
+    }
+    let constraints = reduce_constraints(
+        stacked_constraint_jacobian(sys, run, &u, settings.jacobian_samples).as_ref(),
+        settings.rank_tol,
+    )?;
+    let (model, lift) = project_mechanical(sys, u.as_ref(), constraints.basis.as_ref(), &coords)?;
+    let peak = |off: usize| {
+        run.iter()
+            .map(|z| norm(&z[off..off + n]))
+            .fold(0.0f64, f64::max)
+            .max(f64::MIN_POSITIVE)
+    };
+    let residual = |off: usize| {
+        norm(&super::pod::residual_term(
+            u.as_ref(),
+            &run[0][off..off + n],
+        ))
+    };
+    let initial_residual = [residual(0) / peak(0), residual(n) / peak(n)];
+    Ok(PodReduction {
+        kinds,
+        u,
+        constraints,
+        model,
+        lift,
+        initial_residual,
+    })
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// The constraint Jacobian `C_q(q)` (`n_c x n`) of the mechanical `sys` at
+/// the state `z = (q, q', mu)`, from the analytic Jacobian of the model.
+pub fn constraint_jacobian(sys: &System, z: &[f64]) -> Mat<f64> {
+    let p = DaeProblem::new(sys, 0.0, 0.0);
+    let mut vals = vec![0.0; p.pattern().row_idx().len()];
+    let mut cq = Mat::zeros(0, 0);
+    constraint_jacobian_into(sys, &p, z, &mut vals, &mut cq);
+    cq
+}
+
+fn constraint_jacobian_into(
+    sys: &System,
+    p: &DaeProblem,
+    z: &[f64],
+    vals: &mut [f64],
+    cq: &mut Mat<f64>,
+) {
+    let (n, nc) = sys
+        .mechanical
+        .as_ref()
+        .map_or((0, 0), |m| (m.n_dof, m.n_constraints));
+    let pattern = p.pattern();
+    p.jacobian(0.0, z, vals);
+    *cq = Mat::zeros(nc, n);
+    for col in 0..n {
+        let range = pattern.col_range(col);
+        for (&row, &v) in pattern.row_idx()[range.clone()].iter().zip(&vals[range]) {
+            if (2 * n..2 * n + nc).contains(&row) {
+                cq[(row - 2 * n, col)] = v;
+            }
+        }
+    }
+}
+
+/// `[C_q(q_1) U, ..., C_q(q_K) U]` (`n_c x r K`) at `samples` snapshots
+/// spread evenly over `run`, first and last included.
+fn stacked_constraint_jacobian(
+    sys: &System,
+    run: &[Vec<f64>],
+    u: &Mat<f64>,
+    samples: usize,
+) -> Mat<f64> {
+    let nc = sys.mechanical.as_ref().map_or(0, |m| m.n_constraints);
+    let r = u.ncols();
+    let k = samples.min(run.len());
+    let picks: Vec<usize> = if k == 1 {
+        vec![0]
+    } else {
+        (0..k).map(|i| i * (run.len() - 1) / (k - 1)).collect()
+    };
+    let p = DaeProblem::new(sys, 0.0, 0.0);
+    let mut vals = vec![0.0; p.pattern().row_idx().len()];
+    let mut y = Mat::<f64>::zeros(nc, r * picks.len());
+    let mut cq = Mat::<f64>::zeros(0, 0);
+    for (s, &pick) in picks.iter().enumerate() {
+        constraint_jacobian_into(sys, &p, &run[pick], &mut vals, &mut cq);
+        let block = &cq * u;
+        for c in 0..nc {
+            for j in 0..r {
+                y[(c, s * r + j)] = block[(c, j)];
+            }
+        }
+    }
+    y
+}

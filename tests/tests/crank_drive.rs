@@ -1,0 +1,221 @@
+//! The `pod` reducer (`reduce::pod_model`) on the crank drive of plugin
+//! `crank-drive`, the stand-in for the V8 crank drive of Stadlmayr,
+//! Witteveen & Steiner (2017), Sect. 4.1: 3-D natural coordinates, planar
+//! motion, constraints that become redundant after the projection.
+//!
+//! References derived here from the kinematics, not from the code: piston
+//! `i` on throw `k` of `K` in a bank at `gamma_i` strokes as `s(theta +
+//! beta_k - gamma_i)` along its own axis, so the piston velocities span as
+//! many directions as there are distinct phases `beta_k - gamma_i`, the
+//! crank vector `u` moves in the `x-y` plane (two directions), and every
+//! out-of-plane coordinate stands still. After projection the reduced model
+//! keeps `|u| = 1` and one rod constraint per distinct phase, leaving one
+//! degree of freedom.
+
+use std::collections::BTreeSet;
+
+use faer::Mat;
+use ssm_api::MotionKind;
+use ssm_engine::fom::hht::{integrate, HhtOptions, HhtSolution};
+use ssm_engine::fom::DaeProblem;
+use ssm_engine::model::system::System;
+use ssm_engine::reduce::pod::Truncation;
+use ssm_engine::reduce::pod_model::{constraint_jacobian, pod_reduce, PodReduction, PodSettings};
+use ssm_tests::system;
+
+const STEP: f64 = 1e-3;
+
+fn hht(sys: &System, eps: f64, omega: f64, t_end: f64) -> HhtSolution {
+    let p = DaeProblem::new(sys, eps, omega);
+    let z0 = vec![0.0; sys.states.len()];
+    integrate(&p, &z0, 0.0, t_end, &HhtOptions::new(-0.1, STEP)).expect("HHT run")
+}
+
+/// Distinct piston phases `beta_k - gamma_i` (degrees, mod 360) of the
+/// plugin's layout: one throw per cylinder inline, two cylinders per throw
+/// on the banks at `-v/2`, `+v/2` for a V engine.
+fn distinct_phases(cylinders: usize, v_angle: f64) -> usize {
+    let v = v_angle > 0.0 && cylinders > 1;
+    let throws = if v { cylinders.div_ceil(2) } else { cylinders };
+    (0..cylinders)
+        .map(|i| {
+            let (k, gamma) = if v {
+                (
+                    i / 2,
+                    if i % 2 == 0 {
+                        -0.5 * v_angle
+                    } else {
+                        0.5 * v_angle
+                    },
+                )
+            } else {
+                (i, 0.0)
+            };
+            let phase = (360.0 * k as f64 / throws as f64 - gamma).rem_euclid(360.0);
+            (phase * 1e6).round() as i64
+        })
+        .collect::<BTreeSet<_>>()
+        .len()
+}
+
+/// Largest deviation over the run of the lifted reduced positions from the
+/// full ones, relative to the largest full position (the reduced run
+/// interpolated at the full run's step ends).
+fn coordinate_error(full: &HhtSolution, reduced: &HhtSolution, red: &PodReduction) -> f64 {
+    let (n, r) = (red.u.nrows(), red.u.ncols());
+    let (mut err, mut peak) = (0.0f64, 0.0f64);
+    for (&t, z) in full.times.iter().zip(&full.states) {
+        let y = reduced.at(t, r);
+        for (i, zi) in z[..n].iter().enumerate() {
+            let lifted: f64 = (0..r).map(|j| red.u[(i, j)] * y[j]).sum();
+            err = err.max((lifted - zi).abs());
+            peak = peak.max(zi.abs());
+        }
+    }
+    err / peak
+}
+
+fn reduce(model: &str, t_end: f64) -> (System, HhtSolution, PodReduction, System) {
+    let full = system("crank-drive", "crank-drive", model);
+    let train = hht(&full, 1.0, 0.0, t_end);
+    let red = pod_reduce(&full, &train.states, &PodSettings::default()).expect("POD reduction");
+    let rsys = System::from_model("pod", red.model.clone()).expect("reduced model is valid");
+    (full, train, red, rsys)
+}
+
+/// Acceptance of issue 17: POD of a training run (mean torque, from rest,
+/// one second: about three revolutions) finds the planar motion, its
+/// out-of-plane POVs at round-off (below 1e-12 of the largest of the kind);
+/// the constraints reduce to the regular set `|u| = 1` plus one rod per
+/// distinct phase (smallest kept singular value above 1e-3 of the largest,
+/// the rest below 1e-12); the reduced model has one degree of freedom and
+/// reproduces the full coordinates on the training load and on a load it
+/// was not trained on (1.5 times the torque plus a fluctuation at
+/// Omega = 30 rad/s, 1.5 s). The acceptance asks for 1 %. The subspace is
+/// exact here (the kinematics keep every coordinate in it), so two HHT runs
+/// on the same steps differ only by their Newton tolerance: below 1e-8 of
+/// the peak (measured 1e-12); where one run halves a step whose Newton
+/// iteration failed, by the HHT discretization error, below 1e-4 (measured
+/// 6.3e-6 on the V8's unseen load).
+#[test]
+fn crank_drive_pod_finds_the_planes_and_reduces_the_constraints() {
+    let mut exact = 0;
+    for (cylinders, v_angle) in [(4usize, 0.0), (8, 90.0), (3, 60.0), (1, 0.0)] {
+        let model = format!("cylinders = {cylinders}\nv_angle = {v_angle}\ntau_amp = 0.5");
+        let (full, train, red, rsys) = reduce(&model, 1.0);
+        let phases = distinct_phases(cylinders, v_angle);
+        let label = format!("{cylinders} cylinders, V {v_angle}");
+        for k in &red.kinds {
+            let expected = if k.motion == MotionKind::Rotational {
+                2
+            } else {
+                phases
+            };
+            let v = &k.basis.values;
+            assert_eq!(
+                k.basis.kept(),
+                expected,
+                "{label} {:?}: POVs {v:?}",
+                k.motion
+            );
+            assert!(v[expected - 1] > 1e-6 * v[0], "{label}: {v:?}");
+            assert!(
+                v[expected..].iter().all(|&s| s < 1e-12 * v[0]),
+                "{label}: out-of-plane POVs {v:?}"
+            );
+        }
+        let m = 2 + 3 * cylinders;
+        let l = 1 + phases;
+        let sv = &red.constraints.singular_values;
+        assert_eq!(red.constraints.basis.ncols(), l, "{label}: {sv:?}");
+        assert_eq!(red.constraints.removed(), m - l);
+        assert!(sv[l - 1] > 1e-3 * sv[0], "{label}: {sv:?}");
+        assert!(
+            sv[l..].iter().all(|&s| s < 1e-12 * sv[0]),
+            "{label}: {sv:?}"
+        );
+        assert_eq!(red.u.ncols() - l, 1, "{label}: one degree of freedom");
+        assert_eq!(red.initial_residual, [0.0, 0.0]);
+        let same = hht(&rsys, 1.0, 0.0, 1.0);
+        let e_train = coordinate_error(&train, &same, &red);
+        let other_full = hht(&full, 1.5, 30.0, 1.5);
+        let other_red = hht(&rsys, 1.5, 30.0, 1.5);
+        let e_test = coordinate_error(&other_full, &other_red, &red);
+        for (e, a, b) in [(e_train, &train, &same), (e_test, &other_full, &other_red)] {
+            assert!(e < 1e-4, "{label}: {e:e}");
+            if a.stats.rejected == 0 && b.stats.rejected == 0 {
+                assert!(e < 1e-8, "{label}: {e:e} on equal steps");
+                exact += 1;
+            }
+        }
+    }
+    assert!(exact >= 4, "{exact} comparisons on equal steps");
+}
+
+/// The constraint-force caveat of the paper (Sect. 3.5), quantified on the
+/// four-cylinder engine: the reduced reactions `C_q^T L mu_l` agree with
+/// the full ones `C_q^T mu` inside the POD subspace (`U^T` of both to 1e-6
+/// of the peak reaction), while in the full space they miss the reactions
+/// of the removed constraints, the pistons' side thrust against the
+/// cylinder walls, which reaches a fixed fraction of the rod force (about
+/// `r / l`, here measured above 10 % of the peak reaction).
+#[test]
+fn crank_drive_reduced_reactions_miss_the_side_thrust() {
+    let (full, train, red, rsys) = reduce("cylinders = 4", 1.0);
+    let reduced = hht(&rsys, 1.0, 0.0, 1.0);
+    let (n, r) = (red.u.nrows(), red.u.ncols());
+    let nc = red.constraints.basis.nrows();
+    let (mut peak, mut in_subspace, mut full_space) = (0.0f64, 0.0f64, 0.0f64);
+    for (z, y) in train.states.iter().zip(&reduced.states).skip(1) {
+        let cq = constraint_jacobian(&full, z);
+        let mu = Mat::from_fn(nc, 1, |j, _| z[2 * n + j]);
+        let mu_l = Mat::from_fn(red.constraints.basis.ncols(), 1, |j, _| y[2 * r + j]);
+        let full_reaction = cq.transpose() * &mu;
+        let reduced_reaction = cq.transpose() * (&red.constraints.basis * &mu_l);
+        let diff = &full_reaction - &reduced_reaction;
+        peak = peak.max(full_reaction.norm_max());
+        full_space = full_space.max(diff.norm_max());
+        in_subspace = in_subspace.max((red.u.transpose() * &diff).norm_max());
+    }
+    assert!(in_subspace < 1e-6 * peak, "{in_subspace:e} of {peak:e}");
+    assert!(full_space > 0.1 * peak, "{full_space:e} of {peak:e}");
+}
+
+/// A run in which nothing moves has no POD basis; bad settings and a model
+/// with auxiliary states are refused with typed errors.
+#[test]
+fn pod_reducer_refuses_bad_input() {
+    let full = system("crank-drive", "crank-drive", "cylinders = 2");
+    let rest = vec![vec![0.0; full.states.len()]; 10];
+    let e = pod_reduce(&full, &rest, &PodSettings::default()).unwrap_err();
+    assert!(e.to_string().contains("nothing moves"), "{e}");
+    let e = pod_reduce(&full, &rest[..1], &PodSettings::default()).unwrap_err();
+    assert!(e.to_string().contains("at least two"), "{e}");
+    let short = vec![vec![0.0; 3]; 4];
+    let e = pod_reduce(&full, &short, &PodSettings::default()).unwrap_err();
+    assert!(e.to_string().contains("states"), "{e}");
+    let train = hht(&full, 1.0, 0.0, 0.2);
+    for settings in [
+        PodSettings {
+            truncation: Truncation::Energy { fraction: 1.5 },
+            ..PodSettings::default()
+        },
+        PodSettings {
+            rank_tol: f64::NAN,
+            ..PodSettings::default()
+        },
+        PodSettings {
+            jacobian_samples: 0,
+            ..PodSettings::default()
+        },
+    ] {
+        assert!(pod_reduce(&full, &train.states, &settings).is_err());
+    }
+    let mut nan = train.states.clone();
+    nan[3][full.states.len() / 2] = f64::NAN;
+    assert!(pod_reduce(&full, &nan, &PodSettings::default()).is_err());
+    let chain = system("pendulum", "chain", "n = 3");
+    let z = vec![vec![0.0; chain.states.len()]; 3];
+    let e = pod_reduce(&chain, &z, &PodSettings::default()).unwrap_err();
+    assert!(e.to_string().contains("auxiliary"), "{e}");
+}
