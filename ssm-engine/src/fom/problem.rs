@@ -237,13 +237,25 @@ pub(crate) fn square_pattern(n: usize, cells: &[(usize, usize)]) -> SymbolicSpar
     SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)
 }
 
+/// `x^p` with the common small powers as plain products (`powi` is a call).
+#[inline]
+fn pow(x: f64, p: u32) -> f64 {
+    match p {
+        0 => 1.0,
+        1 => x,
+        2 => x * x,
+        3 => x * x * x,
+        _ => x.powi(p as i32),
+    }
+}
+
 fn eval_into(p: &PolyVector, z: &[f64], scale: f64, out: &mut [f64]) {
     if scale == 0.0 {
         return;
     }
     for t in p.terms.iter() {
         let v = t.factors.iter().fold(t.coeff * scale, |acc, f| {
-            acc * z[f.var as usize].powi(f.power as i32)
+            acc * pow(z[f.var as usize], f.power)
         });
         out[t.eq as usize] += v;
     }
@@ -260,9 +272,9 @@ fn jac_into(p: &PreparedPoly, z: &[f64], scale: f64, vals: &mut [f64]) {
         for (q, f) in t.factors.iter().enumerate() {
             let zv = z[f.var as usize];
             if q == e.factor as usize {
-                d *= f.power as f64 * zv.powi(f.power as i32 - 1);
+                d *= f.power as f64 * pow(zv, f.power - 1);
             } else {
-                d *= zv.powi(f.power as i32);
+                d *= pow(zv, f.power);
             }
         }
         vals[e.slot as usize] += d;
