@@ -29,6 +29,16 @@
 //! fixed (growing back after five converged ones), or controlled by the
 //! local error of the positions, `(beta - 1/6) h^2 (a_{n+1} - a_n)`.
 //!
+//! A recast model's auxiliaries `w` (Li, Jain & Haller 2023, Sect. 4.2:
+//! `u_s = sin a`, `u_c = 1 - cos a`, ...) are unknowns of the same Newton
+//! iteration, moved with the positions (`w = w_pred + beta h^2 w_hat`, the
+//! prediction along their last rate, so their columns scale like the
+//! positions'): a differential auxiliary `B_w w' = f_w(z)` by the trapezoidal
+//! rule, `B_w (w_{n+1} - w_n) = h/2 (f_w(z_{n+1}) + f_w(z_n))` (second order,
+//! free of the HHT shift, which only the second-order rows need), an
+//! algebraic one exactly; both rows are divided by `beta h^2` like the
+//! constraints.
+//!
 //! Consistent starts come from [`consistent_initial`](super::consistent_initial)
 //! (positions, velocities and multipliers); the first accelerations from
 //! `M a_0 = f(z_0, t_0)`.
@@ -176,17 +186,22 @@ impl HhtSolution {
     }
 }
 
-/// The momentum and constraint rows of a mechanical model as HHT sees them.
+/// The momentum, constraint and auxiliary rows of a mechanical model as HHT
+/// sees them.
 struct Layout {
     n: usize,
     n_c: usize,
+    /// Per auxiliary row (rows `2n + n_c ..`): differential (`B` has entries
+    /// in it) or algebraic.
+    differential: Vec<bool>,
 }
 
 /// Checks that `p` is the first-order form of the mechanical builder (Li,
-/// Jain & Haller 2023, eqs. (4)-(5)) in canonical order with nothing else
-/// (no recast auxiliaries): momentum rows `0..n`,
-/// `C_B x' + M v' = A_m z + F_m(z)`; kinematic rows `n..2n`, `E x' = E v`;
-/// constraint rows `2n..`, `0 = g(x)` (no `B`).
+/// Jain & Haller 2023, eqs. (4)-(5)) in canonical order: momentum rows
+/// `0..n`, `C_B x' + M v' = A_m z + F_m(z)`; kinematic rows `n..2n`,
+/// `E x' = E v`; constraint rows `2n .. 2n + n_c`, `0 = g(x, w)` (no `B`);
+/// and the rows of a recast's auxiliaries `w` after them, differential
+/// (`B_w w' = f_w(z)`, `B` only in auxiliary columns) or algebraic.
 fn layout(p: &DaeProblem) -> Result<Layout, SimError> {
     let sys = p.sys;
     let not = |why: String| {
@@ -198,10 +213,11 @@ fn layout(p: &DaeProblem) -> Result<Layout, SimError> {
         return not("this model declares no mechanical structure".into());
     };
     let (n, n_c) = (mech.n_dof, mech.n_constraints);
-    if sys.n_states() != 2 * n + n_c {
+    let big_n = sys.n_states();
+    let first_aux = 2 * n + n_c;
+    if big_n < first_aux {
         return not(format!(
-            "it has {} states besides x, x' and mu (a recast's auxiliaries): integrate it with Radau",
-            sys.n_states() - 2 * n - n_c
+            "{big_n} states, fewer than 2 n + n_c = {first_aux}"
         ));
     }
     let entries = |m: faer::sparse::SparseColMatRef<'_, usize, f64>| {
@@ -216,16 +232,25 @@ fn layout(p: &DaeProblem) -> Result<Layout, SimError> {
         e
     };
     let (b, a) = (entries(sys.b.as_ref()), entries(sys.a.as_ref()));
-    if let Some(&(i, j, _)) = b
-        .iter()
-        .find(|&&(i, j, _)| j >= 2 * n || i >= 2 * n || (i >= n && j >= n))
-    {
+    let misplaced = |&&(i, j, _): &&(usize, usize, f64)| {
+        if i >= first_aux || j >= first_aux {
+            // an auxiliary's own rate, and nothing else, in its rows
+            i < first_aux || j < first_aux
+        } else {
+            j >= 2 * n || i >= 2 * n || (i >= n && j >= n)
+        }
+    };
+    if let Some(&(i, j, _)) = b.iter().find(misplaced) {
         return not(format!(
-            "B has an entry at ({i}, {j}) outside [[C, M], [E, 0], [0, 0]]"
+            "B has an entry at ({i}, {j}) outside [[C, M, 0], [E, 0, 0], [0, 0, 0], [0, 0, B_w]]"
         ));
     }
     // kinematic rows: E x' = E v, the same E on both sides
-    let kin_b: Vec<(usize, usize, f64)> = b.iter().filter(|e| e.0 >= n).copied().collect();
+    let kin_b: Vec<(usize, usize, f64)> = b
+        .iter()
+        .filter(|e| (n..2 * n).contains(&e.0))
+        .copied()
+        .collect();
     let kin_a: Vec<(usize, usize, f64)> = a
         .iter()
         .filter(|e| (n..2 * n).contains(&e.0))
@@ -242,18 +267,40 @@ fn layout(p: &DaeProblem) -> Result<Layout, SimError> {
     {
         return not(format!("the kinematic row {} has a nonlinear term", t.eq));
     }
-    Ok(Layout { n, n_c })
+    let mut differential = vec![false; big_n - first_aux];
+    for &(i, _, _) in &b {
+        if i >= first_aux {
+            differential[i - first_aux] = true;
+        }
+    }
+    Ok(Layout {
+        n,
+        n_c,
+        differential,
+    })
 }
 
-/// One contribution to the iteration matrix: `coef(kind) * J[src]` (and
-/// `B[src]` on momentum rows) into slot `dst`.
+/// The kind of a row of the iteration matrix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Row {
+    /// `M a - (1 + alpha) f(z_{n+1}) + alpha f(z_n)`.
+    Momentum,
+    /// `g(z_{n+1}) / (beta h^2)`: a constraint or an algebraic auxiliary.
+    Algebraic,
+    /// `(B_w (w_{n+1} - w_n) - h/2 (f_w(z_{n+1}) + f_w(z_n))) / (beta h^2)`.
+    Differential,
+}
+
+/// One contribution to the iteration matrix: `coef(row, col) * J[src]`
+/// (and `coef_b(row, col) * B[src]`) into slot `dst`.
 #[derive(Debug, Clone, Copy)]
 struct Scatter {
     src: usize,
     dst: usize,
-    /// 0: a position column, 1: a velocity column, 2: a multiplier column.
-    kind: u8,
-    momentum: bool,
+    /// 0: a position column, 1: a velocity column, 2: a multiplier column,
+    /// 3: an auxiliary column.
+    col: u8,
+    row: Row,
 }
 
 /// The sparse iteration matrix on the unknowns `(a, mu)` and its LU.
@@ -267,41 +314,49 @@ struct Iteration {
 impl Iteration {
     fn new(p: &DaeProblem, l: &Layout) -> Result<Self, SimError> {
         let (n, n_c) = (l.n, l.n_c);
+        let size = p.n() - n;
         let src = p.pattern().as_ref();
-        let mut entries: Vec<(usize, usize, usize, u8)> = Vec::new();
+        let mut entries: Vec<(usize, usize, usize, u8, Row)> = Vec::new();
         for c in 0..src.ncols() {
             let (col, kind) = if c < n {
                 (c, 0)
             } else if c < 2 * n {
                 (c - n, 1)
-            } else {
+            } else if c < 2 * n + n_c {
                 (c - n, 2)
+            } else {
+                (c - n, 3)
             };
             for k in src.col_ptr()[c]..src.col_ptr()[c + 1] {
-                // momentum rows keep their index, constraint rows follow
-                // them, the kinematic rows are the Newmark formulas
+                // momentum rows keep their index, constraint and auxiliary
+                // rows follow them, the kinematic rows are the Newmark formulas
                 let r = src.row_idx()[k];
-                if r < n {
-                    entries.push((col, r, k, kind));
-                } else if r >= 2 * n {
-                    entries.push((col, r - n, k, kind));
-                }
+                let row = if r < n {
+                    Row::Momentum
+                } else if r < 2 * n {
+                    continue;
+                } else if r < 2 * n + n_c || !l.differential[r - 2 * n - n_c] {
+                    Row::Algebraic
+                } else {
+                    Row::Differential
+                };
+                entries.push((col, if r < n { r } else { r - n }, k, kind, row));
             }
         }
         let mut cells: Vec<(usize, usize)> = entries.iter().map(|e| (e.0, e.1)).collect();
         // the diagonal, so that a row the Jacobian leaves empty is reported
         // as singular rather than as a bad pattern
-        cells.extend((0..n + n_c).map(|i| (i, i)));
+        cells.extend((0..size).map(|i| (i, i)));
         cells.sort_unstable();
         cells.dedup();
-        let pattern = square_pattern(n + n_c, &cells);
+        let pattern = square_pattern(size, &cells);
         let scatter = entries
             .iter()
-            .map(|&(c, r, k, kind)| Scatter {
+            .map(|&(c, r, k, col, row)| Scatter {
                 src: k,
                 dst: cells.binary_search(&(c, r)).expect("cell listed"),
-                kind,
-                momentum: r < n,
+                col,
+                row,
             })
             .collect();
         let symbolic =
@@ -329,20 +384,25 @@ impl Iteration {
     ) -> Result<(), SimError> {
         let (gamma, beta) = o.newmark();
         let w = 1.0 + o.alpha;
-        // momentum rows: d/da of M a - (1 + alpha) (A z + F(z) - C_B v) with
-        // q' = v and dq/da = beta h^2, dv/da = gamma h; B's mass and damping
-        // blocks share the Jacobian's slots
-        let momentum_j = [-w * beta * h * h, -w * gamma * h, -w];
-        let momentum_b = [w * gamma * h, 1.0, 0.0];
-        let constraint = [1.0, gamma / (beta * h), 1.0 / (beta * h * h)];
+        // unknowns (a, mu, w_hat) with dq/da = beta h^2, dv/da = gamma h
+        // and w = w_pred + beta h^2 w_hat (auxiliaries move with the
+        // positions). Momentum rows: d/d(unknown) of
+        // M a - (1 + alpha) (A z + F(z) - C_B v); B's mass and damping blocks
+        // share the Jacobian's slots
+        let bh2 = beta * h * h;
+        let momentum_j = [-w * bh2, -w * gamma * h, -w, -w * bh2];
+        let momentum_b = [w * gamma * h, 1.0, 0.0, 0.0];
+        let algebraic = [1.0, gamma / (beta * h), 1.0 / bh2, 1.0];
+        let differential_j = [-0.5 * h, -0.5 * gamma / beta, -0.5 / (beta * h), -0.5 * h];
+        let differential_b = [0.0, 0.0, 0.0, 1.0];
         let b = p.b_values();
         let mut vals = vec![0.0; self.pattern.row_idx().len()];
         for s in &self.scatter {
-            let k = s.kind as usize;
-            vals[s.dst] += if s.momentum {
-                momentum_j[k] * jac[s.src] + momentum_b[k] * b[s.src]
-            } else {
-                constraint[k] * jac[s.src]
+            let k = s.col as usize;
+            vals[s.dst] += match s.row {
+                Row::Momentum => momentum_j[k] * jac[s.src] + momentum_b[k] * b[s.src],
+                Row::Algebraic => algebraic[k] * jac[s.src],
+                Row::Differential => differential_j[k] * jac[s.src] + differential_b[k] * b[s.src],
             };
         }
         let m = SparseColMat::new(self.pattern.clone(), vals);
@@ -461,6 +521,11 @@ pub fn integrate_with(
     let mut h_factored = f64::NAN;
     let mut good = 0;
     let mut f_new = vec![0.0; big_n];
+    // auxiliaries: predicted along their last rate, corrected with the
+    // positions (w = w_pred + beta h^2 w_hat)
+    let first_aux = 2 * n + l.n_c;
+    let mut w_rate = vec![0.0; big_n - first_aux];
+    let mut bw = vec![0.0; big_n];
     while t < t_end {
         if stats.steps >= MAX_STEPS {
             return Err(SimError::TooManySteps {
@@ -477,15 +542,32 @@ pub fn integrate_with(
             t + h
         };
         let hs = t1 - t;
-        // unknowns (a_{n+1}, mu_{n+1}) from the predictor (a_n, mu_n)
-        let mut u: Vec<f64> = a.iter().chain(&z[2 * n..]).copied().collect();
+        // unknowns (a_{n+1}, mu_{n+1}, w_hat) from the predictor (a_n, mu_n, 0)
+        let mut u: Vec<f64> = a
+            .iter()
+            .chain(&z[2 * n..first_aux])
+            .copied()
+            .chain(std::iter::repeat_n(0.0, big_n - first_aux))
+            .collect();
+        let w_pred: Vec<f64> = (first_aux..big_n)
+            .map(|i| z[i] + hs * w_rate[i - first_aux])
+            .collect();
+        let step = Newmark {
+            n,
+            n_c: l.n_c,
+            h: hs,
+            gamma,
+            beta,
+            w_pred: &w_pred,
+        };
         let mut z1 = z.clone();
         let mut converged = false;
         let mut fresh = false;
         let mut iterations = 0;
+        let mut last_size = f64::INFINITY;
         for k in 0..o.max_newton {
             iterations = k + 1;
-            newmark(&z, &a, &u, n, hs, gamma, beta, &mut z1);
+            step.state(&z, &a, &u, &mut z1);
             p.rhs(t1, &z1, &mut f_new);
             if let Some(i) = f_new.iter().position(|v| !v.is_finite()) {
                 return Err(SimError::NonFinite {
@@ -497,10 +579,24 @@ pub fn integrate_with(
             acc.iter_mut().for_each(|v| *v = 0.0);
             acc[n..2 * n].copy_from_slice(&u[..n]);
             p.b_mul(&acc, &mut bz);
-            // residual: momentum rows, then the scaled constraint rows
+            // B_w (w_{n+1} - w_n) of the differential auxiliaries
+            acc.iter_mut().for_each(|v| *v = 0.0);
+            for i in first_aux..big_n {
+                acc[i] = z1[i] - z[i];
+            }
+            p.b_mul(&acc, &mut bw);
+            // residual: momentum rows, then the scaled constraint and
+            // auxiliary rows
+            let bh2 = beta * hs * hs;
             let mut r: Vec<f64> = (0..n)
                 .map(|i| -(bz[i] - w * f_new[i] + o.alpha * f_old[i]))
-                .chain((2 * n..big_n).map(|i| -f_new[i] / (beta * hs * hs)))
+                .chain((2 * n..big_n).map(|i| {
+                    if i >= first_aux && l.differential[i - first_aux] {
+                        -(bw[i] - 0.5 * hs * (f_new[i] + f_old[i])) / bh2
+                    } else {
+                        -f_new[i] / bh2
+                    }
+                }))
                 .collect();
             if k == 0 && hs != h_factored {
                 p.jacobian(t1, &z1, &mut jac);
@@ -512,16 +608,39 @@ pub fn integrate_with(
             it.solve(&mut r);
             stats.newton += 1;
             let mut small = true;
+            let mut finite = true;
             for (ui, di) in u.iter_mut().zip(&r) {
                 if !di.is_finite() {
-                    small = false;
+                    finite = false;
                     break;
                 }
                 *ui += di;
                 small &= di.abs() <= o.tol * (1.0 + ui.abs());
             }
-            if small {
-                newmark(&z, &a, &u, n, hs, gamma, beta, &mut z1);
+            let size = r.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+            // at the round-off floor of the scaled system (the corrections
+            // stop shrinking, small steps with large multipliers), accept
+            // once they no longer move the step's states: `beta h^2 da`,
+            // `gamma h da` in q and q', `gamma h dmu`, `beta h^2 dw_hat`
+            let stalled = finite && k > 0 && size > 0.5 * last_size && {
+                let (bh2, gh) = (beta * hs * hs, gamma * hs);
+                (0..r.len()).all(|i| {
+                    let (impact, scale) = if i < n {
+                        (
+                            gh * r[i].abs(),
+                            (1.0 + z1[i].abs()).min(1.0 + z1[n + i].abs()),
+                        )
+                    } else if i < n + l.n_c {
+                        (gh * r[i].abs(), 1.0 + u[i].abs())
+                    } else {
+                        (bh2 * r[i].abs(), 1.0 + z1[i + n].abs())
+                    };
+                    impact <= o.tol * scale
+                })
+            };
+            last_size = size;
+            if finite && (small || stalled) {
+                step.state(&z, &a, &u, &mut z1);
                 converged = true;
                 break;
             }
@@ -570,6 +689,9 @@ pub fn integrate_with(
                 (hs * factor).min(o.step)
             };
         }
+        for (k, rate) in w_rate.iter_mut().enumerate() {
+            *rate = (z1[first_aux + k] - z[first_aux + k]) / hs;
+        }
         t = t1;
         p.rhs(t, &z1, &mut f_old);
         momentum_force(p, &z1, &mut f_old, &mut bz, &mut acc, n);
@@ -586,25 +708,33 @@ pub fn integrate_with(
     Ok(stats)
 }
 
-/// `z1 = (q, q', mu)` of the Newmark formulas from the step start `(z, a)`
-/// and the unknowns `u = (a_{n+1}, mu_{n+1})`.
-#[allow(clippy::too_many_arguments)]
-fn newmark(
-    z: &[f64],
-    a: &[f64],
-    u: &[f64],
+/// The Newmark formulas of one step.
+struct Newmark<'a> {
     n: usize,
+    n_c: usize,
     h: f64,
     gamma: f64,
     beta: f64,
-    z1: &mut [f64],
-) {
-    for i in 0..n {
-        let (q, v, a0, a1) = (z[i], z[n + i], a[i], u[i]);
-        z1[i] = q + h * v + 0.5 * h * h * ((1.0 - 2.0 * beta) * a0 + 2.0 * beta * a1);
-        z1[n + i] = v + h * ((1.0 - gamma) * a0 + gamma * a1);
+    /// Predicted auxiliaries.
+    w_pred: &'a [f64],
+}
+
+impl Newmark<'_> {
+    /// `z1 = (q, q', mu, w)` from the step start `(z, a)` and the unknowns
+    /// `u = (a_{n+1}, mu_{n+1}, w_hat)`.
+    fn state(&self, z: &[f64], a: &[f64], u: &[f64], z1: &mut [f64]) {
+        let (n, h, gamma, beta) = (self.n, self.h, self.gamma, self.beta);
+        for i in 0..n {
+            let (q, v, a0, a1) = (z[i], z[n + i], a[i], u[i]);
+            z1[i] = q + h * v + 0.5 * h * h * ((1.0 - 2.0 * beta) * a0 + 2.0 * beta * a1);
+            z1[n + i] = v + h * ((1.0 - gamma) * a0 + gamma * a1);
+        }
+        let first_aux = 2 * n + self.n_c;
+        z1[2 * n..first_aux].copy_from_slice(&u[n..n + self.n_c]);
+        for (k, wp) in self.w_pred.iter().enumerate() {
+            z1[first_aux + k] = wp + beta * h * h * u[n + self.n_c + k];
+        }
     }
-    z1[2 * n..].copy_from_slice(&u[n..]);
 }
 
 /// Turns `f = A z + F(z) + eps Fext` (already in `f`) into the force of
