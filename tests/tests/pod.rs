@@ -210,3 +210,51 @@ fn galerkin_projection_equals_projected_evaluation() {
         }
     }
 }
+
+/// Hostile bases for the projection: NaN entries, wrong row counts and
+/// mismatched names are typed errors naming the input; a map or a model
+/// without mechanical structure is refused.
+#[test]
+fn galerkin_projection_refuses_bad_bases() {
+    use ssm_api::MotionKind;
+    use ssm_engine::reduce::galerkin::{project_mechanical, GalerkinError, ReducedCoordinates};
+    let sys = ssm_tests::system("spatial-oscillator", "", "constraint = \"cubic\"");
+    let coords = |r: usize| ReducedCoordinates {
+        names: (0..r).map(|k| format!("c{k}")).collect(),
+        motion: vec![MotionKind::Translational; r],
+    };
+    let l = Mat::from_fn(1, 1, |_, _| 1.0);
+    let mut u = Mat::from_fn(3, 1, |i, _| if i == 0 { 1.0 } else { 0.0 });
+    u[(2, 0)] = f64::NAN;
+    let e = project_mechanical(&sys, u.as_ref(), l.as_ref(), &coords(1)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            GalerkinError::NotFinite {
+                what: "U",
+                row: 2,
+                col: 0
+            }
+        ),
+        "{e}"
+    );
+    let u = Mat::<f64>::zeros(2, 1);
+    let e = project_mechanical(&sys, u.as_ref(), l.as_ref(), &coords(1)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            GalerkinError::Shape {
+                what: "U",
+                found: 2,
+                expected: 3
+            }
+        ),
+        "{e}"
+    );
+    let u = Mat::from_fn(3, 1, |i, _| if i == 0 { 1.0 } else { 0.0 });
+    let e = project_mechanical(&sys, u.as_ref(), l.as_ref(), &coords(2)).unwrap_err();
+    assert!(e.to_string().contains("names"), "{e}");
+    let map = ssm_tests::cubic_map();
+    let e = project_mechanical(&map, u.as_ref(), l.as_ref(), &coords(1)).unwrap_err();
+    assert!(matches!(e, GalerkinError::Unsupported { .. }), "{e}");
+}

@@ -180,10 +180,13 @@ pub fn pod_reduce(
             coords.motion.push(k.motion);
         }
     }
-    let constraints = reduce_constraints(
-        stacked_constraint_jacobian(sys, run, &u, settings.jacobian_samples).as_ref(),
-        settings.rank_tol,
-    )?;
+    let stack = stacked_constraint_jacobian(sys, run, &u, settings.jacobian_samples);
+    let mut constraints = reduce_constraints(stack.as_ref(), settings.rank_tol)?;
+    let instantaneous = instantaneous_rank(&stack, r, settings.rank_tol)?;
+    if constraints.basis.ncols() > instantaneous {
+        let m = constraints.basis.nrows();
+        constraints.basis = Mat::from_fn(m, instantaneous, |i, j| constraints.basis[(i, j)]);
+    }
     let (model, lift) = project_mechanical(sys, u.as_ref(), constraints.basis.as_ref(), &coords)?;
     let peak = |off: usize| {
         run.iter()
@@ -210,6 +213,38 @@ pub fn pod_reduce(
 
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// The largest rank of the blocks `C_q(q_k) U` (`n_c x r` each) of the
+/// stacked Jacobian, by the relative tolerance `rank_tol`.
+///
+/// A nonlinear constraint's projected Jacobian turns along the motion, so
+/// the stack can have a larger rank than any one instant (e.g. eight rods
+/// whose piston motions span six POMs: rank 9 stacked, 7 at every
+/// instant). A constant set of `l` combinations `L^T C` with `l` above the
+/// instantaneous rank makes the reduced constraint Jacobian `L^T C_q U`
+/// rank deficient at every instant, so the HHT iteration matrix
+/// `[M, G^T; G, 0]` singular (the overdetermined case of Sect. 3.3); the
+/// reduction keeps the `l` dominant combinations, at most that rank (the
+/// paper's advice to look for a drop in the singular values of `D`).
+fn instantaneous_rank(stack: &Mat<f64>, r: usize, rank_tol: f64) -> Result<usize, PodError> {
+    let mut rank = 0;
+    if r == 0 {
+        return Ok(0);
+    }
+    for k in 0..stack.ncols() / r {
+        let block = stack.as_ref().subcols(k * r, r);
+        let s = block.singular_values().map_err(|_| PodError::Svd {
+            what: "instantaneous rank of C_q U".into(),
+        })?;
+        let largest = s.first().copied().unwrap_or(0.0);
+        rank = rank.max(
+            s.iter()
+                .take_while(|&&v| v > 0.0 && v > rank_tol * largest)
+                .count(),
+        );
+    }
+    Ok(rank)
 }
 
 /// The constraint Jacobian `C_q(q)` (`n_c x n`) of the mechanical `sys` at
