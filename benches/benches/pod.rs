@@ -13,30 +13,13 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use ssm_engine::fom::hht::{integrate, HhtOptions, HhtSolution};
-use ssm_engine::fom::DaeProblem;
+use ssm_engine::fom::hht::HhtSolution;
 use ssm_engine::model::system::System;
-use ssm_engine::reduce::pod_model::{pod_reduce, PodReduction, PodSettings};
-use ssm_tests::system;
+use ssm_engine::reduce::pod_model::{pod_reduce, PodSettings};
+use ssm_tests::{hht_from_rest, pod_coordinate_error, system};
 
 fn hht(sys: &System, eps: f64, omega: f64, t_end: f64) -> HhtSolution {
-    let p = DaeProblem::new(sys, eps, omega);
-    let z0 = vec![0.0; sys.states.len()];
-    integrate(&p, &z0, 0.0, t_end, &HhtOptions::new(-0.1, 1e-3)).expect("HHT run")
-}
-
-fn error(full: &HhtSolution, reduced: &HhtSolution, red: &PodReduction) -> f64 {
-    let (n, r) = (red.u.nrows(), red.u.ncols());
-    let (mut err, mut peak) = (0.0f64, 0.0f64);
-    for (&t, z) in full.times.iter().zip(&full.states) {
-        let y = reduced.at(t, r);
-        for (i, zi) in z[..n].iter().enumerate() {
-            let lifted: f64 = (0..r).map(|j| red.u[(i, j)] * y[j]).sum();
-            err = err.max((lifted - zi).abs());
-            peak = peak.max(zi.abs());
-        }
-    }
-    err / peak
+    hht_from_rest(sys, eps, omega, t_end, 1e-3)
 }
 
 fn pod(c: &mut Criterion) {
@@ -57,7 +40,7 @@ fn pod(c: &mut Criterion) {
             rsys.states.len(),
             full.nonlinearity.terms.len(),
             rsys.nonlinearity.terms.len(),
-            error(&a, &b, &red)
+            pod_coordinate_error(&a, &b, red.u.as_ref())
         );
         g.bench_function(BenchmarkId::new("full", &label), |bch| {
             bch.iter(|| black_box(hht(&full, 1.5, 30.0, 1.5)))

@@ -546,3 +546,40 @@ pub fn diagnostic(summary: &serde_json::Value, name: &str) -> Vec<f64> {
         v => vec![v.as_f64().unwrap_or_else(|| panic!("{name}: {v}"))],
     }
 }
+
+/// An HHT run (`alpha = -0.1`, fixed steps `h`) of `sys` from rest at the
+/// origin over `[0, t_end]`, forced with `eps`, `Omega`: the crank drive's
+/// training and check runs.
+pub fn hht_from_rest(
+    sys: &System,
+    eps: f64,
+    omega: f64,
+    t_end: f64,
+    h: f64,
+) -> ssm_engine::fom::hht::HhtSolution {
+    use ssm_engine::fom::hht::{integrate, HhtOptions};
+    let p = ssm_engine::fom::DaeProblem::new(sys, eps, omega);
+    let z0 = vec![0.0; sys.states.len()];
+    integrate(&p, &z0, 0.0, t_end, &HhtOptions::new(-0.1, h)).expect("HHT run")
+}
+
+/// Largest deviation over a run of the lifted positions `U q_r` of a POD
+/// reduced run from the full ones, relative to the largest full position
+/// (the reduced run interpolated at the full run's step ends).
+pub fn pod_coordinate_error(
+    full: &ssm_engine::fom::hht::HhtSolution,
+    reduced: &ssm_engine::fom::hht::HhtSolution,
+    u: faer::MatRef<'_, f64>,
+) -> f64 {
+    let (n, r) = (u.nrows(), u.ncols());
+    let (mut err, mut peak) = (0.0f64, 0.0f64);
+    for (&t, z) in full.times.iter().zip(&full.states) {
+        let y = reduced.at(t, r);
+        for (i, zi) in z[..n].iter().enumerate() {
+            let lifted: f64 = (0..r).map(|j| u[(i, j)] * y[j]).sum();
+            err = err.max((lifted - zi).abs());
+            peak = peak.max(zi.abs());
+        }
+    }
+    err / peak
+}

@@ -19,19 +19,16 @@ use std::collections::BTreeSet;
 
 use faer::Mat;
 use ssm_api::MotionKind;
-use ssm_engine::fom::hht::{integrate, HhtOptions, HhtSolution};
-use ssm_engine::fom::DaeProblem;
+use ssm_engine::fom::hht::HhtSolution;
 use ssm_engine::model::system::System;
 use ssm_engine::reduce::pod::Truncation;
 use ssm_engine::reduce::pod_model::{constraint_jacobian, pod_reduce, PodReduction, PodSettings};
-use ssm_tests::system;
+use ssm_tests::{hht_from_rest, pod_coordinate_error, system};
 
 const STEP: f64 = 1e-3;
 
 fn hht(sys: &System, eps: f64, omega: f64, t_end: f64) -> HhtSolution {
-    let p = DaeProblem::new(sys, eps, omega);
-    let z0 = vec![0.0; sys.states.len()];
-    integrate(&p, &z0, 0.0, t_end, &HhtOptions::new(-0.1, STEP)).expect("HHT run")
+    hht_from_rest(sys, eps, omega, t_end, STEP)
 }
 
 /// Piston directions POD must find, `min(#phi, 2 + #(2 phi mod 360))`
@@ -66,23 +63,6 @@ fn piston_directions(cylinders: usize, v_angle: f64) -> usize {
             .len()
     };
     distinct(1.0).min(2 + distinct(2.0))
-}
-
-/// Largest deviation over the run of the lifted reduced positions from the
-/// full ones, relative to the largest full position (the reduced run
-/// interpolated at the full run's step ends).
-fn coordinate_error(full: &HhtSolution, reduced: &HhtSolution, red: &PodReduction) -> f64 {
-    let (n, r) = (red.u.nrows(), red.u.ncols());
-    let (mut err, mut peak) = (0.0f64, 0.0f64);
-    for (&t, z) in full.times.iter().zip(&full.states) {
-        let y = reduced.at(t, r);
-        for (i, zi) in z[..n].iter().enumerate() {
-            let lifted: f64 = (0..r).map(|j| red.u[(i, j)] * y[j]).sum();
-            err = err.max((lifted - zi).abs());
-            peak = peak.max(zi.abs());
-        }
-    }
-    err / peak
 }
 
 fn reduce(model: &str, t_end: f64) -> (System, HhtSolution, PodReduction, System) {
@@ -147,10 +127,10 @@ fn crank_drive_pod_finds_the_planes_and_reduces_the_constraints() {
         assert_eq!(red.u.ncols() - l, 1, "{label}: one degree of freedom");
         assert_eq!(red.initial_residual, [0.0, 0.0]);
         let same = hht(&rsys, 1.0, 0.0, 1.0);
-        let e_train = coordinate_error(&train, &same, &red);
+        let e_train = pod_coordinate_error(&train, &same, red.u.as_ref());
         let other_full = hht(&full, 1.5, 30.0, 1.5);
         let other_red = hht(&rsys, 1.5, 30.0, 1.5);
-        let e_test = coordinate_error(&other_full, &other_red, &red);
+        let e_test = pod_coordinate_error(&other_full, &other_red, red.u.as_ref());
         for (e, a, b) in [(e_train, &train, &same), (e_test, &other_full, &other_red)] {
             assert!(e < 1e-4, "{label}: {e:e}");
             if a.stats.rejected == 0 && b.stats.rejected == 0 {

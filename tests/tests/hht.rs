@@ -19,6 +19,24 @@ fn undamped(w: f64) -> System {
     System::from_model("catalogue", m.into_model().expect("valid model")).expect("valid system")
 }
 
+/// The reference end state of Radau IIA at `(rtol, atol)` from the
+/// consistent start nearest `guess` over `[0, t_end]`.
+fn radau_reference(p: &DaeProblem, guess: &[f64], t_end: f64, rtol: f64, atol: f64) -> Vec<f64> {
+    let z0 = ssm_engine::fom::consistent_initial(p, 0.0, guess)
+        .unwrap()
+        .z;
+    let opts = RadauOptions {
+        rtol,
+        atol,
+        ..RadauOptions::default()
+    };
+    let mut radau = Radau::new(p, 0.0, &z0, t_end, opts).unwrap();
+    while radau.t() < t_end {
+        radau.step(t_end).unwrap();
+    }
+    radau.z().to_vec()
+}
+
 /// Reference: the closed-form motion of two masses tied by `x1 = x2`
 /// (`3 x'' + 0.3 x' + 8 x = 0`, the catalogue's `linear_constrained_oscillator`)
 /// and its multiplier. Halving the step four times, the errors at `t = 4` of
@@ -164,19 +182,7 @@ fn converges_to_radau_on_a_nonlinear_constrained_model() {
     let p = DaeProblem::new(&sys, 0.0, 0.0);
     let (guess, _) = sys.given_state(&[("x1".into(), 0.3), ("x2".into(), 0.2)]);
     let t_end = 3.0;
-    let opts = RadauOptions {
-        rtol: 1e-11,
-        atol: 1e-13,
-        ..RadauOptions::default()
-    };
-    let z0 = ssm_engine::fom::consistent_initial(&p, 0.0, &guess)
-        .unwrap()
-        .z;
-    let mut radau = Radau::new(&p, 0.0, &z0, t_end, opts).unwrap();
-    while radau.t() < t_end {
-        radau.step(t_end).unwrap();
-    }
-    let reference = radau.z().to_vec();
+    let reference = radau_reference(&p, &guess, t_end, 1e-11, 1e-13);
     let mut errors = Vec::new();
     for h in [0.02, 0.01, 0.005, 0.0025] {
         let s = integrate(&p, &guess, 0.0, t_end, &HhtOptions::new(-0.1, h)).unwrap();
@@ -304,19 +310,7 @@ fn converges_to_radau_on_recast_models() {
         let p = DaeProblem::new(&sys, 0.0, 0.0);
         let (guess, _) = sys.given_state(&[(start.0.into(), start.1)]);
         let t_end = 3.0;
-        let opts = RadauOptions {
-            rtol: 1e-11,
-            atol: 1e-13,
-            ..RadauOptions::default()
-        };
-        let z0 = ssm_engine::fom::consistent_initial(&p, 0.0, &guess)
-            .unwrap()
-            .z;
-        let mut radau = Radau::new(&p, 0.0, &z0, t_end, opts).unwrap();
-        while radau.t() < t_end {
-            radau.step(t_end).unwrap();
-        }
-        let reference = radau.z().to_vec();
+        let reference = radau_reference(&p, &guess, t_end, 1e-11, 1e-13);
         let n_dof = sys.mechanical.as_ref().unwrap().n_dof;
         let mut errors = Vec::new();
         let mut drift = 0.0f64;
@@ -376,19 +370,7 @@ fn integrates_the_pendulum_chain_at_second_order() {
     let p = DaeProblem::new(&sys, 0.6, 2.0);
     let (guess, _) = sys.given_state(&[("x1".into(), 0.05)]);
     let t_end = 10.0;
-    let z0 = ssm_engine::fom::consistent_initial(&p, 0.0, &guess)
-        .unwrap()
-        .z;
-    let opts = RadauOptions {
-        rtol: 1e-10,
-        atol: 1e-12,
-        ..RadauOptions::default()
-    };
-    let mut radau = Radau::new(&p, 0.0, &z0, t_end, opts).unwrap();
-    while radau.t() < t_end {
-        radau.step(t_end).unwrap();
-    }
-    let reference = radau.z()[..n_dof].to_vec();
+    let reference = radau_reference(&p, &guess, t_end, 1e-10, 1e-12)[..n_dof].to_vec();
     let peak = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let errors: Vec<f64> = [0.01, 0.005, 0.0025]
         .iter()

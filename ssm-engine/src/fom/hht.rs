@@ -579,12 +579,15 @@ pub fn integrate_with(
             acc.iter_mut().for_each(|v| *v = 0.0);
             acc[n..2 * n].copy_from_slice(&u[..n]);
             p.b_mul(&acc, &mut bz);
-            // B_w (w_{n+1} - w_n) of the differential auxiliaries
-            acc.iter_mut().for_each(|v| *v = 0.0);
-            for i in first_aux..big_n {
-                acc[i] = z1[i] - z[i];
+            // B_w (w_{n+1} - w_n) of the differential auxiliaries (none
+            // without a recast: no product)
+            if first_aux < big_n {
+                acc.iter_mut().for_each(|v| *v = 0.0);
+                for i in first_aux..big_n {
+                    acc[i] = z1[i] - z[i];
+                }
+                p.b_mul(&acc, &mut bw);
             }
-            p.b_mul(&acc, &mut bw);
             // residual: momentum rows, then the scaled constraint and
             // auxiliary rows
             let bh2 = beta * hs * hs;
