@@ -64,6 +64,16 @@ pub fn system(crate_name: &str, model: &str, params: &str) -> System {
     System::from_model(plugin.name(), m).expect("model is valid")
 }
 
+/// Plugin `crate_name`'s `model` with parameters `params` as the plugin
+/// gives it (expressions, equilibrium) and validated: reducers that
+/// project the model itself need both.
+pub fn model_and_system(crate_name: &str, model: &str, params: &str) -> (ssm_api::Model, System) {
+    let plugin = Plugin::load(&plugin_path(crate_name)).expect("plugin loads");
+    let m = plugin.build_model(model, params).expect("model builds");
+    let sys = System::from_model(plugin.name(), m.clone()).expect("model is valid");
+    (m, sys)
+}
+
 /// A registry with the repository's model plugins.
 pub fn registry() -> ssm_engine::model::plugin::Registry {
     ssm_engine::model::plugin::Registry::discover(&[

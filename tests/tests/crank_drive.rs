@@ -23,7 +23,7 @@ use ssm_engine::fom::hht::HhtSolution;
 use ssm_engine::model::system::System;
 use ssm_engine::reduce::pod::Truncation;
 use ssm_engine::reduce::pod_model::{constraint_jacobian, pod_reduce, PodReduction, PodSettings};
-use ssm_tests::{hht_from_rest, pod_coordinate_error, system};
+use ssm_tests::{hht_from_rest, model_and_system, pod_coordinate_error};
 
 const STEP: f64 = 1e-3;
 
@@ -66,9 +66,10 @@ fn piston_directions(cylinders: usize, v_angle: f64) -> usize {
 }
 
 fn reduce(model: &str, t_end: f64) -> (System, HhtSolution, PodReduction, System) {
-    let full = system("crank-drive", "crank-drive", model);
+    let (raw, full) = model_and_system("crank-drive", "crank-drive", model);
     let train = hht(&full, 1.0, 0.0, t_end);
-    let red = pod_reduce(&full, &train.states, &PodSettings::default()).expect("POD reduction");
+    let red =
+        pod_reduce(&raw, &full, &train.states, &PodSettings::default()).expect("POD reduction");
     let rsys = System::from_model("pod", red.model.clone()).expect("reduced model is valid");
     (full, train, red, rsys)
 }
@@ -175,14 +176,14 @@ fn crank_drive_reduced_reactions_miss_the_side_thrust() {
 /// with auxiliary states are refused with typed errors.
 #[test]
 fn pod_reducer_refuses_bad_input() {
-    let full = system("crank-drive", "crank-drive", "cylinders = 2");
+    let (raw, full) = model_and_system("crank-drive", "crank-drive", "cylinders = 2");
     let rest = vec![vec![0.0; full.states.len()]; 10];
-    let e = pod_reduce(&full, &rest, &PodSettings::default()).unwrap_err();
+    let e = pod_reduce(&raw, &full, &rest, &PodSettings::default()).unwrap_err();
     assert!(e.to_string().contains("nothing moves"), "{e}");
-    let e = pod_reduce(&full, &rest[..1], &PodSettings::default()).unwrap_err();
+    let e = pod_reduce(&raw, &full, &rest[..1], &PodSettings::default()).unwrap_err();
     assert!(e.to_string().contains("at least two"), "{e}");
     let short = vec![vec![0.0; 3]; 4];
-    let e = pod_reduce(&full, &short, &PodSettings::default()).unwrap_err();
+    let e = pod_reduce(&raw, &full, &short, &PodSettings::default()).unwrap_err();
     assert!(e.to_string().contains("states"), "{e}");
     let train = hht(&full, 1.0, 0.0, 0.2);
     for settings in [
@@ -199,15 +200,17 @@ fn pod_reducer_refuses_bad_input() {
             ..PodSettings::default()
         },
     ] {
-        assert!(pod_reduce(&full, &train.states, &settings).is_err());
+        assert!(pod_reduce(&raw, &full, &train.states, &settings).is_err());
     }
     let mut nan = train.states.clone();
     nan[3][full.states.len() / 2] = f64::NAN;
-    assert!(pod_reduce(&full, &nan, &PodSettings::default()).is_err());
-    let chain = system("pendulum", "chain", "n = 3");
+    assert!(pod_reduce(&raw, &full, &nan, &PodSettings::default()).is_err());
+    let (chain_raw, chain) = model_and_system("pendulum", "chain", "n = 3");
     let z = vec![vec![0.0; chain.states.len()]; 3];
-    let e = pod_reduce(&chain, &z, &PodSettings::default()).unwrap_err();
-    assert!(e.to_string().contains("auxiliary"), "{e}");
+    let e = pod_reduce(&chain_raw, &chain, &z, &PodSettings::default()).unwrap_err();
+    assert!(e.to_string().contains("nothing moves"), "{e}");
+    let e = pod_reduce(&raw, &chain, &z, &PodSettings::default()).unwrap_err();
+    assert!(e.to_string().contains("is not the model"), "{e}");
 }
 
 /// Extreme but valid geometries build and integrate (a rod barely longer

@@ -159,7 +159,8 @@ fn bad_snapshots_and_settings_are_refused() {
 fn galerkin_projection_equals_projected_evaluation() {
     use ssm_api::MotionKind;
     use ssm_engine::reduce::galerkin::{project_mechanical, ReducedCoordinates};
-    let sys = ssm_tests::system("spatial-oscillator", "", "constraint = \"cubic\"");
+    let (raw, sys) =
+        ssm_tests::model_and_system("spatial-oscillator", "", "constraint = \"cubic\"");
     // orthonormal columns (1, 2, 2)/3 and (2, 1, -2)/3
     let u = Mat::from_fn(3, 2, |i, j| {
         [[1.0, 2.0], [2.0, 1.0], [2.0, -2.0]][i][j] / 3.0
@@ -169,7 +170,7 @@ fn galerkin_projection_equals_projected_evaluation() {
         names: vec!["a".into(), "b".into()],
         motion: vec![MotionKind::Translational; 2],
     };
-    let (model, lift) = project_mechanical(&sys, u.as_ref(), l.as_ref(), &coords).unwrap();
+    let (model, lift) = project_mechanical(&raw, u.as_ref(), l.as_ref(), &coords).unwrap();
     let red = System::from_model("pod", model).unwrap();
     assert_eq!(red.states.len(), 5);
     let mut v = Mat::<f64>::zeros(7, 5);
@@ -218,7 +219,7 @@ fn galerkin_projection_equals_projected_evaluation() {
 fn galerkin_projection_refuses_bad_bases() {
     use ssm_api::MotionKind;
     use ssm_engine::reduce::galerkin::{project_mechanical, GalerkinError, ReducedCoordinates};
-    let sys = ssm_tests::system("spatial-oscillator", "", "constraint = \"cubic\"");
+    let (sys, _) = ssm_tests::model_and_system("spatial-oscillator", "", "constraint = \"cubic\"");
     let coords = |r: usize| ReducedCoordinates {
         names: (0..r).map(|k| format!("c{k}")).collect(),
         motion: vec![MotionKind::Translational; r],
@@ -254,7 +255,65 @@ fn galerkin_projection_refuses_bad_bases() {
     let u = Mat::from_fn(3, 1, |i, _| if i == 0 { 1.0 } else { 0.0 });
     let e = project_mechanical(&sys, u.as_ref(), l.as_ref(), &coords(2)).unwrap_err();
     assert!(e.to_string().contains("names"), "{e}");
-    let map = ssm_tests::cubic_map();
+    let map = ssm_tests::cubic_map_model();
     let e = project_mechanical(&map, u.as_ref(), l.as_ref(), &coords(1)).unwrap_err();
     assert!(matches!(e, GalerkinError::Unsupported { .. }), "{e}");
+}
+
+/// The projection of a model with non-polynomial terms and an equilibrium
+/// (the chain of pendulums, n = 4: `sin phi`, `cos phi mu` terms, gravity
+/// balanced by the multipliers `mu_eq`), against evaluation through the
+/// full model's original (unrecast) right-hand side: for an oblique `U`
+/// (`11 x 3`) and `L` (`7 x 2`), the reduced model's original right-hand
+/// side at 20 pseudo-random `y` equals `V^T` of the full one at
+/// `z_eq + V y`, to 1e-12 of its size; at `y = 0` both vanish (the reduced
+/// model is written about the equilibrium).
+#[test]
+fn galerkin_projection_keeps_expressions_and_the_equilibrium() {
+    use ssm_api::MotionKind;
+    use ssm_engine::reduce::galerkin::{project_mechanical, ReducedCoordinates};
+    let (raw, full) = ssm_tests::model_and_system("pendulum", "chain", "n = 4");
+    let (n, nc) = (11, 7);
+    assert_eq!(raw.states.len(), 2 * n + nc);
+    assert!(!raw.equilibrium.is_empty() && !raw.expressions.is_empty());
+    let mut seed = 11u64;
+    let mut next = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let u = Mat::from_fn(n, 3, |_, _| next());
+    let l = Mat::from_fn(nc, 2, |_, _| next());
+    let coords = ReducedCoordinates {
+        names: vec!["a".into(), "b".into(), "c".into()],
+        motion: vec![MotionKind::Translational; 3],
+    };
+    let (model, lift) = project_mechanical(&raw, u.as_ref(), l.as_ref(), &coords).unwrap();
+    assert_eq!(lift.offset.as_slice(), raw.equilibrium.as_slice());
+    let red = System::from_model("pod", model).expect("the reduced model recasts");
+    let (rf, rr) = (full.recast.as_ref().unwrap(), red.recast.as_ref().unwrap());
+    let nr = rr.n_original;
+    assert_eq!(nr, 8);
+    let mut v = Mat::<f64>::zeros(2 * n + nc, nr);
+    for (i, j, w) in lift.basis.iter() {
+        v[(i, j)] = w;
+    }
+    for k in 0..21 {
+        let y: Vec<f64> = (0..nr)
+            .map(|_| if k == 0 { 0.0 } else { 0.4 * next() })
+            .collect();
+        let z: Vec<f64> = (0..2 * n + nc)
+            .map(|i| (0..nr).map(|j| v[(i, j)] * y[j]).sum())
+            .collect();
+        let fz = rf.original_rhs(&z);
+        let fy = rr.original_rhs(&y);
+        let projected: Vec<f64> = (0..nr)
+            .map(|j| (0..2 * n + nc).map(|i| v[(i, j)] * fz[i]).sum())
+            .collect();
+        let size = projected.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+        for (p, r) in projected.iter().zip(&fy) {
+            assert!((p - r).abs() < 1e-12 * size, "{projected:?} vs {fy:?}");
+        }
+    }
 }

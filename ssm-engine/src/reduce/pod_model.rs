@@ -1,4 +1,4 @@
-//! The `pod` reducer on a polynomial mechanical model: POD of the velocity
+//! The `pod` reducer on a mechanical model: POD of the velocity
 //! snapshots of a training run per coordinate kind, the global projection
 //! `U`, the generalized constraint reduction of the projected constraint
 //! Jacobian over the run, and the reduced model of eq. (14)
@@ -60,6 +60,18 @@ pub enum PodReduceError {
     /// The training run is unusable.
     #[error("training run: {0}")]
     Training(String),
+    /// The kept constraint combinations fix every reduced coordinate.
+    #[error(
+        "the {kept} reduced constraints fix all {r} reduced coordinates (no degree of freedom left): the nonlinear constraints, projected on the POD subspace, are all independent; the singular values of the stacked projected Jacobian are {values} (relative to the largest): raise rank_tol above the ones to drop (the paper's drop in the singular values), or keep more POMs"
+    )]
+    NoFreedom {
+        /// Reduced coordinates.
+        r: usize,
+        /// Constraint combinations kept.
+        kept: usize,
+        /// Leading singular values, relative to the largest, written out.
+        values: String,
+    },
 }
 
 /// The POD of one coordinate kind.
@@ -104,16 +116,29 @@ fn kind_label(m: MotionKind) -> &'static str {
     }
 }
 
-/// The `pod` reduction of the mechanical `sys` from the states `run` of a
-/// training simulation (`z = (q, q', mu)` at each snapshot, ideally
-/// uniformly spaced in time).
+/// The `pod` reduction of the mechanical plugin model `full` (validated
+/// into `sys`, possibly recast) from the states `run` of a training
+/// simulation of `sys` (`z = (q, q', mu)`, then any auxiliaries, at each
+/// snapshot, ideally uniformly spaced in time).
 pub fn pod_reduce(
+    full: &Model,
     sys: &System,
     run: &[Vec<f64>],
     settings: &PodSettings,
 ) -> Result<PodReduction, PodReduceError> {
-    let mech = super::galerkin::supported(sys)?;
-    let n = mech.n_dof;
+    let (n, nc) = super::galerkin::supported(full)?;
+    let original = sys
+        .recast
+        .as_ref()
+        .map_or(sys.states.len(), |r| r.n_original);
+    if original != 2 * n + nc || sys.mechanical.as_ref().map(|m| m.n_dof) != Some(n) {
+        return Err(PodReduceError::Training(format!(
+            "the validated system ({} states) is not the model '{}' ({} states)",
+            sys.states.len(),
+            full.name,
+            full.states.len()
+        )));
+    }
     if run.len() < 2 {
         return Err(PodReduceError::Training(format!(
             "{} snapshots; POD needs at least two",
@@ -183,11 +208,34 @@ pub fn pod_reduce(
     let stack = stacked_constraint_jacobian(sys, run, &u, settings.jacobian_samples);
     let mut constraints = reduce_constraints(stack.as_ref(), settings.rank_tol)?;
     let instantaneous = instantaneous_rank(&stack, r, settings.rank_tol)?;
-    if constraints.basis.ncols() > instantaneous {
+    let origin = vec![0.0; sys.states.len()];
+    let at_origin = constraint_jacobian(sys, &origin) * &u;
+    let regular = regular_count(
+        &stack,
+        at_origin.as_ref(),
+        constraints.basis.as_ref(),
+        instantaneous,
+        settings.rank_tol,
+    )?;
+    if constraints.basis.ncols() > regular {
         let m = constraints.basis.nrows();
-        constraints.basis = Mat::from_fn(m, instantaneous, |i, j| constraints.basis[(i, j)]);
+        constraints.basis = Mat::from_fn(m, regular, |i, j| constraints.basis[(i, j)]);
     }
-    let (model, lift) = project_mechanical(sys, u.as_ref(), constraints.basis.as_ref(), &coords)?;
+    if constraints.basis.ncols() >= r {
+        let largest = constraints.singular_values.first().copied().unwrap_or(1.0);
+        return Err(PodReduceError::NoFreedom {
+            r,
+            kept: constraints.basis.ncols(),
+            values: constraints
+                .singular_values
+                .iter()
+                .take(r + 2)
+                .map(|v| format!("{:.2e}", v / largest))
+                .collect::<Vec<_>>()
+                .join(", "),
+        });
+    }
+    let (model, lift) = project_mechanical(full, u.as_ref(), constraints.basis.as_ref(), &coords)?;
     let peak = |off: usize| {
         run.iter()
             .map(|z| norm(&z[off..off + n]))
@@ -247,8 +295,57 @@ fn instantaneous_rank(stack: &Mat<f64>, r: usize, rank_tol: f64) -> Result<usize
     Ok(rank)
 }
 
+/// How many of the leading combinations `L^i` (at most `cap`) keep
+/// `(L^i)^T C_q U` of full row rank at every stacked instant and at the
+/// model's origin (its reference configuration, where a run from rest
+/// starts): a combination that loses rank anywhere makes the reduced HHT
+/// iteration matrix singular there. The count falls until it holds.
+fn regular_count(
+    stack: &Mat<f64>,
+    at_origin: faer::MatRef<'_, f64>,
+    basis: faer::MatRef<'_, f64>,
+    cap: usize,
+    rank_tol: f64,
+) -> Result<usize, PodError> {
+    let r = at_origin.ncols();
+    let mut l = cap.min(basis.ncols());
+    if r == 0 {
+        return Ok(0);
+    }
+    let blocks = stack.ncols() / r;
+    loop {
+        if l == 0 {
+            return Ok(0);
+        }
+        let lt = basis.subcols(0, l).transpose();
+        let mut worst = l;
+        for k in 0..=blocks {
+            let block = if k < blocks {
+                stack.as_ref().subcols(k * r, r)
+            } else {
+                at_origin
+            };
+            let s = (lt * block).singular_values().map_err(|_| PodError::Svd {
+                what: "rank of the reduced constraint Jacobian".into(),
+            })?;
+            let largest = s.first().copied().unwrap_or(0.0);
+            let rank = s
+                .iter()
+                .take_while(|&&v| v > 0.0 && v > rank_tol * largest)
+                .count();
+            worst = worst.min(rank);
+        }
+        if worst == l {
+            return Ok(l);
+        }
+        l = worst;
+    }
+}
+
 /// The constraint Jacobian `C_q(q)` (`n_c x n`) of the mechanical `sys` at
-/// the state `z = (q, q', mu)`, from the analytic Jacobian of the model.
+/// the state `z = (q, q', mu)` (followed by a recast's auxiliaries, which
+/// must then satisfy their definitions), from the analytic Jacobian of the
+/// model: the total derivative, through the auxiliaries too.
 pub fn constraint_jacobian(sys: &System, z: &[f64]) -> Mat<f64> {
     let p = DaeProblem::new(sys, 0.0, 0.0);
     let mut vals = vec![0.0; p.pattern().row_idx().len()];
@@ -275,7 +372,23 @@ fn constraint_jacobian_into(
         let range = pattern.col_range(col);
         for (&row, &v) in pattern.row_idx()[range.clone()].iter().zip(&vals[range]) {
             if (2 * n..2 * n + nc).contains(&row) {
-                cq[(row - 2 * n, col)] = v;
+                cq[(row - 2 * n, col)] += v;
+            }
+        }
+    }
+    // a recast's constraint rows depend on q also through its auxiliaries
+    // (`u = sin phi`): `dC/dq = C_q + C_u du/dq` by the chain rule
+    if let Some(recast) = &sys.recast {
+        let first_aux = recast.n_original;
+        let du_dz = recast.aux_jacobian(z);
+        for (k, du) in du_dz.iter().enumerate() {
+            let range = pattern.col_range(first_aux + k);
+            for (&row, &v) in pattern.row_idx()[range.clone()].iter().zip(&vals[range]) {
+                if (2 * n..2 * n + nc).contains(&row) {
+                    for &(j, d) in du.iter().filter(|(j, _)| *j < n) {
+                        cq[(row - 2 * n, j)] += v * d;
+                    }
+                }
             }
         }
     }

@@ -38,6 +38,7 @@
 //! efficient Taylor series-based continuation method using a quadratic recast of
 //! smooth nonlinear systems*, Int. J. Numer. Methods Eng. 119 (2019) 261-280.
 
+mod derivative;
 mod expr;
 mod spoly;
 
