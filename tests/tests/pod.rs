@@ -214,7 +214,8 @@ fn galerkin_projection_equals_projected_evaluation() {
 
 /// Hostile bases for the projection: NaN entries, wrong row counts and
 /// mismatched names are typed errors naming the input; a map or a model
-/// without mechanical structure is refused.
+/// without mechanical structure is refused, and so is a model with a
+/// polynomial term in a state it does not have.
 #[test]
 fn galerkin_projection_refuses_bad_bases() {
     use ssm_api::MotionKind;
@@ -255,6 +256,10 @@ fn galerkin_projection_refuses_bad_bases() {
     let u = Mat::from_fn(3, 1, |i, _| if i == 0 { 1.0 } else { 0.0 });
     let e = project_mechanical(&sys, u.as_ref(), l.as_ref(), &coords(2)).unwrap_err();
     assert!(e.to_string().contains("names"), "{e}");
+    let mut corrupt = sys.clone();
+    corrupt.nonlinearity.push(0, 1.0, &[(99, 2)]);
+    let e = project_mechanical(&corrupt, u.as_ref(), l.as_ref(), &coords(1)).unwrap_err();
+    assert!(matches!(e, GalerkinError::Invalid { .. }), "{e}");
     let map = ssm_tests::cubic_map_model();
     let e = project_mechanical(&map, u.as_ref(), l.as_ref(), &coords(1)).unwrap_err();
     assert!(matches!(e, GalerkinError::Unsupported { .. }), "{e}");

@@ -40,6 +40,8 @@ use ssm_api::{
     Output, PolyVector, SparseMatrix, StateInfo, StateKind, TimeKind, Weight,
 };
 
+use crate::model::system::System;
+
 /// Why a model cannot be projected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GalerkinError {
@@ -49,6 +51,14 @@ pub enum GalerkinError {
         /// Model name.
         model: String,
         /// What is missing or extra.
+        problem: String,
+    },
+    /// The model itself is invalid (an index out of range, a NaN, ...).
+    #[error("model '{model}' is invalid: {problem}")]
+    Invalid {
+        /// Model name.
+        model: String,
+        /// What the validation found.
         problem: String,
     },
     /// A basis has the wrong number of rows, or a name list the wrong length.
@@ -104,6 +114,12 @@ pub fn project_mechanical(
     coords: &ReducedCoordinates,
 ) -> Result<(Model, Lift), GalerkinError> {
     let (n, nc) = supported(full)?;
+    // every index of the model in range, every value finite: the
+    // substitution below indexes by them
+    System::from_model("projection", full.clone()).map_err(|e| GalerkinError::Invalid {
+        model: full.name.to_string(),
+        problem: e.to_string(),
+    })?;
     let (r, nl) = (u.ncols(), l.ncols());
     for (what, m, rows) in [("U", u, n), ("L", l, nc)] {
         if m.nrows() != rows {
