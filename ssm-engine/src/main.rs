@@ -213,15 +213,25 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     for w in &result.warnings {
         eprintln!("warning: {w}");
     }
-    println!(
-        "{}: {} states, {} finite eigenvalues ({}), master pairs {:?}; wrote {}",
-        scene.name(),
-        result.system.n_states(),
-        result.spectrum.eigenvalues.len(),
-        result.spectrum.method.as_str(),
-        scene.scene.ssm.master_pairs.get_ref(),
-        out.display()
-    );
+    match &result.spectrum {
+        Some(spectrum) => println!(
+            "{}: {} states, {} finite eigenvalues ({}), master pairs {:?}; wrote {}",
+            scene.name(),
+            result.system.n_states(),
+            spectrum.eigenvalues.len(),
+            spectrum.method.as_str(),
+            scene.scene.ssm.master_pairs.get_ref(),
+            out.display()
+        ),
+        None => println!(
+            "{}: {} states, POD study of {} reduced model(s) on {} load(s); wrote {}",
+            scene.name(),
+            result.system.n_states(),
+            result.pod.as_ref().map_or(0, |p| p.pod.len() + p.ssm.len()),
+            result.pod.as_ref().map_or(0, |p| p.cases.len()),
+            out.display()
+        ),
+    }
     Ok(())
 }
 

@@ -125,7 +125,7 @@ points = 41
         )
     };
     let r = run_scene_text(&scene(0.8)).expect("the scene runs");
-    let order = r.ssm.order;
+    let order = r.ssm.as_ref().expect("SSM").order;
     assert!(order > 3, "O(3) is not within 1 % at rho = 0.8");
     let summary: serde_json::Value =
         serde_json::from_slice(r.outputs.get("summary.json").unwrap()).unwrap();

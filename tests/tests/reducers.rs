@@ -40,7 +40,8 @@ fn plugin_built_against_api_1_0_loads_and_runs() {
     let exact = C64::new(-0.03, (1.0f64 - 0.03 * 0.03).sqrt());
     assert!((lam - exact).norm() < 1e-12, "{lam} vs {exact}");
     // the cubic term of the backbone is in the reduced dynamics
-    assert!(r.ssm.r.len() > 1, "{:?}", r.ssm.r);
+    let ssm = r.ssm.as_ref().expect("SSM");
+    assert!(ssm.r.len() > 1, "{:?}", ssm.r);
 }
 
 /// Modal truncation keeps an invariant subspace of the linear part, so the
@@ -64,6 +65,8 @@ fn modal_truncation_spectrum_is_the_kept_part_of_the_full_one() {
         assert_eq!(r.system.n_states(), 2 * pairs);
         let mut red: Vec<C64> = r
             .spectrum
+            .as_ref()
+            .expect("spectrum")
             .eigenvalues
             .iter()
             .copied()

@@ -15,7 +15,7 @@ const GOOD: &str = "[model]\nplugin = \"spatial-oscillator\"\n[model.params]\nco
 #[test]
 fn good_scene_runs() {
     let r = run_text(GOOD).unwrap();
-    assert_eq!(r.spectrum.eigenvalues.len(), 4);
+    assert_eq!(r.spectrum.as_ref().expect("spectrum").eigenvalues.len(), 4);
     assert!(r.warnings.is_empty(), "{:?}", r.warnings);
 }
 

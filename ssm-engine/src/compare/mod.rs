@@ -9,7 +9,9 @@
 //! 5.1.1, 5.2.2, 5.2.3, Appendix G.1, eq. (47).
 
 pub mod instantaneous;
+pub mod pod;
 pub mod report;
+pub mod ssm_run;
 pub mod validation;
 
 use std::time::Instant;

@@ -7,6 +7,7 @@ mod files;
 pub mod frc;
 pub mod identified;
 pub mod plot;
+pub mod pod;
 pub mod report;
 pub mod simulation;
 pub mod ssm;
@@ -18,7 +19,11 @@ use crate::rom::autonomous::{BackboneCurve, LiftedTransient};
 use crate::spectrum::ModalFigures;
 pub use files::{OutputError, OutputSet, MARKER};
 use plot::PlotError;
-use summary::{summary_json, Summary};
+use summary::{pod_only_summary_json, summary_json, Summary, Timing};
+
+use crate::compare::pod::PodStudy;
+use crate::model::plugin::PluginOrigin;
+use crate::model::system::System;
 
 /// `spectrum.csv`: one finite eigenvalue a row with its frequency, damping
 /// ratio and master-pair membership (`(pair, index)` of each master).
@@ -114,11 +119,49 @@ pub fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
         );
         out.add("report.svg", report::svg(r)?);
     }
+    if let Some(study) = s.pod {
+        pod_files(&mut out, &s.system.name, study)?;
+    }
     if let Some(r) = s.reduction.filter(|r| r.signals.is_some()) {
         out.add("identified.json", identified::identified_json(r, s.system));
     }
     let pair_index: Vec<(usize, usize)> = s.masters.iter().map(|m| (m.pair, m.index)).collect();
     out.add("spectrum.csv", spectrum_csv(p.modal, &pair_index));
     out.add("summary.json", summary_json(s));
+    Ok(out)
+}
+
+/// The files of a `[pod]` study.
+fn pod_files(out: &mut OutputSet, model: &str, study: &PodStudy) -> Result<(), PlotError> {
+    out.add("pod_comparison.csv", pod::comparison_csv(study));
+    out.add("pod_report.md", pod::report_md(model, study));
+    out.add("pod_povs.csv", pod::povs_csv(study));
+    out.add("pod_povs.svg", pod::povs_svg(study)?);
+    out.add("pod_constraints.csv", pod::constraints_csv(study));
+    for (k, case) in study.cases.iter().enumerate() {
+        out.add(
+            &format!("pod_case_{}.csv", k + 1),
+            pod::case_csv(study, case),
+        );
+    }
+    Ok(())
+}
+
+/// Every file of a `[pod]` scene that asks for no SSM answer.
+pub fn pod_only_files(
+    system: &System,
+    plugins: &[PluginOrigin],
+    study: Option<&PodStudy>,
+    warnings: &[String],
+    timing: Timing,
+) -> Result<OutputSet, PlotError> {
+    let mut out = OutputSet::default();
+    if let Some(study) = study {
+        pod_files(&mut out, &system.name, study)?;
+    }
+    out.add(
+        "summary.json",
+        pod_only_summary_json(system, plugins, study, warnings, timing),
+    );
     Ok(out)
 }

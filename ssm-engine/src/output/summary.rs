@@ -3,7 +3,8 @@
 
 use serde_json::{json, Value};
 
-use super::{frc, report, simulation, ssm, validation};
+use super::{frc, pod, report, simulation, ssm, validation};
+use crate::compare::pod::PodStudy;
 use crate::compare::report::Report;
 use crate::compare::validation::Validation;
 use crate::fom::Simulation;
@@ -34,6 +35,8 @@ pub struct Timing {
     pub validation: f64,
     /// Speed-against-error report.
     pub report: f64,
+    /// The `[pod]` study.
+    pub pod: f64,
     /// The whole run.
     pub total: f64,
 }
@@ -72,6 +75,8 @@ pub struct Summary<'a> {
     pub report: Option<&'a Report>,
     /// Sampled full-system runs of `[simulate]`.
     pub simulation: Option<&'a Simulation>,
+    /// The `[pod]` study.
+    pub pod: Option<&'a PodStudy>,
     /// The accuracy target, the order and every answer's estimate.
     pub accuracy: &'a Accuracy,
     /// Warnings of the run.
@@ -129,6 +134,7 @@ pub fn summary_json(s: &Summary<'_>) -> String {
         "validation": s.validation.map(validation::validation_json),
         "report": s.report.map(report::json),
         "simulation": s.simulation.map(simulation::simulation_json),
+        "pod": s.pod.map(pod::pod_json),
         "accuracy": accuracy_json(s.accuracy),
         "warnings": s.warnings,
         "timing_s": {
@@ -142,6 +148,7 @@ pub fn summary_json(s: &Summary<'_>) -> String {
             "frc": t.frc,
             "validation": t.validation,
             "report": t.report,
+            "pod": t.pod,
             "total": t.total,
         },
         "linear_algebra": {
@@ -217,4 +224,31 @@ fn reduction_json(r: &Reduction) -> Value {
         "lifted_outputs": r.lifted_outputs,
         "diagnostics": diagnostics,
     })
+}
+
+/// `summary.json` of a `[pod]` scene that asks for no SSM answer: the
+/// model, the plugins, the study, the warnings and the times.
+pub fn pod_only_summary_json(
+    system: &System,
+    plugins: &[PluginOrigin],
+    study: Option<&PodStudy>,
+    warnings: &[String],
+    timing: Timing,
+) -> String {
+    let value = json!({
+        "plugins": plugins.iter().map(|p| json!({
+            "name": p.name,
+            "version": p.version,
+            "file": p.file.display().to_string(),
+        })).collect::<Vec<_>>(),
+        "model": {
+            "plugin": system.plugin,
+            "name": system.name,
+            "n_states": system.n_states(),
+        },
+        "pod": study.map(pod::pod_json),
+        "warnings": warnings,
+        "timing_s": {"pod": timing.pod, "total": timing.total},
+    });
+    serde_json::to_string_pretty(&value).expect("JSON values are serializable")
 }

@@ -59,6 +59,9 @@ pub enum JobError {
     /// The speed-against-error report failed.
     #[error(transparent)]
     Report(#[from] ReportError),
+    /// The `[pod]` study failed.
+    #[error("[pod] {0}")]
+    Pod(#[from] crate::compare::pod::PodStudyError),
     /// A plot could not be drawn.
     #[error(transparent)]
     Plot(#[from] PlotError),

@@ -12,6 +12,7 @@ pub mod budget;
 mod checks;
 mod error;
 pub mod export;
+mod pod;
 mod simulate;
 mod spectral;
 
@@ -22,13 +23,14 @@ pub use error::JobError;
 pub use spectral::Spectral;
 
 use crate::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
+use crate::compare::pod::PodStudy;
 use crate::compare::report::{report, Report, ReportInputs};
 use crate::compare::validation::{validation, Validation};
 use crate::model::plugin::{PluginOrigin, Registry};
 use crate::model::source::build_model;
 use crate::model::system::{OutputMap, System};
 use crate::output::summary::{Summary, Timing};
-use crate::output::{result_files, OutputSet, Products};
+use crate::output::{pod_only_files, result_files, OutputSet, Products};
 use crate::reduce::scene::reduce_scene;
 use crate::reduce::Reduction;
 use crate::rom::accuracy::{percent, Accuracy, AnswerEstimate, MeasuredError, OrdersTried};
@@ -58,12 +60,14 @@ impl Progress for Quiet {
 pub struct JobResult {
     /// The validated system.
     pub system: System,
-    /// Finite spectrum.
-    pub spectrum: Spectrum,
+    /// Finite spectrum (`None`: a `[pod]` scene that asks for no SSM answer).
+    pub spectrum: Option<Spectrum>,
     /// Master modes.
     pub masters: Vec<MasterMode>,
     /// The SSM.
-    pub ssm: SsmExpansion,
+    pub ssm: Option<SsmExpansion>,
+    /// The `[pod]` study.
+    pub pod: Option<PodStudy>,
     /// Forced response curves of `[forcing]`.
     pub frc: Option<ForcedResponse>,
     /// Full-system comparisons of `[validate]`.
@@ -373,8 +377,37 @@ pub fn run(
     let mut timing = Timing::default();
     progress.stage("building model");
     registry.take_used();
-    let (system, reduction) = obtain_model(scene, registry)?;
+    let (system, reduction, full_model) = obtain_model(scene, registry)?;
     let plugins = registry.take_used();
+    let mut warnings = Vec::new();
+    let pod = match (&sc.pod, &full_model) {
+        (Some(sec), Some(model)) => {
+            let t = Instant::now();
+            let (study, w) = pod::pod_stage(scene, sec, model, &system, progress)?;
+            warnings.extend(w);
+            timing.pod = t.elapsed().as_secs_f64();
+            Some(study)
+        }
+        _ => None,
+    };
+    if !scene.wants_ssm() {
+        progress.stage("writing outputs");
+        timing.total = t0.elapsed().as_secs_f64();
+        let outputs = pod_only_files(&system, &plugins, pod.as_ref(), &warnings, timing)?;
+        return Ok(JobResult {
+            system,
+            spectrum: None,
+            masters: Vec::new(),
+            ssm: None,
+            pod,
+            frc: None,
+            validation: None,
+            report: None,
+            warnings,
+            plugins,
+            outputs,
+        });
+    }
     let coordinates = checks::coordinates(scene, &system)?;
 
     let limits = budget::Limits::of_machine();
@@ -394,7 +427,7 @@ pub fn run(
         coordinates: &coordinates,
         progress,
     };
-    let mut warnings = sp.warnings.clone();
+    warnings.extend(sp.warnings.iter().cloned());
     if let Some(r) = &reduction {
         warnings.extend(
             r.diagnostics
@@ -536,6 +569,7 @@ pub fn run(
             validation: checked.as_ref(),
             report: speed.as_ref(),
             simulation: simulation.as_ref(),
+            pod: pod.as_ref(),
             accuracy: &accuracy,
             warnings: &warnings,
             timing,
@@ -543,9 +577,10 @@ pub fn run(
     })?;
     Ok(JobResult {
         system,
-        spectrum: sp.spectrum,
+        spectrum: Some(sp.spectrum),
         masters: sp.masters,
-        ssm: expansion,
+        ssm: Some(expansion),
+        pod,
         frc,
         validation: checked,
         report: speed,
@@ -572,11 +607,12 @@ fn signal_backbones(sig: &ssm_api::Signals, name: Option<&str>) -> Vec<DataBackb
 
 /// The model the analyses run on: the plugin's model of `[model]`, or the
 /// model the reducer of `[reduce]` makes from it and/or the `[data]` signals;
-/// validated into a [`System`].
+/// validated into a [`System`]. With `[pod]`, the plugin's model as it was
+/// given too (the POD reducer projects it).
 pub fn obtain_model(
     scene: &SceneFile,
     registry: &mut Registry,
-) -> Result<(System, Option<Reduction>), JobError> {
+) -> Result<(System, Option<Reduction>, Option<ssm_api::Model>), JobError> {
     let sc = &scene.scene;
     let full = sc
         .model
@@ -586,13 +622,14 @@ pub fn obtain_model(
     match &sc.reduce {
         Some(red) => {
             let (system, reduction) = reduce_scene(scene, red, full, registry)?;
-            Ok((system, Some(reduction)))
+            Ok((system, Some(reduction), None))
         }
         None => {
             let (plugin, model) = full.ok_or_else(|| {
                 scene.invalid(0..0, "model", "the scene has no [model] section".into())
             })?;
-            Ok((System::from_model(&plugin, model)?, None))
+            let raw = sc.pod.as_ref().map(|_| model.clone());
+            Ok((System::from_model(&plugin, model)?, None, raw))
         }
     }
 }

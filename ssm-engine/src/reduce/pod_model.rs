@@ -354,6 +354,55 @@ pub fn constraint_jacobian(sys: &System, z: &[f64]) -> Mat<f64> {
     cq
 }
 
+/// The generalized reaction forces `C_q(q)^T mu` of a mechanical `sys` at
+/// recast states `z` (shifted: `mu = mu_eq + mu_hat`), the analytic
+/// Jacobian's pattern set up once for many states.
+pub struct Reactions<'a> {
+    sys: &'a System,
+    problem: DaeProblem<'a>,
+    vals: Vec<f64>,
+    cq: Mat<f64>,
+    mu_eq: Vec<f64>,
+}
+
+impl<'a> Reactions<'a> {
+    /// Prepares the Jacobian of `sys`.
+    pub fn new(sys: &'a System) -> Self {
+        let problem = DaeProblem::new(sys, 0.0, 0.0);
+        let vals = vec![0.0; problem.pattern().row_idx().len()];
+        let (n, nc) = sys
+            .mechanical
+            .as_ref()
+            .map_or((0, 0), |m| (m.n_dof, m.n_constraints));
+        let mu_eq = sys
+            .recast
+            .as_ref()
+            .and_then(|r| r.equilibrium.get(2 * n..2 * n + nc))
+            .map_or_else(|| vec![0.0; nc], <[f64]>::to_vec);
+        Self {
+            sys,
+            problem,
+            vals,
+            cq: Mat::zeros(0, 0),
+            mu_eq,
+        }
+    }
+
+    /// `C_q(q)^T mu` (`n` entries) at the recast state `z` (auxiliaries
+    /// satisfying their definitions).
+    pub fn at(&mut self, z: &[f64]) -> Vec<f64> {
+        constraint_jacobian_into(self.sys, &self.problem, z, &mut self.vals, &mut self.cq);
+        let (nc, n) = (self.cq.nrows(), self.cq.ncols());
+        (0..n)
+            .map(|j| {
+                (0..nc)
+                    .map(|c| self.cq[(c, j)] * (self.mu_eq[c] + z[2 * n + c]))
+                    .sum()
+            })
+            .collect()
+    }
+}
+
 fn constraint_jacobian_into(
     sys: &System,
     p: &DaeProblem,

@@ -12,11 +12,13 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::Spanned;
 
+mod pod;
 mod reduce;
 mod simulate;
 mod validate;
 
 pub use crate::spectrum::Normalization;
+pub use pod::{PodRun, PodSection, MAX_POD_ROMS, MAX_POD_STEPS, MAX_POD_TESTS};
 pub use reduce::{DataSection, ReduceSection};
 pub use simulate::{SimulateRun, SimulateSection, MAX_SAMPLES};
 pub use validate::{ReportSection, SteadyStart, SteadyStateSection, ValidateSection};
@@ -163,6 +165,9 @@ pub struct Scene {
     /// Sampled full-system runs written as `[data]` CSV files.
     #[serde(default)]
     pub simulate: Option<SimulateSection>,
+    /// POD reduction with constraint reduction, compared with the full model.
+    #[serde(default)]
+    pub pod: Option<PodSection>,
 }
 
 /// `[forcing]`: forced response curves of the periodic SSM. The load's shape is
@@ -509,6 +514,7 @@ impl SceneFile {
         self.check_forcing()?;
         self.check_validate()?;
         self.check_simulate()?;
+        self.check_pod()?;
         if let Some(m) = &self.scene.spectrum.modes {
             if *m.get_ref() == 0 {
                 return Err(self.invalid(m.span(), "spectrum.modes", "must be at least 1".into()));

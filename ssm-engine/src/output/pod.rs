@@ -1,0 +1,355 @@
+//! Writers of the `[pod]` study: `pod_comparison.csv` and `pod_report.md`
+//! (one row per reduced model and load), `pod_case_<k>.csv` (the outputs
+//! of every model over time with their errors), `pod_povs.csv` and
+//! `pod_povs.svg` (the POV decay), `pod_constraints.csv` and the summary's
+//! `pod`. They format a [`PodStudy`] and compute nothing.
+
+use serde_json::{json, Value};
+
+use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::compare::pod::{CaseRun, PodStudy, RomRun};
+use crate::reduce::pod::Truncation;
+
+/// One reduced model as the tables name it.
+struct RomInfo<'a> {
+    id: String,
+    label: &'a str,
+    kind: &'static str,
+    /// Reduced coordinates (POD: `r`; SSM: `2m`).
+    dimension: usize,
+    /// States of the reduced model's DAE or ODE.
+    states: usize,
+    offline_s: f64,
+}
+
+fn roms(study: &PodStudy) -> Vec<RomInfo<'_>> {
+    let pod = study.pod.iter().enumerate().map(|(k, r)| RomInfo {
+        id: format!("pod{}", k + 1),
+        label: &r.label,
+        kind: "pod",
+        dimension: r.reduction.u.ncols(),
+        states: r.system.n_states(),
+        offline_s: r.offline_s,
+    });
+    let ssm = study.ssm.iter().enumerate().map(|(k, r)| RomInfo {
+        id: format!("ssm{}", k + 1),
+        label: &r.label,
+        kind: "ssm",
+        dimension: r.expansion.dim(),
+        states: r.expansion.dim(),
+        offline_s: r.offline_s,
+    });
+    pod.chain(ssm).collect()
+}
+
+fn runs(case: &CaseRun) -> impl Iterator<Item = &RomRun> {
+    case.pod.iter().chain(&case.ssm)
+}
+
+fn e(v: Option<f64>) -> String {
+    v.map_or_else(String::new, |x| format!("{x:.6e}"))
+}
+
+/// `pod_comparison.csv`: one row per reduced model and load case.
+pub fn comparison_csv(study: &PodStudy) -> String {
+    let mut s = String::from(
+        "id,model,kind,case,trained,epsilon,omega,t_end,dimension,states,offline_s,online_s,full_s,speedup,max_error,late_error,reaction_gap,reaction_gap_subspace,start_distance,failure\n",
+    );
+    let infos = roms(study);
+    for case in &study.cases {
+        for (info, run) in infos.iter().zip(runs(case)) {
+            let c = &case.case;
+            s.push_str(&format!(
+                "{},{},{},{},{},{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{},{},{:.6e},{}\n",
+                info.id,
+                info.label,
+                info.kind,
+                c.label,
+                if info.kind == "pod" {
+                    c.trained.to_string()
+                } else {
+                    String::new()
+                },
+                c.epsilon,
+                c.omega,
+                c.t_end,
+                info.dimension,
+                info.states,
+                info.offline_s,
+                run.online_s,
+                case.full_s,
+                case.full_s / run.online_s.max(1e-12),
+                e(run.errors.as_ref().map(|x| x.max)),
+                e(run.errors.as_ref().map(|x| x.late)),
+                e(run.reactions.map(|r| r.full_space)),
+                e(run.reactions.map(|r| r.in_subspace)),
+                run.start_distance,
+                run.failure
+                    .as_deref()
+                    .unwrap_or("")
+                    .replace([',', '\n', '"'], ";"),
+            ));
+        }
+    }
+    s
+}
+
+/// `pod_case_<k>.csv` (1-based, the training run is 1): `t`, each output
+/// of the full model (`<output>@full`) and of every reduced model
+/// (`<output>@<id>`), then every model's error `e(t)` (`error@<id>`).
+pub fn case_csv(study: &PodStudy, case: &CaseRun) -> String {
+    let infos = roms(study);
+    let mut head = vec!["t".to_owned()];
+    for o in &study.outputs {
+        head.push(format!("{o}@full"));
+    }
+    for info in &infos {
+        for o in &study.outputs {
+            head.push(format!("{o}@{}", info.id));
+        }
+    }
+    for info in &infos {
+        head.push(format!("error@{}", info.id));
+    }
+    let mut s = head.join(",");
+    s.push('\n');
+    let n_out = study.outputs.len();
+    for (j, t) in case.times.iter().enumerate() {
+        let mut row = vec![format!("{t:.17e}")];
+        row.extend(case.full_outputs[j].iter().map(|v| format!("{v:.17e}")));
+        for run in runs(case) {
+            match run.outputs.get(j) {
+                Some(vals) => row.extend(vals.iter().map(|v| format!("{v:.17e}"))),
+                None => row.extend(std::iter::repeat_n(String::new(), n_out)),
+            }
+        }
+        for run in runs(case) {
+            row.push(e(run.errors.as_ref().map(|x| x.series[j])));
+        }
+        s.push_str(&row.join(","));
+        s.push('\n');
+    }
+    s
+}
+
+/// `pod_povs.csv`: every proper orthogonal value per coordinate kind, with
+/// its value relative to the kind's largest and the POD models keeping it.
+pub fn povs_csv(study: &PodStudy) -> String {
+    let mut s = String::from("kind,index,pov,relative,kept_by\n");
+    let Some(first) = study.pod.first() else {
+        return s;
+    };
+    for (g, kind) in first.reduction.kinds.iter().enumerate() {
+        let v = &kind.basis.values;
+        let largest = v.first().copied().unwrap_or(0.0);
+        for (i, x) in v.iter().enumerate() {
+            let kept: Vec<String> = study
+                .pod
+                .iter()
+                .enumerate()
+                .filter(|(_, r)| r.reduction.kinds.get(g).is_some_and(|k| i < k.basis.kept()))
+                .map(|(k, _)| format!("pod{}", k + 1))
+                .collect();
+            s.push_str(&format!(
+                "{:?},{},{x:.6e},{:.6e},{}\n",
+                kind.motion,
+                i + 1,
+                if largest > 0.0 { x / largest } else { 0.0 },
+                kept.join(" ")
+            ));
+        }
+    }
+    s
+}
+
+/// `pod_povs.svg`: the POV decay of each coordinate kind (relative to its
+/// largest), the basis of the truncation.
+pub fn povs_svg(study: &PodStudy) -> Result<String, PlotError> {
+    let curves: Vec<Curve> = study
+        .pod
+        .first()
+        .map(|r| {
+            r.reduction
+                .kinds
+                .iter()
+                .map(|k| {
+                    let largest = k.basis.values.first().copied().unwrap_or(1.0);
+                    Curve {
+                        label: format!("{:?} ({} kept by {})", k.motion, k.basis.kept(), r.label),
+                        points: k
+                            .basis
+                            .values
+                            .iter()
+                            .enumerate()
+                            .map(|(i, v)| ((i + 1) as f64, v / largest))
+                            .collect(),
+                        ..Curve::default()
+                    }
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    line_plot(
+        "Proper orthogonal values (velocity snapshots of the training run)",
+        "index",
+        "POV / largest",
+        &curves,
+        Scale::LogLog,
+    )
+}
+
+/// `pod_constraints.csv`: the singular values of the stacked projected
+/// constraint Jacobian of each POD model, and which combinations it keeps.
+pub fn constraints_csv(study: &PodStudy) -> String {
+    let mut s = String::from("id,index,singular_value,relative,kept\n");
+    for (k, r) in study.pod.iter().enumerate() {
+        let c = &r.reduction.constraints;
+        let largest = c.singular_values.first().copied().unwrap_or(0.0);
+        for (i, v) in c.singular_values.iter().enumerate() {
+            s.push_str(&format!(
+                "pod{},{},{v:.6e},{:.6e},{}\n",
+                k + 1,
+                i + 1,
+                if largest > 0.0 { v / largest } else { 0.0 },
+                i < c.basis.ncols()
+            ));
+        }
+    }
+    s
+}
+
+fn fmt_s(x: f64) -> String {
+    if x < 1e-3 {
+        format!("{:.1} µs", x * 1e6)
+    } else if x < 1.0 {
+        format!("{:.2} ms", x * 1e3)
+    } else {
+        format!("{x:.2} s")
+    }
+}
+
+fn rel(v: Option<f64>) -> String {
+    v.map_or_else(|| "failed".into(), |x| format!("{x:.2e}"))
+}
+
+/// `pod_report.md`: the comparison a person reads.
+pub fn report_md(model: &str, study: &PodStudy) -> String {
+    let infos = roms(study);
+    let mut s = format!(
+        "# POD and SSM reduced models against the full model: {model} ({} states)\n\n\
+         Every run uses HHT (alpha = {}, fixed step {}) for the full and the POD models; \
+         the SSM models integrate their reduced dynamics (Dormand-Prince) and lift \
+         through W (+ eps X0). Error: the largest deviation of the outputs ({}) over the \
+         run, each relative to its full-model peak; late: over the second half. Reaction gap: \
+         the largest difference of the reactions C_q^T mu, relative to the full model's peak, in \
+         the full coordinates (the removed constraints' reactions are missing) and projected on \
+         the POD subspace (U^T C_q^T mu: what the reduced equations feel).\n\n",
+        study.n_full_states,
+        study.settings.alpha,
+        study.settings.step,
+        study.outputs.join(", ")
+    );
+    s.push_str("| Model | Coordinates | States | Offline |\n|---|---|---|---|\n");
+    for i in &infos {
+        s.push_str(&format!(
+            "| {} ({}) | {} | {} | {} |\n",
+            i.label,
+            i.id,
+            i.dimension,
+            i.states,
+            fmt_s(i.offline_s)
+        ));
+    }
+    for case in &study.cases {
+        let c = &case.case;
+        s.push_str(&format!(
+            "\n## {}: eps = {}, Omega = {}, {} s{}{}\n\nFull model: {} ({} steps).\n\n\
+             | Model | Online | Speed-up | Error | Late error | Reaction gap | In the subspace |\n|---|---|---|---|---|---|---|\n",
+            c.label,
+            c.epsilon,
+            c.omega,
+            c.t_end,
+            if c.start.is_empty() { ", from rest" } else { ", from a given start" },
+            if c.trained { " (POD trained on it)" } else { "" },
+            fmt_s(case.full_s),
+            case.full_steps,
+        ));
+        for (i, run) in infos.iter().zip(runs(case)) {
+            s.push_str(&format!(
+                "| {} | {} | {:.2} | {} | {} | {} | {} |\n",
+                i.id,
+                fmt_s(run.online_s),
+                case.full_s / run.online_s.max(1e-12),
+                rel(run.errors.as_ref().map(|x| x.max)),
+                rel(run.errors.as_ref().map(|x| x.late)),
+                run.reactions
+                    .map_or_else(|| "-".into(), |r| format!("{:.2e}", r.full_space)),
+                run.reactions
+                    .map_or_else(|| "-".into(), |r| format!("{:.2e}", r.in_subspace)),
+            ));
+        }
+    }
+    s
+}
+
+fn truncation_json(t: &Truncation) -> Value {
+    match t {
+        Truncation::Drop { decades } => json!({"drop_decades": decades}),
+        Truncation::Energy { fraction } => json!({"energy_left_out": fraction}),
+    }
+}
+
+/// The summary's `pod`.
+pub fn pod_json(study: &PodStudy) -> Value {
+    let infos = roms(study);
+    json!({
+        "outputs": study.outputs,
+        "n_full_states": study.n_full_states,
+        "hht": {"alpha": study.settings.alpha, "step": study.settings.step},
+        "rank_tol": study.settings.rank_tol,
+        "pod_models": study.pod.iter().enumerate().map(|(k, r)| json!({
+            "id": format!("pod{}", k + 1),
+            "truncation": truncation_json(&r.truncation),
+            "kept": r.reduction.kinds.iter().map(|g| json!({
+                "kind": format!("{:?}", g.motion),
+                "coordinates": g.coordinates.len(),
+                "kept": g.basis.kept(),
+            })).collect::<Vec<_>>(),
+            "reduced_coordinates": r.reduction.u.ncols(),
+            "constraints": r.reduction.constraints.basis.nrows(),
+            "constraints_kept": r.reduction.constraints.basis.ncols(),
+            "constraints_removed": r.reduction.constraints.removed(),
+            "singular_values": r.reduction.constraints.singular_values,
+            "initial_residual": r.reduction.initial_residual,
+            "states": r.system.n_states(),
+            "offline_s": r.offline_s,
+        })).collect::<Vec<_>>(),
+        "ssm_models": study.ssm.iter().enumerate().map(|(k, r)| json!({
+            "id": format!("ssm{}", k + 1),
+            "master_pairs": r.pairs,
+            "order": r.expansion.order,
+            "dimension": r.expansion.dim(),
+            "offline_s": r.offline_s,
+        })).collect::<Vec<_>>(),
+        "cases": study.cases.iter().map(|c| json!({
+            "case": c.case.label,
+            "trained": c.case.trained,
+            "epsilon": c.case.epsilon,
+            "omega": c.case.omega,
+            "t_end": c.case.t_end,
+            "full_s": c.full_s,
+            "full_steps": c.full_steps,
+            "runs": infos.iter().zip(runs(c)).map(|(i, r)| json!({
+                "id": i.id,
+                "online_s": r.online_s,
+                "speedup": c.full_s / r.online_s.max(1e-12),
+                "max_error": r.errors.as_ref().map(|x| x.max),
+                "late_error": r.errors.as_ref().map(|x| x.late),
+                "reaction_gap": r.reactions.map(|g| g.full_space),
+                "reaction_gap_subspace": r.reactions.map(|g| g.in_subspace),
+                "start_distance": r.start_distance,
+                "failure": r.failure,
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
