@@ -46,8 +46,19 @@ fn runs(case: &CaseRun) -> impl Iterator<Item = &RomRun> {
     case.pod.iter().chain(&case.ssm)
 }
 
+/// A figure, or an empty field where there is none (a failed run).
 fn e(v: Option<f64>) -> String {
-    v.map_or_else(String::new, |x| format!("{x:.6e}"))
+    v.filter(|x| x.is_finite())
+        .map_or_else(String::new, |x| format!("{x:.6e}"))
+}
+
+/// A sample, or an empty field where it is not finite.
+fn sample(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.17e}")
+    } else {
+        String::new()
+    }
 }
 
 /// `pod_comparison.csv`: one row per reduced model and load case.
@@ -60,7 +71,7 @@ pub fn comparison_csv(study: &PodStudy) -> String {
         for (info, run) in infos.iter().zip(runs(case)) {
             let c = &case.case;
             s.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{},{},{:.6e},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{},{},{},{}\n",
                 info.id,
                 info.label,
                 info.kind,
@@ -83,7 +94,7 @@ pub fn comparison_csv(study: &PodStudy) -> String {
                 e(run.errors.as_ref().map(|x| x.late)),
                 e(run.reactions.map(|r| r.full_space)),
                 e(run.reactions.map(|r| r.in_subspace)),
-                run.start_distance,
+                e(Some(run.start_distance)),
                 run.failure
                     .as_deref()
                     .unwrap_or("")
@@ -115,11 +126,11 @@ pub fn case_csv(study: &PodStudy, case: &CaseRun) -> String {
     s.push('\n');
     let n_out = study.outputs.len();
     for (j, t) in case.times.iter().enumerate() {
-        let mut row = vec![format!("{t:.17e}")];
-        row.extend(case.full_outputs[j].iter().map(|v| format!("{v:.17e}")));
+        let mut row = vec![sample(*t)];
+        row.extend(case.full_outputs[j].iter().map(|v| sample(*v)));
         for run in runs(case) {
             match run.outputs.get(j) {
-                Some(vals) => row.extend(vals.iter().map(|v| format!("{v:.17e}"))),
+                Some(vals) => row.extend(vals.iter().map(|v| sample(*v))),
                 None => row.extend(std::iter::repeat_n(String::new(), n_out)),
             }
         }

@@ -38,12 +38,15 @@ pub fn reduce_scene(
     registry: &mut Registry,
 ) -> Result<(System, Reduction), ReduceError> {
     let sc = &scene.scene;
-    let plugin = resolve(scene, registry, &red.plugin, "reduce.plugin")?;
+    let Some(plugin_key) = &red.plugin else {
+        return super::engine::engine_reduce(scene, red, full);
+    };
+    let plugin = resolve(scene, registry, plugin_key, "reduce.plugin")?;
     let listed = match plugin.reducers() {
         None => {
             return Err(scene
                 .invalid(
-                    red.plugin.span(),
+                    plugin_key.span(),
                     "reduce.plugin",
                     PluginLoadError::NoReducers {
                         plugin: plugin.name().to_owned(),

@@ -12,8 +12,10 @@ use super::{SceneError, SceneFile};
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ReduceSection {
-    /// Plugin name or path to a plugin library (relative paths: from the scene's directory).
-    pub plugin: Spanned<String>,
+    /// Plugin name or path to a plugin library (relative paths: from the
+    /// scene's directory); without it, one of the engine's own reducers (`pod`).
+    #[serde(default)]
+    pub plugin: Option<Spanned<String>>,
     /// Reducer name, as listed by `ssm-engine plugins`.
     pub reducer: Spanned<String>,
     /// Parameters passed to the reducer.
