@@ -17,7 +17,7 @@ use std::time::Instant;
 use faer::Mat;
 
 use crate::fom::hht::{integrate, HhtOptions, HhtSolution};
-use crate::fom::{consistent_initial_keeping, DaeProblem, SimError};
+use crate::fom::{given_start, DaeProblem, SimError};
 use crate::model::system::{ModelError, OutputMap, System};
 use crate::reduce::pod::Truncation;
 use crate::reduce::pod_model::{pod_reduce, PodReduceError, PodReduction, PodSettings, Reactions};
@@ -199,17 +199,6 @@ pub fn output_values(outputs: &[&OutputMap], z: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// The full model's initial state of `case`: the origin (rest at the
-/// equilibrium), or the given values made consistent with the constraints.
-pub fn full_start(sys: &System, case: &LoadCase) -> Result<Vec<f64>, SimError> {
-    if case.start.is_empty() {
-        return Ok(vec![0.0; sys.n_states()]);
-    }
-    let (z, keep) = sys.given_state(&case.start);
-    let p = DaeProblem::new(sys, case.epsilon, case.omega);
-    Ok(consistent_initial_keeping(&p, 0.0, &z, &keep)?.z)
-}
-
 /// The full model's HHT run on `case`.
 pub fn full_run(
     sys: &System,
@@ -221,8 +210,8 @@ pub fn full_run(
         case: case.label.clone(),
         source: Box::new(source),
     };
-    let z0 = full_start(sys, case).map_err(fail)?;
     let p = DaeProblem::new(sys, case.epsilon, case.omega);
+    let z0 = given_start(&p, &case.start).map_err(fail)?;
     let t = Instant::now();
     let solution = integrate(
         &p,

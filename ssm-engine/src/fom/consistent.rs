@@ -53,6 +53,18 @@ pub fn consistent_initial(p: &DaeProblem, t0: f64, guess: &[f64]) -> Result<Cons
     consistent_initial_keeping(p, t0, guess, &[])
 }
 
+/// The initial state of a run of `p.sys` from the named `(state, value)`
+/// pairs: the origin (rest at the equilibrium) when there are none, else
+/// the values made consistent with the displacements among them kept
+/// ([`consistent_initial_keeping`]).
+pub fn given_start(p: &DaeProblem, values: &[(String, f64)]) -> Result<Vec<f64>, SimError> {
+    if values.is_empty() {
+        return Ok(vec![0.0; p.n()]);
+    }
+    let (z, keep) = p.sys.given_state(values);
+    Ok(consistent_initial_keeping(p, 0.0, &z, &keep)?.z)
+}
+
 /// [`consistent_initial`] with the displacements `keep` (state indices)
 /// held at their given values where the constraints allow: they weigh `1e6`
 /// in the position metric, so the other coordinates take up the correction

@@ -57,7 +57,7 @@ pub mod radau;
 pub mod sample;
 pub mod steady;
 
-pub use consistent::{consistent_initial, consistent_initial_keeping, Consistent};
+pub use consistent::{consistent_initial, consistent_initial_keeping, given_start, Consistent};
 pub use problem::DaeProblem;
 pub use radau::{Radau, RadauOptions, RadauStats};
 pub use sample::{add_noise, sample_run, Integrator, SampledRun, Simulation};

@@ -91,11 +91,7 @@ pub fn summary_json(s: &Summary<'_>) -> String {
     let t = &s.timing;
     let lin = &s.ssm.timing.linear;
     let value = json!({
-        "plugins": s.plugins.iter().map(|p| json!({
-            "name": p.name,
-            "version": p.version,
-            "file": p.file.display().to_string(),
-        })).collect::<Vec<_>>(),
+        "plugins": plugins_json(s.plugins),
         "model": {
             "plugin": sys.plugin,
             "name": sys.name,
@@ -236,11 +232,7 @@ pub fn pod_only_summary_json(
     timing: Timing,
 ) -> String {
     let value = json!({
-        "plugins": plugins.iter().map(|p| json!({
-            "name": p.name,
-            "version": p.version,
-            "file": p.file.display().to_string(),
-        })).collect::<Vec<_>>(),
+        "plugins": plugins_json(plugins),
         "model": {
             "plugin": system.plugin,
             "name": system.name,
@@ -251,4 +243,18 @@ pub fn pod_only_summary_json(
         "timing_s": {"pod": timing.pod, "total": timing.total},
     });
     serde_json::to_string_pretty(&value).expect("JSON values are serializable")
+}
+
+/// The plugin libraries that ran, by name, version and file.
+fn plugins_json(plugins: &[PluginOrigin]) -> Value {
+    plugins
+        .iter()
+        .map(|p| {
+            json!({
+                "name": p.name,
+                "version": p.version,
+                "file": p.file.display().to_string(),
+            })
+        })
+        .collect()
 }

@@ -2,6 +2,8 @@
 //! named outputs and states exist, `[validate]` has a flow and a forcing to
 //! work with. Each failure is a scene error at the key's line.
 
+use toml::Spanned;
+
 use super::error::JobError;
 use crate::model::system::{OutputMap, System};
 use crate::scene::{SceneFile, ValidateSection};
@@ -11,7 +13,21 @@ pub fn coordinates<'a>(
     scene: &SceneFile,
     system: &'a System,
 ) -> Result<Vec<&'a OutputMap>, JobError> {
-    let names = &scene.scene.outputs.coordinates;
+    named_outputs(
+        scene,
+        system,
+        &scene.scene.outputs.coordinates,
+        "outputs.coordinates",
+    )
+}
+
+/// The outputs `names` (the scene key `key`), each checked to exist.
+pub fn named_outputs<'a>(
+    scene: &SceneFile,
+    system: &'a System,
+    names: &Spanned<Vec<String>>,
+    key: &str,
+) -> Result<Vec<&'a OutputMap>, JobError> {
     names
         .get_ref()
         .iter()
@@ -26,7 +42,7 @@ pub fn coordinates<'a>(
                 scene
                     .invalid(
                         names.span(),
-                        "outputs.coordinates",
+                        key,
                         format!(
                             "model '{}' has no output '{name}'; it has: {}",
                             system.name,

@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use toml::Spanned;
 
+use super::checks::named_outputs;
 use super::error::JobError;
 use super::spectral::spectral;
 use super::Progress;
@@ -38,31 +39,7 @@ fn pod_outputs<'a>(
             )
             .into());
     }
-    names
-        .get_ref()
-        .iter()
-        .map(|name| {
-            sys.output(name).ok_or_else(|| {
-                let known: Vec<&str> = sys
-                    .outputs
-                    .iter()
-                    .map(|o| o.name.as_str())
-                    .take(40)
-                    .collect();
-                scene
-                    .invalid(
-                        names.span(),
-                        key,
-                        format!(
-                            "model '{}' has no output '{name}'; it has: {}",
-                            sys.name,
-                            known.join(", ")
-                        ),
-                    )
-                    .into()
-            })
-        })
-        .collect()
+    named_outputs(scene, sys, names, key)
 }
 
 /// The load case of a `[pod]` run, its start states checked to exist.

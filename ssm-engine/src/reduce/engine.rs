@@ -11,7 +11,7 @@ use super::pod_model::{pod_reduce, PodSettings};
 use super::scene::ReduceError;
 use super::{lift_outputs, Reduction};
 use crate::fom::hht::{integrate, HhtOptions};
-use crate::fom::{consistent_initial_keeping, DaeProblem};
+use crate::fom::{given_start, DaeProblem};
 use crate::model::system::System;
 use crate::scene::{ReduceSection, SceneFile, MAX_POD_STEPS};
 
@@ -173,14 +173,7 @@ pub fn engine_reduce(
         )
     };
     let p = DaeProblem::new(&sys, params.epsilon, params.omega);
-    let z0 = if start.is_empty() {
-        vec![0.0; sys.n_states()]
-    } else {
-        let (z, keep) = sys.given_state(&start);
-        consistent_initial_keeping(&p, 0.0, &z, &keep)
-            .map_err(|e| training(e.to_string()))?
-            .z
-    };
+    let z0 = given_start(&p, &start).map_err(|e| training(e.to_string()))?;
     let run = integrate(
         &p,
         &z0,

@@ -322,13 +322,10 @@ mod tests {
     use crate::poly::MultiIndexSet;
     use crate::ssm::RTerm;
 
-    /// Reference: the linear flow `p' = lambda p` has `p(t) = p0 e^{lambda t}`;
-    /// with `rtol = 1e-10` the error must stay below 1e-8 relative.
-    #[test]
-    fn linear_reduced_flow_matches_exponential() {
+    /// The linear reduced flow `p' = lambda p` of one pair.
+    fn linear_pair(lambda: C64) -> SsmExpansion {
         let set = MultiIndexSet::new(2, 1);
-        let lambda = C64::new(-0.05, 2.0);
-        let ssm = SsmExpansion {
+        SsmExpansion {
             dynamics: Dynamics::Flow,
             lambda: vec![lambda, lambda.conj()],
             w: vec![vec![C64::new(0.0, 0.0)]; set.len()],
@@ -347,7 +344,15 @@ mod tests {
             order: 1,
             set,
             timing: Default::default(),
-        };
+        }
+    }
+
+    /// Reference: the linear flow `p' = lambda p` has `p(t) = p0 e^{lambda t}`;
+    /// with `rtol = 1e-10` the error must stay below 1e-8 relative.
+    #[test]
+    fn linear_reduced_flow_matches_exponential() {
+        let lambda = C64::new(-0.05, 2.0);
+        let ssm = linear_pair(lambda);
         let p0 = [C64::new(0.3, 0.1), C64::new(0.3, -0.1)];
         let tr = integrate(&ssm, 1, &p0, 20.0, 41, 1e-10).unwrap();
         assert_eq!(tr.times.len(), 41);
@@ -363,28 +368,8 @@ mod tests {
     /// below 1e-8 of `|c|` at the requested (unequally spaced) times.
     #[test]
     fn forced_linear_flow_matches_closed_form() {
-        let set = MultiIndexSet::new(2, 1);
         let lambda = C64::new(-0.05, 2.0);
-        let ssm = SsmExpansion {
-            dynamics: Dynamics::Flow,
-            lambda: vec![lambda, lambda.conj()],
-            w: vec![vec![C64::new(0.0, 0.0)]; set.len()],
-            r: vec![
-                RTerm {
-                    coord: 0,
-                    index: set.index(&[1, 0]).unwrap(),
-                    coeff: lambda,
-                },
-                RTerm {
-                    coord: 1,
-                    index: set.index(&[0, 1]).unwrap(),
-                    coeff: lambda.conj(),
-                },
-            ],
-            order: 1,
-            set,
-            timing: Default::default(),
-        };
+        let ssm = linear_pair(lambda);
         let omega = 1.9;
         let c = 1.0 / (C64::new(0.0, omega) - lambda);
         let times: Vec<f64> = (0..60).map(|k| 0.01 * f64::from(k * k)).collect();
