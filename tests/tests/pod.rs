@@ -182,13 +182,7 @@ fn galerkin_projection_equals_projected_evaluation() {
         DaeProblem::new(&sys, eps, omega),
         DaeProblem::new(&red, eps, omega),
     );
-    let mut seed = 7u64;
-    let mut next = || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut next = uniform(7u64);
     for _ in 0..20 {
         let y: Vec<f64> = (0..5).map(|_| next()).collect();
         let z: Vec<f64> = (0..7)
@@ -281,13 +275,7 @@ fn galerkin_projection_keeps_expressions_and_the_equilibrium() {
     let (n, nc) = (11, 7);
     assert_eq!(raw.states.len(), 2 * n + nc);
     assert!(!raw.equilibrium.is_empty() && !raw.expressions.is_empty());
-    let mut seed = 11u64;
-    let mut next = || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut next = uniform(11u64);
     let u = Mat::from_fn(n, 3, |_, _| next());
     let l = Mat::from_fn(nc, 2, |_, _| next());
     let coords = ReducedCoordinates {
@@ -320,5 +308,16 @@ fn galerkin_projection_keeps_expressions_and_the_equilibrium() {
         for (p, r) in projected.iter().zip(&fy) {
             assert!((p - r).abs() < 1e-12 * size, "{projected:?} vs {fy:?}");
         }
+    }
+}
+
+/// Reproducible numbers uniform in `[-0.5, 0.5)` (a 64-bit linear
+/// congruential generator seeded with `seed`).
+fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
     }
 }
