@@ -29,6 +29,7 @@
 
 pub mod chebyshev;
 pub mod compare;
+pub mod continuation;
 pub mod fom;
 pub mod model;
 pub mod output;

@@ -593,3 +593,82 @@ pub fn pod_coordinate_error(
     }
     err / peak
 }
+
+/// The forced Duffing oscillator `x'' + 2 zeta x' + x + gamma x^3 = eps sum_k
+/// a_k cos(k Omega t)` with `loads = [(k, a_k), ...]` (`gamma = 0`: the
+/// linear oscillator, whose steady state is the closed form
+/// [`linear_steady_state`]).
+pub fn forced_duffing(zeta: f64, gamma: f64, loads: &[(f64, f64)]) -> System {
+    use ssm_api::{Harmonic, MechanicalSystem, PolyVector, SparseMatrix};
+    let mut m = MechanicalSystem::new("duffing", &["x"]);
+    m.mass = SparseMatrix::diagonal(&[1.0]);
+    m.damping = SparseMatrix::diagonal(&[2.0 * zeta]);
+    m.stiffness = SparseMatrix::diagonal(&[1.0]);
+    let mut f = PolyVector::zeros(1, 2);
+    if gamma != 0.0 {
+        f.push(0, gamma, &[(0, 3)]);
+    }
+    m.internal_force = f;
+    m.forcing = loads
+        .iter()
+        .map(|&(k, a)| {
+            let mut cos = PolyVector::zeros(1, 2);
+            cos.push(0, a, &[]);
+            Harmonic {
+                multiple: k,
+                cos,
+                sin: PolyVector::zeros(1, 2),
+            }
+        })
+        .collect();
+    System::from_model("catalogue", m.into_model().expect("valid model")).expect("valid system")
+}
+
+/// The closed-form steady state `x(t)` of [`forced_duffing`] with `gamma =
+/// 0`: `sum_k eps a_k Re[e^(i k Omega t) / (1 - (k Omega)^2 + 2 i zeta k
+/// Omega)]`, restricted to the harmonics `k > above` (the tail a truncation
+/// at `above` harmonics leaves out).
+pub fn linear_steady_state(
+    zeta: f64,
+    eps: f64,
+    loads: &[(f64, f64)],
+    omega: f64,
+    above: f64,
+    t: f64,
+) -> f64 {
+    loads
+        .iter()
+        .filter(|(k, _)| *k > above)
+        .map(|&(k, a)| {
+            let w = k * omega;
+            let h = C64::new(1.0 - w * w, 2.0 * zeta * w).inv();
+            eps * a * (h * C64::new(0.0, w * t).exp()).re
+        })
+        .sum()
+}
+
+/// Two oscillators in 1:2 resonance where the second pumps the first
+/// parametrically: `x1'' + 2 zeta1 x1' + x1 + alpha x1 x2 = 0`, `x2'' + 4
+/// zeta2 x2' + 4 x2 + beta x1^2 = f cos(Omega t)`. On `x1 = 0` the second
+/// oscillator is linear, so the period-`T` branch is known in closed form
+/// and `x1` obeys a damped Mathieu equation whose tongue near `Omega = 2`
+/// is bounded by two period doublings.
+pub fn parametric_pump(zeta1: f64, zeta2: f64, alpha: f64, beta: f64, f: f64) -> System {
+    use ssm_api::{Harmonic, MechanicalSystem, PolyVector, SparseMatrix};
+    let mut m = MechanicalSystem::new("parametric-pump", &["x1", "x2"]);
+    m.mass = SparseMatrix::diagonal(&[1.0, 1.0]);
+    m.damping = SparseMatrix::diagonal(&[2.0 * zeta1, 4.0 * zeta2]);
+    m.stiffness = SparseMatrix::diagonal(&[1.0, 4.0]);
+    let mut nl = PolyVector::zeros(2, 4);
+    nl.push(0, alpha, &[(0, 1), (1, 1)]);
+    nl.push(1, beta, &[(0, 2)]);
+    m.internal_force = nl;
+    let mut cos = PolyVector::zeros(2, 4);
+    cos.push(1, f, &[]);
+    m.forcing = vec![Harmonic {
+        multiple: 1.0,
+        cos,
+        sin: PolyVector::zeros(2, 4),
+    }];
+    System::from_model("catalogue", m.into_model().expect("valid model")).expect("valid system")
+}

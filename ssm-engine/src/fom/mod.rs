@@ -52,6 +52,7 @@
 
 pub mod consistent;
 pub mod hht;
+pub mod periodic;
 pub mod problem;
 pub mod radau;
 pub mod sample;

@@ -5,7 +5,9 @@
 use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
+use super::reference::reference_curves;
 use crate::compare::validation::SteadyReference;
+use crate::fom::periodic::frc::ReferenceFrc;
 use crate::rom::accuracy::percent;
 use crate::rom::forced_response::{CurveDetails, ForcedResponse};
 
@@ -99,12 +101,17 @@ fn curves(f: &ForcedResponse) -> Vec<Curve> {
 }
 
 /// `frc.svg`: amplitude of the first output (or `rho_1`) against `Omega`, with
-/// the full-system steady states of `reference` as circles.
+/// the full-system steady states of `reference` as circles and the
+/// full-system curves of `[reference]` in black.
 pub fn frc_svg(
     f: &ForcedResponse,
     reference: Option<&SteadyReference>,
+    full: Option<&ReferenceFrc>,
 ) -> Result<String, PlotError> {
     let mut drawn = curves(f);
+    if let Some(r) = full {
+        drawn.extend(reference_curves(r));
+    }
     if let Some(r) = reference {
         drawn.push(Curve {
             label: format!("full system, eps = {} (steady state)", r.epsilon),

@@ -8,6 +8,7 @@ pub mod frc;
 pub mod identified;
 pub mod plot;
 pub mod pod;
+pub mod reference;
 pub mod report;
 pub mod simulation;
 pub mod ssm;
@@ -109,7 +110,13 @@ pub fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
     }
     if let Some(f) = s.frc {
         out.add("frc.csv", frc::frc_csv(f));
-        out.add("frc.svg", frc::frc_svg(f, steady)?);
+        out.add("frc.svg", frc::frc_svg(f, steady, s.reference)?);
+    }
+    if let Some(r) = s.reference {
+        out.add("reference_frc.csv", reference::reference_csv(r));
+        if s.frc.is_none() {
+            out.add("reference_frc.svg", reference::reference_svg(r)?);
+        }
     }
     if let Some(r) = s.report {
         out.add("report.csv", report::csv(r));

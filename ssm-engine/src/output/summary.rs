@@ -3,10 +3,11 @@
 
 use serde_json::{json, Value};
 
-use super::{frc, pod, report, simulation, ssm, validation};
+use super::{frc, pod, reference, report, simulation, ssm, validation};
 use crate::compare::pod::PodStudy;
 use crate::compare::report::Report;
 use crate::compare::validation::Validation;
+use crate::fom::periodic::frc::ReferenceFrc;
 use crate::fom::Simulation;
 use crate::model::plugin::PluginOrigin;
 use crate::model::system::System;
@@ -37,6 +38,8 @@ pub struct Timing {
     pub report: f64,
     /// The `[pod]` study.
     pub pod: f64,
+    /// The `[reference]` forced responses.
+    pub reference: f64,
     /// The whole run.
     pub total: f64,
 }
@@ -77,6 +80,8 @@ pub struct Summary<'a> {
     pub simulation: Option<&'a Simulation>,
     /// The `[pod]` study.
     pub pod: Option<&'a PodStudy>,
+    /// The `[reference]` forced responses of the full system.
+    pub reference: Option<&'a ReferenceFrc>,
     /// The accuracy target, the order and every answer's estimate.
     pub accuracy: &'a Accuracy,
     /// Warnings of the run.
@@ -131,6 +136,7 @@ pub fn summary_json(s: &Summary<'_>) -> String {
         "report": s.report.map(report::json),
         "simulation": s.simulation.map(simulation::simulation_json),
         "pod": s.pod.map(pod::pod_json),
+        "reference": s.reference.map(reference::reference_json),
         "accuracy": accuracy_json(s.accuracy),
         "warnings": s.warnings,
         "timing_s": {
@@ -145,6 +151,7 @@ pub fn summary_json(s: &Summary<'_>) -> String {
             "validation": t.validation,
             "report": t.report,
             "pod": t.pod,
+            "reference": t.reference,
             "total": t.total,
         },
         "linear_algebra": {

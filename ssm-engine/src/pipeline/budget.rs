@@ -493,3 +493,47 @@ pub fn check(
     }
     Ok(())
 }
+
+/// Continuation steps assumed per reference branch when `max_steps` allows
+/// more (the zoo's branches take 100-300).
+const REFERENCE_STEPS: f64 = 500.0;
+
+/// Refuses a `[reference]` that would not finish within `limits`: per step
+/// five sparse factorizations of the harmonic-balance Jacobian (a dense
+/// `(2H+1)^2` block per nonzero of the pencil, eliminated at `(2H+1)^3` each)
+/// and, up to the dense Hill limit, one Hill eigenproblem (`(N (2H+1))^3`).
+pub fn check_reference(
+    scene: &SceneFile,
+    system: &System,
+    limits: &Limits,
+) -> Result<(), JobError> {
+    let Some(r) = &scene.scene.reference else {
+        return Ok(());
+    };
+    let sizes = Sizes::of(system);
+    let k = 2.0 * *r.harmonics.get_ref() as f64 + 1.0;
+    let nu = sizes.states * k;
+    let factor = 2.0 * (sizes.nnz + sizes.factors) * k.powi(3);
+    let hill = if nu <= crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64 {
+        nu.powi(3)
+    } else {
+        0.0
+    };
+    let branches = r.epsilon.get_ref().len() as f64;
+    let steps = (*r.max_steps.get_ref() as f64).min(REFERENCE_STEPS);
+    let cost = Cost {
+        ops: branches * steps * (5.0 * factor + hill),
+        bytes: 8.0 * (sizes.nnz + sizes.factors) * k * k * 4.0 + 8.0 * nu * nu.min(1500.0),
+    };
+    ensure(
+        scene,
+        r.harmonics.span(),
+        "reference.harmonics",
+        format!(
+            "the full-system reference ({branches:.0} branches of orbits with {nu:.0} Fourier coefficients)"
+        ),
+        &cost,
+        limits,
+        "lower harmonics or max_steps, or give fewer epsilon",
+    )
+}

@@ -62,6 +62,9 @@ pub enum JobError {
     /// The `[pod]` study failed.
     #[error("[pod] {0}")]
     Pod(#[from] crate::compare::pod::PodStudyError),
+    /// The `[reference]` forced response failed.
+    #[error(transparent)]
+    Reference(#[from] crate::fom::periodic::ReferenceError),
     /// A plot could not be drawn.
     #[error(transparent)]
     Plot(#[from] PlotError),

@@ -13,6 +13,7 @@ mod checks;
 mod error;
 pub mod export;
 mod pod;
+mod reference;
 mod simulate;
 mod spectral;
 
@@ -26,6 +27,7 @@ use crate::compare::instantaneous::{data_backbones, near_frequency, DataBackbone
 use crate::compare::pod::PodStudy;
 use crate::compare::report::{report, Report, ReportInputs};
 use crate::compare::validation::{validation, Validation};
+use crate::fom::periodic::frc::ReferenceFrc;
 use crate::model::plugin::{PluginOrigin, Registry};
 use crate::model::source::build_model;
 use crate::model::system::{OutputMap, System};
@@ -70,6 +72,8 @@ pub struct JobResult {
     pub pod: Option<PodStudy>,
     /// Forced response curves of `[forcing]`.
     pub frc: Option<ForcedResponse>,
+    /// The full system's forced responses of `[reference]`.
+    pub reference: Option<ReferenceFrc>,
     /// Full-system comparisons of `[validate]`.
     pub validation: Option<Validation>,
     /// Speed-against-error report.
@@ -401,6 +405,7 @@ pub fn run(
             ssm: None,
             pod,
             frc: None,
+            reference: None,
             validation: None,
             report: None,
             warnings,
@@ -417,6 +422,7 @@ pub fn run(
     timing.spectrum = sp.spectrum_s;
     timing.resonance_check = sp.resonance_s;
     budget::check(scene, &system, &sp.masters, ceiling, &limits)?;
+    budget::check_reference(scene, &system, &limits)?;
 
     let others: Vec<C64> = ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
     let stage = Stage {
@@ -458,6 +464,17 @@ pub fn run(
         tried,
         answers: estimates,
         measured: Vec::new(),
+    };
+
+    let full_frc = match &sc.reference {
+        Some(sec) => {
+            let (r, w) =
+                reference::reference_stage(scene, sec, &system, &coordinates, tolerance, progress)?;
+            warnings.extend(w);
+            timing.reference = r.seconds;
+            Some(r)
+        }
+        None => None,
     };
 
     let t = Instant::now();
@@ -570,6 +587,7 @@ pub fn run(
             report: speed.as_ref(),
             simulation: simulation.as_ref(),
             pod: pod.as_ref(),
+            reference: full_frc.as_ref(),
             accuracy: &accuracy,
             warnings: &warnings,
             timing,
@@ -582,6 +600,7 @@ pub fn run(
         ssm: Some(expansion),
         pod,
         frc,
+        reference: full_frc,
         validation: checked,
         report: speed,
         warnings,

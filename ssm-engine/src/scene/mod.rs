@@ -14,12 +14,17 @@ use toml::Spanned;
 
 mod pod;
 mod reduce;
+mod reference;
 mod simulate;
 mod validate;
 
 pub use crate::spectrum::Normalization;
 pub use pod::{PodRun, PodSection, MAX_POD_ROMS, MAX_POD_STEPS, MAX_POD_TESTS};
 pub use reduce::{DataSection, ReduceSection};
+pub use reference::{
+    ReferenceSection, MAX_HARMONICS, MAX_REFERENCE_COEFFICIENTS, MAX_REFERENCE_CURVES,
+    MAX_REFERENCE_STEPS,
+};
 pub use simulate::{SimulateRun, SimulateSection, MAX_SAMPLES};
 pub use validate::{ReportSection, SteadyStart, SteadyStateSection, ValidateSection};
 
@@ -168,6 +173,9 @@ pub struct Scene {
     /// POD reduction with constraint reduction, compared with the full model.
     #[serde(default)]
     pub pod: Option<PodSection>,
+    /// The full system's forced response by harmonic balance.
+    #[serde(default)]
+    pub reference: Option<ReferenceSection>,
 }
 
 /// `[forcing]`: forced response curves of the periodic SSM. The load's shape is
@@ -515,6 +523,7 @@ impl SceneFile {
         self.check_validate()?;
         self.check_simulate()?;
         self.check_pod()?;
+        self.check_reference()?;
         if let Some(m) = &self.scene.spectrum.modes {
             if *m.get_ref() == 0 {
                 return Err(self.invalid(m.span(), "spectrum.modes", "must be at least 1".into()));

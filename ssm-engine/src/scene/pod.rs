@@ -110,7 +110,7 @@ impl PodSection {
 impl SceneFile {
     /// Whether the scene asks for an SSM answer: any scene without `[pod]`,
     /// and a `[pod]` scene with a backbone, invariance error, transient,
-    /// forcing, validation, report or simulation (the SSM models of `[pod]
+    /// forcing, validation, report, simulation or reference (the SSM models of `[pod]
     /// ssm_pairs` are the study's own).
     pub fn wants_ssm(&self) -> bool {
         let sc = &self.scene;
@@ -123,6 +123,7 @@ impl SceneFile {
             || sc.validate.is_some()
             || sc.report.is_some()
             || sc.simulate.is_some()
+            || sc.reference.is_some()
     }
 
     pub(super) fn check_pod(&self) -> Result<(), SceneError> {

@@ -98,13 +98,24 @@ fn numerical_rank(m: &Mat<f64>) -> Result<(usize, Mat<f64>), SpectrumError> {
     Ok((rank, svd.U().subcols(0, rank).to_owned()))
 }
 
-/// All finite eigenvalues of `(A, B)`, unsorted.
-pub fn finite_eigenvalues(
+/// The structure of the nilpotent part found by [`finite_eigenvalues`]:
+/// `range(T^power)` is the finite invariant subspace, of dimension `rank`.
+/// Pencils that differ by a smooth change of their entries (the Floquet
+/// problems along a branch of periodic orbits) keep it, so it can be reused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FiniteStructure {
+    /// The index `nu`.
+    pub power: usize,
+    /// Dimension of the finite invariant subspace.
+    pub rank: usize,
+}
+
+/// `T = (A - sigma B)^{-1} B`, balanced.
+fn shifted_inverse(
     a: SparseColMatRef<'_, usize, f64>,
     b: SparseColMatRef<'_, usize, f64>,
     shift: f64,
-) -> Result<Vec<C64>, SpectrumError> {
-    let n = a.nrows();
+) -> Result<Mat<f64>, SpectrumError> {
     let shifted = super::sparse::combine(a, b, -shift).to_dense();
     let lu = shifted.partial_piv_lu();
     let mut t: Mat<f64> = b.to_dense();
@@ -123,11 +134,78 @@ pub fn finite_eigenvalues(
         });
     }
     balance(&mut t);
-    let (mut rank, mut q) = numerical_rank(&t)?;
+    Ok(t)
+}
+
+/// The finite eigenvalues `sigma + 1/theta` from the eigenvalues `theta` of
+/// `T` on the orthonormal basis `q` of its finite invariant subspace.
+fn eigenvalues_on(t: &Mat<f64>, q: &Mat<f64>, shift: f64) -> Result<Vec<C64>, SpectrumError> {
+    let h = q.transpose() * t * q;
+    let theta = h
+        .eigenvalues()
+        .map_err(|_| SpectrumError::NoConvergence { n: t.nrows() })?;
+    Ok(theta
+        .iter()
+        .map(|t| C64::new(shift, 0.0) + C64::new(1.0, 0.0) / C64::new(t.re, t.im))
+        .collect())
+}
+
+/// [`finite_eigenvalues`] reusing a known [`FiniteStructure`]: the basis of
+/// `range(T^power)` from a column-pivoted QR instead of the rank search by
+/// SVDs of every power. The structure is checked (a gap of six decades in
+/// the diagonal of `R` after `rank` columns) and searched anew, and
+/// `structure` updated, when it does not hold.
+pub fn finite_eigenvalues_with(
+    a: SparseColMatRef<'_, usize, f64>,
+    b: SparseColMatRef<'_, usize, f64>,
+    shift: f64,
+    structure: &mut Option<FiniteStructure>,
+) -> Result<Vec<C64>, SpectrumError> {
+    let t = shifted_inverse(a, b, shift)?;
+    if let Some(st) = *structure {
+        let mut power = t.clone();
+        for _ in 1..st.power {
+            power = &t * &power;
+        }
+        let qr = power.col_piv_qr();
+        let r = qr.R();
+        let d = |i: usize| r[(i, i)].abs();
+        let n = r.nrows().min(r.ncols());
+        let holds = st.rank >= 1
+            && st.rank <= n
+            && d(st.rank - 1) > RANK_TOL * d(0)
+            && (st.rank == n || d(st.rank) < 1e-6 * d(st.rank - 1));
+        if holds {
+            let q = qr.compute_thin_Q().subcols(0, st.rank).to_owned();
+            return eigenvalues_on(&t, &q, shift);
+        }
+    }
+    let (q, st) = finite_subspace(&t)?;
+    *structure = Some(st);
+    eigenvalues_on(&t, &q, shift)
+}
+
+/// All finite eigenvalues of `(A, B)`, unsorted.
+pub fn finite_eigenvalues(
+    a: SparseColMatRef<'_, usize, f64>,
+    b: SparseColMatRef<'_, usize, f64>,
+    shift: f64,
+) -> Result<Vec<C64>, SpectrumError> {
+    let t = shifted_inverse(a, b, shift)?;
+    let (q, _) = finite_subspace(&t)?;
+    eigenvalues_on(&t, &q, shift)
+}
+
+/// An orthonormal basis of the finite invariant subspace `range(T^nu)` and
+/// the structure found: the first power at which the numerical rank stops
+/// falling.
+fn finite_subspace(t: &Mat<f64>) -> Result<(Mat<f64>, FiniteStructure), SpectrumError> {
+    let (mut rank, mut q) = numerical_rank(t)?;
     let mut power = t.clone();
     let mut stable = false;
+    let mut nu = 1;
     for _ in 1..MAX_INDEX {
-        power = &t * &power;
+        power = t * &power;
         let (r, qq) = numerical_rank(&power)?;
         if r == rank {
             stable = true;
@@ -135,6 +213,7 @@ pub fn finite_eigenvalues(
         }
         rank = r;
         q = qq;
+        nu += 1;
     }
     if !stable {
         return Err(SpectrumError::SingularPencil {
@@ -143,12 +222,5 @@ pub fn finite_eigenvalues(
             ),
         });
     }
-    let h = q.transpose() * &t * &q;
-    let theta = h
-        .eigenvalues()
-        .map_err(|_| SpectrumError::NoConvergence { n })?;
-    Ok(theta
-        .iter()
-        .map(|t| C64::new(shift, 0.0) + C64::new(1.0, 0.0) / C64::new(t.re, t.im))
-        .collect())
+    Ok((q, FiniteStructure { power: nu, rank }))
 }

@@ -1,0 +1,577 @@
+//! Continuation of the zeros of `F(u) = 0`,
+//! `F: R^(n+1) -> R^n`, the continuation parameter being the last unknown.
+//!
+//! One core for every continued problem: the problem gives its residual, a
+//! factorization of the bordered Jacobian `[F_u(u); e_k^T]` (dense or sparse,
+//! its choice) and its test functions; the core does the rest.
+//!
+//! The branch is parametrized locally by the unknown `k` of the largest
+//! tangent component (Rheinboldt's local parametrization, as in PITCON):
+//! near a fold in the parameter that is an amplitude, elsewhere mostly the
+//! parameter. Unlike Keller's pseudo-arclength row `t^T`, the border `e_k^T`
+//! is sparse, so a sparse problem factors `F_u` with column `k` removed and
+//! keeps the fill of its own Jacobian (a dense border row makes the
+//! structure of `J^T J`, and so the symbolic LU with partial pivoting, dense).
+//!
+//! - Predictor: `u_pred = u + h t` with the unit tangent `t`, the solution of
+//!   `[F_u(u); e_k^T] t = e_(n+1)`, normalized (its orientation follows the
+//!   previous tangent, so the branch passes folds without turning back).
+//! - Corrector: Newton on `[F(u); u_k - u_pred,k] = 0`, with a fresh
+//!   factorization at each iterate.
+//! - Step control: the step halves when the corrector fails or the tangent
+//!   turns by more than [`Settings::max_turn`] (so that two events never share
+//!   a step), and grows by 1.3 up to `h_max` after a straight, fast step.
+//! - Events: folds in the parameter (the parameter component of the tangent
+//!   changes sign) and the problem's test functions, either signed values
+//!   (an event where the sign changes) or counts (an event where the count
+//!   changes: unstable Floquet multipliers or eigenvalues). Each event is
+//!   located along the arc by bisection of the arclength in `[0, h]`, every
+//!   trial point corrected onto the branch.
+//! - Stops: the parameter leaves its range, the problem's own bound (e.g. an
+//!   amplitude up to which a model is trusted), the branch closes on itself,
+//!   the step falls below `h_min`, or `max_steps`.
+//!
+//! # References
+//! W. C. Rheinboldt, J. V. Burkardt, A locally parameterized continuation
+//! process, ACM Trans. Math. Softw. 9 (1983) 215-235;
+//! H. B. Keller, Numerical solution of bifurcation and nonlinear eigenvalue
+//! problems, in *Applications of Bifurcation Theory*, Academic Press (1977);
+//! E. L. Allgower, K. Georg, *Introduction to Numerical Continuation
+//! Methods*, SIAM (2003), Chs. 2, 8; H. Dankowicz, F. Schilder, *Recipes for
+//! Continuation*, SIAM (2013), Chs. 3, 10; W. Govaerts, *Numerical Methods
+//! for Bifurcations of Dynamical Equilibria*, SIAM (2000), Ch. 3.
+
+/// A failure of the problem (its residual, factorization or tests), in words.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct ProblemFailure(pub String);
+
+/// One test function at a point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Test {
+    /// A signed value: an event where the sign changes.
+    Sign(f64),
+    /// A count: an event where it changes.
+    Count(usize),
+}
+
+impl Test {
+    fn differs(self, other: Test) -> bool {
+        match (self, other) {
+            (Test::Sign(a), Test::Sign(b)) => (a > 0.0) != (b > 0.0),
+            (Test::Count(a), Test::Count(b)) => a != b,
+            _ => true,
+        }
+    }
+}
+
+/// What a problem reports at a corrected point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Monitor<I> {
+    /// Test functions, in a fixed order.
+    pub tests: Vec<Test>,
+    /// The problem's data at the point (stability, multipliers, ...).
+    pub info: I,
+}
+
+/// A continued problem.
+pub trait Problem {
+    /// Data attached to each point.
+    type Info: Clone;
+    /// Number of unknowns `n + 1`, the parameter last.
+    fn dim(&self) -> usize;
+    /// `F(u)`, `n` values.
+    fn residual(&mut self, u: &[f64]) -> Result<Vec<f64>, ProblemFailure>;
+    /// Factorizes `[F_u(u); e_k^T]` for the following [`Problem::solve`]s.
+    fn factor(&mut self, u: &[f64], k: usize) -> Result<(), ProblemFailure>;
+    /// Solves with the last factorization, in place (`n + 1` values).
+    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), ProblemFailure>;
+    /// Test functions and data at a corrected point with unit tangent `t`.
+    fn monitor(&mut self, u: &[f64], t: &[f64]) -> Result<Monitor<Self::Info>, ProblemFailure>;
+    /// True where the branch must stop although the parameter is in range
+    /// (the problem's own bound).
+    fn beyond(&self, _u: &[f64]) -> bool {
+        false
+    }
+}
+
+/// Settings of a continuation run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// The branch stops when the parameter leaves this range.
+    pub range: (f64, f64),
+    /// First step.
+    pub h0: f64,
+    /// Largest step.
+    pub h_max: f64,
+    /// Smallest step before giving up.
+    pub h_min: f64,
+    /// Largest number of continuation steps.
+    pub max_steps: usize,
+    /// Largest angle (radians) between consecutive tangents.
+    pub max_turn: f64,
+    /// Newton tolerance on the update, relative to `1 + |u|`.
+    pub tol: f64,
+    /// Largest number of corrector iterations.
+    pub max_newton: usize,
+}
+
+impl Settings {
+    /// Defaults for a parameter range and a largest step.
+    pub fn new(range: (f64, f64), h_max: f64) -> Self {
+        Self {
+            range,
+            h0: h_max,
+            h_max,
+            h_min: h_max * 1e-6,
+            max_steps: 10_000,
+            max_turn: 0.1,
+            tol: 1e-10,
+            max_newton: 16,
+        }
+    }
+}
+
+/// A corrected point of a branch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point<I> {
+    /// The unknowns, the parameter last.
+    pub u: Vec<f64>,
+    /// The unit tangent.
+    pub tangent: Vec<f64>,
+    /// The problem's test functions and data.
+    pub monitor: Monitor<I>,
+}
+
+impl<I> Point<I> {
+    /// The parameter.
+    pub fn parameter(&self) -> f64 {
+        self.u[self.u.len() - 1]
+    }
+}
+
+/// What was located on a branch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventKind {
+    /// A fold in the parameter.
+    Fold,
+    /// A change of the problem's test function of this index.
+    Test(usize),
+}
+
+/// A located event.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Event<I> {
+    /// What changed.
+    pub kind: EventKind,
+    /// Index of the branch point after which it lies.
+    pub after: usize,
+    /// The located point.
+    pub at: Point<I>,
+}
+
+/// Why a branch ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Stop {
+    /// The parameter left its range.
+    Range,
+    /// The problem's own bound ([`Problem::beyond`]).
+    Bound,
+    /// The branch came back to its start.
+    Closed,
+    /// `max_steps` reached.
+    MaxSteps,
+    /// The step fell below `h_min`; the last failure.
+    StepTooSmall {
+        /// Parameter reached.
+        parameter: f64,
+        /// The corrector's last failure.
+        cause: String,
+    },
+    /// The observer asked to stop.
+    Interrupted,
+}
+
+/// A continued branch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Branch<I> {
+    /// Points in order.
+    pub points: Vec<Point<I>>,
+    /// Located events in order.
+    pub events: Vec<Event<I>>,
+    /// Why it ended.
+    pub stop: Stop,
+}
+
+/// Why a continuation could not start.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ContinuationError {
+    /// The start point is not a zero of `F`.
+    #[error("continuation: no solution near the start at parameter {parameter}: {cause}")]
+    Start {
+        /// Start parameter.
+        parameter: f64,
+        /// The corrector's failure.
+        cause: String,
+    },
+    /// The problem failed at the start (tangent or test functions).
+    #[error("continuation: the problem failed at the start point: {0}")]
+    Problem(#[from] ProblemFailure),
+}
+
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// The index of the largest component of `t`: the local parameter.
+pub fn local_parameter(t: &[f64]) -> usize {
+    t.iter()
+        .enumerate()
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        .map_or(0, |(i, _)| i)
+}
+
+/// Newton on `[F(u); u_k - anchor_k] = 0` from `u`, as a chord iteration:
+/// the Jacobian is factored at the first iterate and again only where an
+/// update shrank by less than a factor 4 (one sparse LU is the cost of a
+/// step on large problems; a corrector from a good predictor contracts fast
+/// with the first factorization). Returns the point and the number of
+/// iterations.
+pub fn correct<P: Problem>(
+    p: &mut P,
+    mut u: Vec<f64>,
+    anchor: &[f64],
+    k: usize,
+    s: &Settings,
+) -> Result<(Vec<f64>, usize), ProblemFailure> {
+    let mut refactor = true;
+    let mut last = f64::INFINITY;
+    for it in 1..=s.max_newton {
+        let mut rhs = p.residual(&u)?;
+        rhs.push(u[k] - anchor[k]);
+        rhs.iter_mut().for_each(|v| *v = -*v);
+        if refactor {
+            p.factor(&u, k)?;
+            refactor = false;
+        }
+        p.solve(&mut rhs)?;
+        if !rhs.iter().all(|v| v.is_finite()) {
+            return Err(ProblemFailure("the Newton update is not finite".into()));
+        }
+        u.iter_mut().zip(&rhs).for_each(|(a, d)| *a += d);
+        let step = norm(&rhs);
+        if step <= s.tol * (1.0 + norm(&u)) {
+            return Ok((u, it));
+        }
+        if step > 0.25 * last {
+            refactor = true;
+        }
+        last = step;
+    }
+    Err(ProblemFailure(format!(
+        "Newton did not converge in {} iterations",
+        s.max_newton
+    )))
+}
+
+/// The unit tangent at `u`, oriented along `prev`.
+pub fn tangent<P: Problem>(p: &mut P, u: &[f64], prev: &[f64]) -> Result<Vec<f64>, ProblemFailure> {
+    p.factor(u, local_parameter(prev))?;
+    let mut t = vec![0.0; u.len()];
+    t[u.len() - 1] = 1.0;
+    p.solve(&mut t)?;
+    let n = norm(&t);
+    if !n.is_finite() || n == 0.0 {
+        return Err(ProblemFailure(
+            "the tangent is not finite: the bordered Jacobian is singular".into(),
+        ));
+    }
+    if dot(&t, prev) < 0.0 {
+        t.iter_mut().for_each(|v| *v = -*v / n);
+    } else {
+        t.iter_mut().for_each(|v| *v /= n);
+    }
+    Ok(t)
+}
+
+fn point_at<P: Problem>(
+    p: &mut P,
+    u: Vec<f64>,
+    prev: &[f64],
+) -> Result<Point<P::Info>, ProblemFailure> {
+    let t = tangent(p, &u, prev)?;
+    let monitor = p.monitor(&u, &t)?;
+    Ok(Point {
+        u,
+        tangent: t,
+        monitor,
+    })
+}
+
+/// Solves `F(u) = 0` with the parameter fixed at the last entry of `guess`.
+pub fn solve_at_parameter<P: Problem>(
+    p: &mut P,
+    guess: Vec<f64>,
+    s: &Settings,
+) -> Result<Vec<f64>, ContinuationError> {
+    let anchor = guess.clone();
+    let k = guess.len() - 1;
+    correct(p, guess, &anchor, k, s)
+        .map(|(u, _)| u)
+        .map_err(|e| ContinuationError::Start {
+            parameter: anchor[anchor.len() - 1],
+            cause: e.0,
+        })
+}
+
+/// The point between `from` and `to` (consecutive points of a branch) where
+/// `kind` changes: trial points `from + sigma (to - from)`, `sigma` in
+/// `[0, 1]`, corrected in the hyperplane of the chord's largest component
+/// (which the arc crosses once between two points of a step, also when a
+/// fold lies between them); `sigma` by regula falsi with the Illinois
+/// modification on the continuous value (the tangent's parameter component
+/// for folds, a signed test function), by bisection for counts.
+fn locate<P: Problem>(
+    p: &mut P,
+    from: &Point<P::Info>,
+    to: &Point<P::Info>,
+    kind: EventKind,
+    s: &Settings,
+) -> Option<Point<P::Info>> {
+    let k = from.u.len() - 1;
+    let chord: Vec<f64> = to.u.iter().zip(&from.u).map(|(a, b)| a - b).collect();
+    let k_chord = local_parameter(&chord);
+    let h = 1.0;
+    // the continuous value, or +-1 for counts (+1 where equal to `from`)
+    let value = |a: &Point<P::Info>| -> (f64, bool) {
+        match kind {
+            EventKind::Fold => (a.tangent[k], true),
+            EventKind::Test(i) => match (from.monitor.tests[i], a.monitor.tests[i]) {
+                (Test::Sign(_), Test::Sign(v)) => (v, true),
+                (f, v) => (if f.differs(v) { -1.0 } else { 1.0 }, false),
+            },
+        }
+    };
+    // a fold needs the tangent only; the problem's tests need its monitor
+    let needs_monitor = kind != EventKind::Fold;
+    let at = |p: &mut P, sigma: f64| -> Option<Point<P::Info>> {
+        let pred: Vec<f64> = from
+            .u
+            .iter()
+            .zip(&chord)
+            .map(|(a, b)| a + sigma * b)
+            .collect();
+        let (u, _) = correct(p, pred.clone(), &pred, k_chord, s).ok()?;
+        let tangent = tangent(p, &u, &from.tangent).ok()?;
+        let monitor = if needs_monitor {
+            p.monitor(&u, &tangent).ok()?
+        } else {
+            from.monitor.clone()
+        };
+        Some(Point {
+            u,
+            tangent,
+            monitor,
+        })
+    };
+    let (f_from, continuous) = value(from);
+    let (mut lo, mut hi) = (0.0, h);
+    let (mut f_lo, mut f_hi) = (f_from, if continuous { f64::NAN } else { -1.0 });
+    let mut best = to.clone();
+    if continuous {
+        f_hi = value(&best).0;
+        if (f_hi > 0.0) == (f_lo > 0.0) {
+            return Some(best);
+        }
+    }
+    let mut side = 0i8;
+    for _ in 0..60 {
+        let mid = if continuous && f_lo != f_hi {
+            (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        } else {
+            0.5 * (lo + hi)
+        };
+        let mid = mid.clamp(lo + 1e-3 * (hi - lo), hi - 1e-3 * (hi - lo));
+        let Some(pt) = at(p, mid) else { break };
+        let (f, _) = value(&pt);
+        if continuous && f == 0.0 {
+            best = pt;
+            break;
+        }
+        if (f > 0.0) == (f_lo > 0.0) {
+            lo = mid;
+            f_lo = f;
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
+        } else {
+            hi = mid;
+            f_hi = f;
+            best = pt;
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
+        }
+        if hi - lo <= 1e-10 * h {
+            break;
+        }
+    }
+    if !needs_monitor {
+        best.monitor = p.monitor(&best.u, &best.tangent).ok()?;
+    }
+    Some(best)
+}
+
+/// Continues the branch through the solution `u0` in the direction `t0`,
+/// calling `observe` with each accepted point (and its events); the
+/// observer returns `false` to stop.
+pub fn continue_branch<P, O>(
+    p: &mut P,
+    u0: Vec<f64>,
+    t0: &[f64],
+    s: &Settings,
+    mut observe: O,
+) -> Result<Branch<P::Info>, ContinuationError>
+where
+    P: Problem,
+    O: FnMut(&Point<P::Info>, &[Event<P::Info>]) -> bool,
+{
+    let k = u0.len() - 1;
+    let first = point_at(p, u0, t0)?;
+    let mut points = vec![first];
+    let mut events: Vec<Event<P::Info>> = Vec::new();
+    if !observe(&points[0], &[]) {
+        return Ok(Branch {
+            points,
+            events,
+            stop: Stop::Interrupted,
+        });
+    }
+    let mut h = s.h0.min(s.h_max);
+    let mut steps = 0;
+    let stop = loop {
+        if steps >= s.max_steps {
+            break Stop::MaxSteps;
+        }
+        steps += 1;
+        let last = points.last().expect("a branch has its start");
+        let pred: Vec<f64> = last
+            .u
+            .iter()
+            .zip(&last.tangent)
+            .map(|(a, b)| a + h * b)
+            .collect();
+        let k_local = local_parameter(&last.tangent);
+        let corrected = correct(p, pred.clone(), &pred, k_local, s)
+            .and_then(|(u, it)| tangent(p, &u, &last.tangent).map(|t| (u, t, it)));
+        let (u_new, t_new, iters) = match corrected {
+            Ok(v) => v,
+            Err(e) => {
+                h *= 0.5;
+                if h < s.h_min {
+                    break Stop::StepTooSmall {
+                        parameter: last.u[k],
+                        cause: e.0,
+                    };
+                }
+                continue;
+            }
+        };
+        let turn = dot(&t_new, &last.tangent).clamp(-1.0, 1.0).acos();
+        if turn > s.max_turn && h > s.h_min * 2.0 {
+            h *= 0.5;
+            continue;
+        }
+        let next = match p.monitor(&u_new, &t_new) {
+            Ok(monitor) => Point {
+                u: u_new,
+                tangent: t_new,
+                monitor,
+            },
+            Err(e) => {
+                h *= 0.5;
+                if h < s.h_min {
+                    break Stop::StepTooSmall {
+                        parameter: last.u[k],
+                        cause: e.0,
+                    };
+                }
+                continue;
+            }
+        };
+        let last = last.clone();
+        let mut found = Vec::new();
+        if (next.tangent[k] > 0.0) != (last.tangent[k] > 0.0) {
+            found.push(EventKind::Fold);
+        }
+        for (i, (a, b)) in last
+            .monitor
+            .tests
+            .iter()
+            .zip(&next.monitor.tests)
+            .enumerate()
+        {
+            if a.differs(*b) {
+                found.push(EventKind::Test(i));
+            }
+        }
+        let after = points.len() - 1;
+        let new_events: Vec<Event<P::Info>> = found
+            .into_iter()
+            .filter_map(|kind| locate(p, &last, &next, kind, s).map(|at| Event { kind, after, at }))
+            .collect();
+        events.extend(new_events.iter().cloned());
+        let u_next = next.u.clone();
+        points.push(next);
+        let newest = points.last().expect("just pushed");
+        if !observe(newest, &new_events) {
+            break Stop::Interrupted;
+        }
+        if u_next[k] < s.range.0 || u_next[k] > s.range.1 {
+            break Stop::Range;
+        }
+        if p.beyond(&u_next) {
+            break Stop::Bound;
+        }
+        let start = &points[0];
+        if points.len() > 10
+            && passes_through(&last.u, &u_next, &start.u, 0.1 * s.h_max)
+            && dot(&newest.tangent, &start.tangent) > 0.5
+        {
+            break Stop::Closed;
+        }
+        if turn < 0.25 * s.max_turn && iters <= 5 {
+            h = (1.3 * h).min(s.h_max);
+        }
+    };
+    Ok(Branch {
+        points,
+        events,
+        stop,
+    })
+}
+
+/// True when the segment from `a` to `b` passes within `tol` of `p`.
+fn passes_through(a: &[f64], b: &[f64], p: &[f64], tol: f64) -> bool {
+    let ab: Vec<f64> = b.iter().zip(a).map(|(x, y)| x - y).collect();
+    let ap: Vec<f64> = p.iter().zip(a).map(|(x, y)| x - y).collect();
+    let len2 = dot(&ab, &ab);
+    let s = if len2 > 0.0 {
+        (dot(&ap, &ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let d2: f64 = ap.iter().zip(&ab).map(|(x, y)| (x - s * y).powi(2)).sum();
+    d2.sqrt() <= tol
+}
+
+pub mod sparse;
+
+#[cfg(test)]
+mod tests;

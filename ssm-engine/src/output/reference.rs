@@ -1,0 +1,156 @@
+//! Writers of `[reference]`: `reference_frc.csv`, the reference curves drawn
+//! on `frc.svg` (or `reference_frc.svg` without `[forcing]`), and the
+//! summary's `reference`. They format a [`ReferenceFrc`] and compute nothing.
+
+use serde_json::{json, Value};
+
+use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::continuation::Stop;
+use crate::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
+
+/// `reference_frc.csv`: `omega,epsilon,stable,branch,period_multiple,
+/// <out>_linf...,max_multiplier,tail`, one row per orbit (`stable` and
+/// `max_multiplier` empty where the multipliers were not computed).
+pub fn reference_csv(r: &ReferenceFrc) -> String {
+    let mut csv = String::from("omega,epsilon,stable,branch,period_multiple");
+    for o in &r.outputs {
+        csv.push_str(&format!(",{o}_linf"));
+    }
+    csv.push_str(",max_multiplier,tail\n");
+    for o in r.branches.iter().flat_map(|b| &b.orbits) {
+        csv.push_str(&format!(
+            "{:.12e},{:e},{},{},{}",
+            o.omega,
+            o.epsilon,
+            o.stable.map_or(String::new(), |s| u8::from(s).to_string()),
+            o.branch,
+            o.period_multiple
+        ));
+        for v in &o.linf {
+            csv.push_str(&format!(",{v:.12e}"));
+        }
+        csv.push_str(&format!(
+            ",{},{:.3e}\n",
+            o.max_multiplier
+                .map_or(String::new(), |m| format!("{m:.10e}")),
+            o.tail
+        ));
+    }
+    csv
+}
+
+/// The reference curves to draw: per branch one segment per run of equal
+/// stability (dashed when unstable), and its bifurcations as markers; the
+/// first output's amplitude (nothing when the scene names no output).
+pub fn reference_curves(r: &ReferenceFrc) -> Vec<Curve> {
+    let mut drawn = Vec::new();
+    if r.outputs.is_empty() {
+        return drawn;
+    }
+    let y = |o: &ReferenceOrbit| (o.omega, o.linf[0]);
+    for b in &r.branches {
+        let mut labelled = false;
+        let mut k = 0;
+        let orbits = &b.orbits;
+        while k < orbits.len() {
+            let st = orbits[k].stable;
+            let mut seg = Vec::new();
+            if k > 0 {
+                seg.push(y(&orbits[k - 1]));
+            }
+            while k < orbits.len() && orbits[k].stable == st {
+                seg.push(y(&orbits[k]));
+                k += 1;
+            }
+            drawn.push(Curve {
+                label: if labelled {
+                    String::new()
+                } else {
+                    format!(
+                        "full system (harmonic balance, H = {}), eps = {}",
+                        r.harmonics,
+                        orbits.first().map_or(0.0, |o| o.epsilon)
+                    )
+                },
+                points: seg,
+                dashed: st == Some(false),
+                markers: Vec::new(),
+                color: None,
+            });
+            labelled = true;
+        }
+        drawn.push(Curve {
+            markers: b.events.iter().map(|e| y(&e.orbit)).collect(),
+            ..Curve::default()
+        });
+    }
+    drawn
+}
+
+/// `reference_frc.svg`: the reference alone (a scene without `[forcing]`).
+pub fn reference_svg(r: &ReferenceFrc) -> Result<String, PlotError> {
+    let y_label = r
+        .outputs
+        .first()
+        .map_or("amplitude".to_owned(), |o| format!("max |{o}|"));
+    line_plot(
+        "full-system forced response (dashed: unstable, circles: bifurcations)",
+        "Omega",
+        &y_label,
+        &reference_curves(r),
+        Scale::Linear,
+    )
+}
+
+fn stop_text(s: &Stop) -> String {
+    match s {
+        Stop::Range => "range".into(),
+        Stop::Bound => "bound".into(),
+        Stop::Closed => "closed".into(),
+        Stop::MaxSteps => "max_steps".into(),
+        Stop::StepTooSmall { cause, .. } => format!("step too small: {cause}"),
+        Stop::Interrupted => "interrupted".into(),
+    }
+}
+
+/// The summary's `reference`.
+pub fn reference_json(r: &ReferenceFrc) -> Value {
+    let branches: Vec<Value> = r
+        .branches
+        .iter()
+        .map(|b| {
+            let eps = b.orbits.first().map_or(0.0, |o| o.epsilon);
+            json!({
+                "epsilon": eps,
+                "orbits": b.orbits.len(),
+                "stop": stop_text(&b.stop),
+                "factorizations": b.factorizations,
+                "coefficients": b.coefficients,
+                "largest_tail": b.orbits.iter().map(|o| o.tail).fold(0.0, f64::max),
+                "stability_computed": b.orbits.iter().all(|o| o.stable.is_some()),
+                "bifurcations": b.events.iter().map(|e| {
+                    let mut v = json!({
+                        "kind": e.kind.label(),
+                        "omega": e.orbit.omega,
+                        "epsilon": e.orbit.epsilon,
+                        "branch": e.orbit.branch,
+                        "period_multiple": e.orbit.period_multiple,
+                        "multiplier": e.multiplier.map(|m| json!({"re": m.re, "im": m.im})),
+                    });
+                    for (name, a) in r.outputs.iter().zip(&e.orbit.linf) {
+                        v[format!("{name}_linf")] = json!(a);
+                    }
+                    v
+                }).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    json!({
+        "method": "harmonic balance (AFT) with pseudo-arclength continuation, Hill's method for Floquet multipliers",
+        "harmonics": r.harmonics,
+        "samples_per_period": r.samples,
+        "outputs": r.outputs,
+        "branches": branches,
+        "seconds": r.seconds,
+    })
+}

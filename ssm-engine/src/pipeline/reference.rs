@@ -1,0 +1,122 @@
+//! `[reference]`: the full system's forced response curves by harmonic
+//! balance and continuation, one branch per forcing amplitude, with the
+//! warnings a user must see (truncation estimate above the accuracy target,
+//! multipliers not computed, a branch that stopped short).
+
+use std::time::Instant;
+
+use super::checks::named_outputs;
+use super::error::JobError;
+use super::Progress;
+use crate::continuation::Stop;
+use crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS;
+use crate::fom::periodic::frc::ReferenceFrc;
+use crate::fom::periodic::{reference_frc, ReferenceSettings};
+use crate::model::system::{OutputMap, System};
+use crate::scene::{ReferenceSection, SceneFile, MAX_REFERENCE_COEFFICIENTS};
+
+/// Runs `[reference]`; returns the curves and the warnings.
+pub fn reference_stage(
+    scene: &SceneFile,
+    sec: &ReferenceSection,
+    system: &System,
+    coordinates: &[&OutputMap],
+    tolerance: f64,
+    progress: &dyn Progress,
+) -> Result<(ReferenceFrc, Vec<String>), JobError> {
+    let t = Instant::now();
+    let outputs: Vec<OutputMap> = match &sec.outputs {
+        Some(names) => named_outputs(scene, system, names, "reference.outputs")?
+            .into_iter()
+            .cloned()
+            .collect(),
+        None => coordinates.iter().map(|o| (*o).clone()).collect(),
+    };
+    let h = *sec.harmonics.get_ref();
+    let coefficients = system.n_states() * (2 * h + 1);
+    if coefficients > MAX_REFERENCE_COEFFICIENTS {
+        return Err(scene
+            .invalid(
+                sec.harmonics.span(),
+                "reference.harmonics",
+                format!(
+                    "{} states x {} Fourier functions = {coefficients} unknowns per orbit exceed the limit {MAX_REFERENCE_COEFFICIENTS}: lower harmonics",
+                    system.n_states(),
+                    2 * h + 1
+                ),
+            )
+            .into());
+    }
+    if system.forcing.is_empty() {
+        return Err(scene
+            .invalid(
+                sec.epsilon.span(),
+                "reference",
+                format!(
+                    "model '{}' has no forcing Fext to drive a forced response",
+                    system.name
+                ),
+            )
+            .into());
+    }
+    let range = sec
+        .omega_range(scene)
+        .expect("the scene check requires a frequency range");
+    let mut warnings = Vec::new();
+    if coefficients > MAX_HILL_COEFFICIENTS {
+        warnings.push(format!(
+            "[reference]: {coefficients} Fourier coefficients per orbit exceed the dense Floquet limit {MAX_HILL_COEFFICIENTS}: stability and bifurcations of the reference are not computed (stable column empty); lower harmonics for them"
+        ));
+    }
+    let mut branches = Vec::new();
+    let mut samples = 0;
+    for &eps in sec.epsilon.get_ref() {
+        progress.stage(&format!("full-system reference, eps = {eps}"));
+        let settings = ReferenceSettings {
+            epsilon: eps,
+            omega_range: range,
+            harmonics: h,
+            step: *sec.step.get_ref(),
+            tol: *sec.tol.get_ref(),
+            max_steps: *sec.max_steps.get_ref(),
+            outputs: outputs.clone(),
+            points_at: Vec::new(),
+            period_doubling: *sec.period_doubling.get_ref(),
+        };
+        let mut branch = reference_frc(system, &settings, |_| true)?;
+        samples = branch.samples;
+        let tail = branch.orbits.iter().map(|o| o.tail).fold(0.0, f64::max);
+        if tail > tolerance {
+            warnings.push(format!(
+                "[reference] eps = {eps}: the highest harmonic carries {:.2e} of the orbit amplitude, above the accuracy target {tolerance:e}: the reference is truncated; raise harmonics",
+                tail
+            ));
+        }
+        match &branch.stop {
+            Stop::Range => {}
+            Stop::StepTooSmall { parameter, cause } => warnings.push(format!(
+                "[reference] eps = {eps}: the continuation stopped at Omega = {:.6}: {cause}; the curve ends there (lower step, raise harmonics or tol)",
+                parameter * (range.1 - range.0)
+            )),
+            Stop::MaxSteps => warnings.push(format!(
+                "[reference] eps = {eps}: max_steps reached before Omega left the range; the curve ends there (raise max_steps or step)"
+            )),
+            other => warnings.push(format!(
+                "[reference] eps = {eps}: the branch ended early ({other:?})"
+            )),
+        }
+        let mut doubled = std::mem::take(&mut branch.doubled);
+        branches.push(branch);
+        branches.append(&mut doubled);
+    }
+    Ok((
+        ReferenceFrc {
+            outputs: outputs.iter().map(|o| o.name.clone()).collect(),
+            harmonics: h,
+            samples,
+            branches,
+            seconds: t.elapsed().as_secs_f64(),
+        },
+        warnings,
+    ))
+}
