@@ -294,6 +294,8 @@ omega_range = [1.9, 2.1]
 [reference]
 epsilon = 0.02
 harmonics = 9
+[report]
+orders = [5, 13]
 "#;
     let r = ssm_tests::run_scene_text(text).expect("scene runs");
     let full = r.reference.as_ref().expect("reference");

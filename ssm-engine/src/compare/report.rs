@@ -12,7 +12,8 @@ use std::time::Instant;
 
 use toml::Spanned;
 
-use super::validation::{frc_error, Validation};
+use super::validation::{frc_error, frc_error_at, reference_points, Validation};
+use crate::fom::periodic::frc::ReferenceFrc;
 use crate::model::system::{OutputMap, System};
 use crate::rom::forced_response::{forced_response, FrcError};
 use crate::scene::ForcingSection;
@@ -70,7 +71,8 @@ pub struct ReportRow {
     pub invariance_rho: Option<f64>,
     /// Largest relative output error of the transient against the full system.
     pub transient_error: Option<f64>,
-    /// Largest relative FRC amplitude error against the steady-state reference.
+    /// Largest relative FRC amplitude error against the `[reference]` curve,
+    /// else against the steady states.
     pub frc_error: Option<f64>,
 }
 
@@ -96,6 +98,9 @@ pub struct ReportInputs<'a> {
     pub rtol: f64,
     /// Accuracy target of the forced response curves (`[ssm] tolerance`).
     pub tolerance: f64,
+    /// The full system's forced response of `[reference]`, if any: the FRC
+    /// errors are measured against it (else against the steady states).
+    pub reference: Option<&'a ReferenceFrc>,
 }
 
 /// Computes the rows of the report.
@@ -106,6 +111,17 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
         .and_then(|v| v.transient.as_ref())
         .map(|t| &t.result);
     let steady = inp.validation.and_then(|v| v.steady.as_ref());
+    // the reference curve of the first output, at the first forcing amplitude
+    let harmonic = inp.reference.and_then(|r| {
+        let name = &inp.outputs.first()?.name;
+        let j = r.outputs.iter().position(|o| o == name)?;
+        let eps = r.branches.first()?.orbits.first()?.epsilon;
+        let points: Vec<(f64, Vec<f64>)> = reference_points(r, eps)?
+            .into_iter()
+            .map(|(w, a)| (w, vec![a[j]]))
+            .collect();
+        Some((eps, points))
+    });
     for &order in inp.orders {
         let t = Instant::now();
         let ssm = ssm::compute(
@@ -175,14 +191,18 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
         if let Some(f) = inp.forcing {
             let mut sec = f.clone();
             sec.orders = Some(Spanned::new(0..0, vec![order]));
-            if let Some(r) = steady {
+            if let Some((eps, _)) = &harmonic {
+                sec.epsilon = Spanned::new(0..0, vec![*eps]);
+            } else if let Some(r) = steady {
                 sec.epsilon = Spanned::new(0..0, vec![r.epsilon]);
             }
             let t = Instant::now();
             let rep = forced_response(&ssm, sys, inp.masters, &sec, inp.outputs, inp.tolerance)
                 .map_err(|source| ReportError::Frc { order, source })?;
             row.frc_s = Some(t.elapsed().as_secs_f64());
-            if let Some(r) = steady {
+            if let Some((eps, points)) = &harmonic {
+                row.frc_error = frc_error_at(&rep.rows, points, *eps, order, 0).0;
+            } else if let Some(r) = steady {
                 row.frc_error = frc_error(&rep.rows, r, order, 0).0;
             }
             if row.invariance_rho.is_none() {
@@ -198,8 +218,19 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
 }
 
 /// Full-system costs `(what, seconds)` of the references.
-pub fn full_costs(v: Option<&Validation>) -> Vec<FullCost> {
+pub fn full_costs(v: Option<&Validation>, reference: Option<&ReferenceFrc>) -> Vec<FullCost> {
     let mut out = Vec::new();
+    if let Some(r) = reference {
+        let orbits: usize = r.branches.iter().map(|b| b.orbits.len()).sum();
+        out.push(FullCost {
+            kind: FullKind::HarmonicBalance,
+            what: format!(
+                "full forced response (harmonic balance, {} branches, {orbits} orbits)",
+                r.branches.len()
+            ),
+            wall_s: r.seconds,
+        });
+    }
     if let Some(v) = v {
         if let Some(t) = &v.transient {
             out.push(FullCost {
@@ -226,6 +257,8 @@ pub enum FullKind {
     Transient,
     /// The steady states of `[validate.steady_state]`.
     SteadyState,
+    /// The forced response of `[reference]`.
+    HarmonicBalance,
 }
 
 /// What one full-system reference cost.
@@ -284,7 +317,7 @@ impl ReportRow {
 /// The report of `inp`: its rows, the full-system costs and the speed-up.
 pub fn report(sys: &System, inp: &ReportInputs<'_>) -> Result<Report, ReportError> {
     let rows = rows(sys, inp)?;
-    let full = full_costs(inp.validation);
+    let full = full_costs(inp.validation, inp.reference);
     let speedup = match (
         rows.iter()
             .filter(|r| r.transient_s.is_some())

@@ -15,6 +15,7 @@ use super::{
     nearest_on_ssm, steady_state_reference, transient, TransientSettings, TransientValidation,
     ValidateError,
 };
+use crate::fom::periodic::frc::ReferenceFrc;
 use crate::fom::{
     consistent_initial_keeping, DaeProblem, RadauOptions, SteadyOptions, SteadyState,
 };
@@ -395,19 +396,49 @@ pub fn frc_error(
     order: usize,
     k: usize,
 ) -> (Option<f64>, usize) {
-    let scale = r
+    let points: Vec<(f64, Vec<f64>)> = r
         .points
         .iter()
-        .map(|p| p.amplitudes.get(k).copied().unwrap_or(0.0))
+        .map(|p| (p.omega, p.amplitudes.clone()))
+        .collect();
+    frc_error_at(rows, &points, r.epsilon, order, k)
+}
+
+/// [`frc_error`] against reference points `(Omega, amplitudes)` at forcing
+/// amplitude `epsilon` (steady states, or the orbits of `[reference]`): at
+/// each point the FRC's amplitude nearest the reference's among its
+/// branches there.
+pub fn frc_error_at(
+    rows: &[FrcRow],
+    points: &[(f64, Vec<f64>)],
+    epsilon: f64,
+    order: usize,
+    k: usize,
+) -> (Option<f64>, usize) {
+    let scale = points
+        .iter()
+        .map(|p| p.1.get(k).copied().unwrap_or(0.0))
         .fold(0.0, f64::max);
-    let errs: Vec<f64> = r
-        .points
+    let errs: Vec<f64> = points
         .iter()
-        .filter_map(|p| {
-            let a = *p.amplitudes.get(k)?;
-            frc_amplitude_at(rows, order, r.epsilon, k, p.omega, a).map(|f| (f - a).abs() / scale)
+        .filter_map(|(omega, amps)| {
+            let a = *amps.get(k)?;
+            frc_amplitude_at(rows, order, epsilon, k, *omega, a).map(|f| (f - a).abs() / scale)
         })
         .collect();
     let n = errs.len();
     ((n > 0).then(|| errs.into_iter().fold(0.0, f64::max)), n)
+}
+
+/// The main-branch orbits of a `[reference]` curve at `epsilon` as
+/// reference points `(Omega, amplitudes)` (`None`: no curve at `epsilon`).
+pub fn reference_points(r: &ReferenceFrc, epsilon: f64) -> Option<Vec<(f64, Vec<f64>)>> {
+    r.branches
+        .iter()
+        .find(|b| {
+            b.orbits.first().is_some_and(|o| {
+                o.period_multiple == 1 && (o.epsilon - epsilon).abs() <= 1e-12 * epsilon.abs()
+            })
+        })
+        .map(|b| b.orbits.iter().map(|o| (o.omega, o.linf.clone())).collect())
 }

@@ -35,6 +35,11 @@ pub fn csv(report: &Report) -> String {
         let (kind, tr, frc) = match f.kind {
             FullKind::Transient => ("full_transient", format!("{secs:.6e}"), String::new()),
             FullKind::SteadyState => ("full_steady_state", String::new(), format!("{secs:.6e}")),
+            FullKind::HarmonicBalance => (
+                "full_harmonic_balance",
+                String::new(),
+                format!("{secs:.6e}"),
+            ),
         };
         s.push_str(&format!("{kind},,,,{tr},{frc},,,,\n"));
     }

@@ -190,6 +190,7 @@ fn accuracy_json(a: &Accuracy) -> Value {
             "epsilon": m.epsilon,
             "relative_error": m.relative_error,
             "output": m.output,
+            "against": m.against,
         })).collect::<Vec<_>>(),
     })
 }

@@ -311,6 +311,7 @@ fn measured_errors(v: &Validation) -> Vec<MeasuredError> {
                 .enumerate()
                 .max_by(|a, b| a.1.total_cmp(b.1))
                 .map(|(k, _)| t.outputs[k].clone()),
+            against: "full_transient",
         })
         .collect();
     for e in v.steady.iter().flat_map(|s| s.frc_errors.iter().flatten()) {
@@ -320,6 +321,7 @@ fn measured_errors(v: &Validation) -> Vec<MeasuredError> {
             epsilon: Some(e.epsilon),
             relative_error: e.max_relative_error,
             output: e.output.clone(),
+            against: "steady_state",
         });
     }
     list
@@ -496,6 +498,9 @@ pub fn run(
         None => None,
     };
     accuracy.measured = checked.as_ref().map_or_else(Vec::new, measured_errors);
+    if let (Some(f), Some(r)) = (&frc, &full_frc) {
+        accuracy.measured.extend(reference::reference_errors(f, r));
+    }
     timing.validation = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
@@ -517,6 +522,7 @@ pub fn run(
                     .map(|t| t.result.p0.clone()),
                 rtol: sc.validate.as_ref().map_or(1e-8, |v| *v.rtol.get_ref()),
                 tolerance: *sc.ssm.tolerance.get_ref(),
+                reference: full_frc.as_ref(),
             };
             Some(report(&system, &inputs)?)
         }

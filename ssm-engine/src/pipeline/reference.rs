@@ -8,11 +8,14 @@ use std::time::Instant;
 use super::checks::named_outputs;
 use super::error::JobError;
 use super::Progress;
+use crate::compare::validation::{frc_error_at, reference_points};
 use crate::continuation::Stop;
 use crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS;
 use crate::fom::periodic::frc::ReferenceFrc;
 use crate::fom::periodic::{reference_frc, ReferenceSettings};
 use crate::model::system::{OutputMap, System};
+use crate::rom::accuracy::MeasuredError;
+use crate::rom::forced_response::ForcedResponse;
 use crate::scene::{ReferenceSection, SceneFile, MAX_REFERENCE_COEFFICIENTS};
 
 /// Runs `[reference]`; returns the curves and the warnings.
@@ -119,4 +122,41 @@ pub fn reference_stage(
         },
         warnings,
     ))
+}
+
+/// Each forced response curve's error against the reference curve of its
+/// forcing amplitude: per output both have, the largest amplitude error over
+/// the reference's orbits (stable and unstable) relative to the reference's
+/// largest amplitude.
+pub fn reference_errors(f: &ForcedResponse, r: &ReferenceFrc) -> Vec<MeasuredError> {
+    let mut list = Vec::new();
+    for c in &f.curves {
+        let Some(points) = reference_points(r, c.epsilon) else {
+            continue;
+        };
+        for (k, name) in f.outputs.iter().enumerate() {
+            let Some(j) = r.outputs.iter().position(|o| o == name) else {
+                continue;
+            };
+            // the reference's amplitudes of this output at the FRC's index k
+            let pts: Vec<(f64, Vec<f64>)> = points
+                .iter()
+                .map(|(w, a)| {
+                    let mut v = vec![f64::NAN; k + 1];
+                    v[k] = a[j];
+                    (*w, v)
+                })
+                .collect();
+            let (err, _) = frc_error_at(&f.rows, &pts, c.epsilon, c.order, k);
+            list.push(MeasuredError {
+                answer: "frc",
+                order: c.order,
+                epsilon: Some(c.epsilon),
+                relative_error: err,
+                output: Some(name.clone()),
+                against: "harmonic_balance",
+            });
+        }
+    }
+    list
 }

@@ -349,6 +349,9 @@ pub struct MeasuredError {
     pub relative_error: Option<f64>,
     /// The output it was found on.
     pub output: Option<String>,
+    /// What it was measured against: `"full_transient"`,
+    /// `"steady_state"` or `"harmonic_balance"`.
+    pub against: &'static str,
 }
 
 /// How the expansion order of a run was set and what its answers are worth.
