@@ -90,6 +90,12 @@ impl Progress for Spinner {
             Spinner::Lines(t0) => eprintln!("[{:8.2} s] {name}", t0.elapsed().as_secs_f64()),
         }
     }
+
+    fn detail(&self, what: &str) {
+        if let Spinner::Bar(bar) = self {
+            bar.set_message(what.to_owned());
+        }
+    }
 }
 
 impl Spinner {

@@ -48,6 +48,9 @@ use crate::C64;
 pub trait Progress {
     /// A new stage begins.
     fn stage(&self, name: &str);
+    /// Where a long stage is (e.g. the frequency a continuation reached);
+    /// a display may show it in place of the stage's name.
+    fn detail(&self, _what: &str) {}
 }
 
 /// No progress display.

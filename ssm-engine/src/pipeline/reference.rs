@@ -86,7 +86,17 @@ pub fn reference_stage(
             points_at: Vec::new(),
             period_doubling: *sec.period_doubling.get_ref(),
         };
-        let mut branch = reference_frc(system, &settings, |_| true)?;
+        let (lo, hi) = range;
+        let mut count = 0usize;
+        let mut branch = reference_frc(system, &settings, |o| {
+            count += 1;
+            let at = ((o.omega - lo) / (hi - lo) * 100.0).clamp(0.0, 100.0);
+            progress.detail(&format!(
+                "full-system reference, eps = {eps}: orbit {count}, branch {} (period {}T), Omega = {:.5} ({at:.0} % of the range)",
+                o.branch, o.period_multiple, o.omega
+            ));
+            true
+        })?;
         samples = branch.samples;
         let tail = branch.orbits.iter().map(|o| o.tail).fold(0.0, f64::max);
         if tail > tolerance {
