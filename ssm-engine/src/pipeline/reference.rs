@@ -74,7 +74,7 @@ pub fn reference_stage(
     let mut branches = Vec::new();
     let mut samples = 0;
     for &eps in sec.epsilon.get_ref() {
-        progress.stage(&format!("full-system reference, eps = {eps}"));
+        progress.stage(&format!("full-system reference, eps = {eps:e}"));
         let settings = ReferenceSettings {
             epsilon: eps,
             omega_range: range,
@@ -92,7 +92,7 @@ pub fn reference_stage(
             count += 1;
             let at = ((o.omega - lo) / (hi - lo) * 100.0).clamp(0.0, 100.0);
             progress.detail(&format!(
-                "full-system reference, eps = {eps}: orbit {count}, branch {} (period {}T), Omega = {:.5} ({at:.0} % of the range)",
+                "full-system reference, eps = {eps:e}: orbit {count}, branch {} (period {}T), Omega = {:.5} ({at:.0} % of the range)",
                 o.branch, o.period_multiple, o.omega
             ));
             true
