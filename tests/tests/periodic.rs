@@ -405,6 +405,10 @@ coordinates = ["x1"]
             "reference.step",
         ),
         (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\nstep = 1e-300\n",
+            "reference.step",
+        ),
+        (
             "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\ntol = 0.0\n",
             "reference.tol",
         ),

@@ -146,7 +146,7 @@ pub fn reference_json(r: &ReferenceFrc) -> Value {
         })
         .collect();
     json!({
-        "method": "harmonic balance (AFT) with pseudo-arclength continuation, Hill's method for Floquet multipliers",
+        "method": "harmonic balance (AFT) continued in Omega (local parametrization), Hill's method for Floquet multipliers",
         "harmonics": r.harmonics,
         "samples_per_period": r.samples,
         "outputs": r.outputs,

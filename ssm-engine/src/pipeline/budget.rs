@@ -520,7 +520,8 @@ pub fn check_reference(
         0.0
     };
     let branches = r.epsilon.get_ref().len() as f64;
-    let steps = (*r.max_steps.get_ref() as f64).min(REFERENCE_STEPS);
+    // a branch's scaled arclength is of order ten: small steps take more
+    let steps = (*r.max_steps.get_ref() as f64).min(REFERENCE_STEPS.max(10.0 / *r.step.get_ref()));
     let cost = Cost {
         ops: branches * steps * (5.0 * factor + hill),
         bytes: 8.0 * (sizes.nnz + sizes.factors) * k * k * 4.0 + 8.0 * nu * nu.min(1500.0),

@@ -1,6 +1,6 @@
 //! Forced response of several master pairs (internal resonance): fixed points
-//! of the rotating-frame reduced dynamics traced by pseudo-arclength
-//! continuation in `Omega`, with stability, saddle-node, branch-point and Hopf
+//! of the rotating-frame reduced dynamics traced by the shared continuation
+//! core in `Omega`, with stability, saddle-node, branch-point and Hopf
 //! detection, and branch switching at branch points.
 //!
 //! With `p_{2j} = q_j e^{i r_j Omega t}` (ratios `r` of eq. 16) the normal-form
@@ -12,14 +12,17 @@
 //! where `q^k` is a monomial in `q_l` and `conj q_l`. Fixed points are the zeros
 //! of `F(y, Omega)`, `y = (Re q_1, Im q_1, ...)`, in Cartesian form so that
 //! branches through `q_j = 0` (the `rho_1 = 0` main branch of a 1:2 resonance)
-//! are regular. Continuation: tangent predictor, Newton corrector on
-//! `[F; t . (u - u_pred)]`, step control by Newton iterations. Test functions
-//! between consecutive points: `det F_y` (saddle-node when the tangent's
-//! `Omega` component also changes sign, otherwise a branch point),
-//! `det [F_y F_Omega; t^T]` (branch point), and the number of eigenvalues of
-//! `F_y` in the right half-plane without a change of `det F_y` (Hopf). Each is
-//! located by bisection along the arc, re-corrected at every step. At a branch
-//! point the second direction of the two-dimensional null space of
+//! are regular. They are continued by the shared core
+//! ([`crate::continuation`]: local parametrization, step control, events
+//! located along the chord), with this module's test functions between
+//! consecutive points: `det F_y` (it changes sign at folds, which the core
+//! reports from the tangent's `Omega` component, and at branch points),
+//! `det [F_y F_Omega; t^T]` with the unit tangent `t` (branch point), and the
+//! number of eigenvalues of `F_y` in the right half-plane (Hopf, where it
+//! changes in a step without a fold or a determinant's sign change). The
+//! Jacobian is by central differences (the dynamics are a handful of
+//! polynomial equations). At a
+//! branch point the second direction of the two-dimensional null space of
 //! `[F_y F_Omega]` (SVD) starts the other branch.
 //!
 //! # References
@@ -29,9 +32,13 @@
 //! (2004), Sect. 10.2; M. Li, S. Jain, G. Haller, Nonlinear Dyn. 110 (2022),
 //! Sect. 4 (rotating-frame reduced dynamics on SSMs).
 
-use faer::linalg::solvers::Solve;
+use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 
+use crate::continuation::{
+    self as core, correct, local_parameter, solve_at_parameter, EventKind, Monitor, Problem,
+    ProblemFailure, Stop, Test,
+};
 use crate::rom::frc::BifurcationKind;
 use crate::C64;
 
@@ -225,70 +232,8 @@ impl RotatingFrame {
         j
     }
 
-    /// Newton at fixed `Omega`.
-    fn solve_at(&self, mut y: Vec<f64>, omega: f64) -> Option<Vec<f64>> {
-        let n = y.len();
-        for _ in 0..50 {
-            let f = self.rhs(&y, omega);
-            let norm = f.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if norm < 1e-13 {
-                return Some(y);
-            }
-            let j = self.jacobian(&y, omega);
-            let fy = j.subcols(0, n).to_owned();
-            let rhs = Mat::<f64>::from_fn(n, 1, |i, _| -f[i]);
-            let dy = fy.partial_piv_lu().solve(&rhs);
-            for i in 0..n {
-                y[i] += dy[(i, 0)];
-            }
-            if !y.iter().all(|v| v.is_finite()) {
-                return None;
-            }
-        }
-        None
-    }
-
-    /// Corrector: Newton on `[F(u); t . (u - u_pred)] = 0`.
-    fn correct(&self, pred: &[f64], t: &[f64]) -> Option<(Vec<f64>, usize)> {
-        let n = pred.len() - 1;
-        let mut u = pred.to_vec();
-        for it in 0..12 {
-            let f = self.rhs(&u[..n], u[n]);
-            let g: f64 = t
-                .iter()
-                .zip(u.iter().zip(pred))
-                .map(|(ti, (a, b))| ti * (a - b))
-                .sum();
-            let norm = f.iter().map(|v| v * v).sum::<f64>().sqrt() + g.abs();
-            if norm < 1e-12 {
-                return Some((u, it));
-            }
-            let j = self.jacobian(&u[..n], u[n]);
-            let a = Mat::<f64>::from_fn(n + 1, n + 1, |r, c| if r < n { j[(r, c)] } else { t[c] });
-            let rhs = Mat::<f64>::from_fn(n + 1, 1, |r, _| if r < n { -f[r] } else { -g });
-            let du = a.partial_piv_lu().solve(&rhs);
-            for i in 0..=n {
-                u[i] += du[(i, 0)];
-            }
-            if !u.iter().all(|v| v.is_finite()) {
-                return None;
-            }
-        }
-        None
-    }
-
-    /// Unit tangent with the orientation of `prev`.
-    fn tangent(&self, u: &[f64], prev: &[f64]) -> Vec<f64> {
-        let n = u.len() - 1;
-        let j = self.jacobian(&u[..n], u[n]);
-        let a = Mat::<f64>::from_fn(n + 1, n + 1, |r, c| if r < n { j[(r, c)] } else { prev[c] });
-        let rhs = Mat::<f64>::from_fn(n + 1, 1, |r, _| if r < n { 0.0 } else { 1.0 });
-        let t = a.partial_piv_lu().solve(&rhs);
-        let norm = (0..=n).map(|i| t[(i, 0)].powi(2)).sum::<f64>().sqrt();
-        (0..=n).map(|i| t[(i, 0)] / norm).collect()
-    }
-
-    /// `(det F_y, det [F_y F_Omega; t^T], unstable eigenvalue count, stable)`.
+    /// `(det F_y, det [F_y F_Omega; t^T], eigenvalues of F_y in the right
+    /// half-plane, stable)`.
     fn tests(&self, u: &[f64], t: &[f64]) -> (f64, f64, usize, bool) {
         let n = u.len() - 1;
         let j = self.jacobian(&u[..n], u[n]);
@@ -301,140 +246,87 @@ impl RotatingFrame {
         (det, bp, unstable, unstable == 0 && !ev.is_empty())
     }
 
-    fn point(&self, u: &[f64], t: &[f64]) -> BranchPoint {
+    fn point(&self, u: &[f64], stable: bool) -> BranchPoint {
         let n = u.len() - 1;
         BranchPoint {
             q: (0..n / 2)
                 .map(|j| C64::new(u[2 * j], u[2 * j + 1]))
                 .collect(),
             omega: u[n],
-            stable: self.tests(u, t).3,
+            stable,
         }
     }
 
-    /// Bisection along the arc from `(u0, t0)` over `[0, h]` for a sign change
-    /// of `test`.
-    fn locate(
-        &self,
-        u0: &[f64],
-        t0: &[f64],
-        h: f64,
-        test: &dyn Fn(&[f64], &[f64]) -> f64,
-    ) -> (Vec<f64>, Vec<f64>) {
-        let at = |s: f64| -> Option<(Vec<f64>, Vec<f64>)> {
-            let pred: Vec<f64> = u0.iter().zip(t0).map(|(a, b)| a + s * b).collect();
-            let (u, _) = self.correct(&pred, t0)?;
-            let t = self.tangent(&u, t0);
-            Some((u, t))
-        };
-        let f0 = test(u0, t0);
-        let (mut lo, mut hi) = (0.0, h);
-        for _ in 0..50 {
-            let mid = 0.5 * (lo + hi);
-            match at(mid) {
-                Some((u, t)) if (test(&u, &t) > 0.0) == (f0 > 0.0) => lo = mid,
-                Some(_) => hi = mid,
-                None => break,
-            }
+    fn core_settings(s: &Settings) -> core::Settings {
+        core::Settings {
+            h_min: s.h_min,
+            max_steps: s.max_steps,
+            max_turn: MAX_TURN,
+            tol: 1e-13,
+            ..core::Settings::new(s.omega_range, s.h_max)
         }
-        at(0.5 * (lo + hi)).unwrap_or_else(|| (u0.to_vec(), t0.to_vec()))
     }
 
     /// Continues the branch through `(u0, t0)` in the direction `t0`.
     pub fn continue_branch(&self, u0: Vec<f64>, t0: Vec<f64>, s: &Settings) -> Branch {
-        let mut u = u0;
-        let mut t = self.tangent(&u, &t0);
-        let mut h = s.h_max;
-        let mut points = vec![self.point(&u, &t)];
-        let mut located = Vec::new();
-        let (mut det, mut bp, mut unst, _) = self.tests(&u, &t);
-        let (u_first, t_first) = (u.clone(), t.clone());
-        let mut reached_max_amplitude = false;
-        let mut closed = false;
-        for step in 0..s.max_steps {
-            let pred: Vec<f64> = u.iter().zip(&t).map(|(a, b)| a + h * b).collect();
-            let Some((un, iters)) = self.correct(&pred, &t) else {
-                h *= 0.5;
-                if h < s.h_min {
-                    break;
-                }
-                continue;
+        let mut p = FrameProblem {
+            frame: self,
+            lu: None,
+            max_amplitude: s.max_amplitude,
+        };
+        let Ok(branch) =
+            core::continue_branch(&mut p, u0, &t0, &Self::core_settings(s), |_, _| true)
+        else {
+            return Branch {
+                points: Vec::new(),
+                located: Vec::new(),
+                reached_max_amplitude: false,
+                closed: false,
             };
-            let tn = self.tangent(&un, &t);
-            let (detn, bpn, unstn, _) = self.tests(&un, &tn);
-            let n = un.len() - 1;
-            if bp * bpn < 0.0 {
-                let (ul, tl) = self.locate(&u, &t, h, &|a, b| self.tests(a, b).1);
-                located.push(Located {
-                    kind: LocatedKind::BranchPoint,
-                    at: self.point(&ul, &tl),
-                    tangent: tl,
-                });
-            } else if det * detn < 0.0 {
-                let (ul, tl) = self.locate(&u, &t, h, &|a, b| self.tests(a, b).0);
-                located.push(Located {
-                    kind: LocatedKind::Bifurcation(BifurcationKind::SaddleNode),
-                    at: self.point(&ul, &tl),
-                    tangent: tl,
-                });
-            } else if unst != unstn {
-                // a complex pair crossed: locate where the smallest |Re| of a pair vanishes
-                let hopf = |a: &[f64], _: &[f64]| -> f64 {
-                    let j = self.jacobian(&a[..n], a[n]);
-                    let ev = j.subcols(0, n).to_owned().eigenvalues().unwrap_or_default();
-                    let count = ev.iter().filter(|l| l.re > 0.0).count();
-                    if count == unst {
-                        1.0
-                    } else {
-                        -1.0
+        };
+        let step_has = |after: usize, kind: EventKind| {
+            branch
+                .events
+                .iter()
+                .any(|e| e.after == after && e.kind == kind)
+        };
+        let mut located = Vec::new();
+        for e in &branch.events {
+            let kind = match e.kind {
+                // the tangent's Omega component also turns where a branch
+                // crosses a symmetric (pitchfork) branch point: that is the
+                // branch point the augmented determinant reports
+                EventKind::Fold if step_has(e.after, EventKind::Test(1)) => continue,
+                EventKind::Fold => LocatedKind::Bifurcation(BifurcationKind::SaddleNode),
+                EventKind::Test(1) => LocatedKind::BranchPoint,
+                // det F_y alone: a fold (reported by the tangent) or a
+                // branch point (reported by the augmented determinant)
+                EventKind::Test(0) => continue,
+                EventKind::Test(_) => {
+                    let real = step_has(e.after, EventKind::Fold)
+                        || step_has(e.after, EventKind::Test(0))
+                        || step_has(e.after, EventKind::Test(1));
+                    if real {
+                        continue;
                     }
-                };
-                let (ul, tl) = self.locate(&u, &t, h, &hopf);
-                located.push(Located {
-                    kind: LocatedKind::Bifurcation(BifurcationKind::Hopf),
-                    at: self.point(&ul, &tl),
-                    tangent: tl,
-                });
-            }
-            let u_prev = std::mem::replace(&mut u, un);
-            let t_prev = std::mem::replace(&mut t, tn);
-            det = detn;
-            bp = bpn;
-            unst = unstn;
-            points.push(self.point(&u, &t));
-            if u[n] < s.omega_range.0 || u[n] > s.omega_range.1 {
-                break;
-            }
-            if let Some(r) = s.max_amplitude {
-                if (0..n / 2).any(|j| u[2 * j].hypot(u[2 * j + 1]) > r) {
-                    reached_max_amplitude = true;
-                    break;
+                    LocatedKind::Bifurcation(BifurcationKind::Hopf)
                 }
-            }
-            // a closed branch (isola, or the loop of a secondary branch) is done
-            // when its last step passes its start in the starting direction
-            if step > 10
-                && passes_through(&u_prev, &u, &u_first, 0.1 * s.h_max)
-                && dot(&t, &t_first) > 0.5
-            {
-                closed = true;
-                break;
-            }
-            // step control: shrink where the branch turns (so that two
-            // bifurcations never share a step), grow where it is straight and
-            // the corrector converged fast
-            let turn = dot(&t, &t_prev).clamp(-1.0, 1.0).acos();
-            if turn > MAX_TURN {
-                h = (0.5 * h).max(s.h_min);
-            } else if iters <= 3 && turn < 0.25 * MAX_TURN {
-                h = (h * 1.3).min(s.h_max);
-            }
+            };
+            located.push(Located {
+                kind,
+                at: self.point(&e.at.u, e.at.monitor.info),
+                tangent: e.at.tangent.clone(),
+            });
         }
         Branch {
-            points,
+            points: branch
+                .points
+                .iter()
+                .map(|pt| self.point(&pt.u, pt.monitor.info))
+                .collect(),
             located,
-            reached_max_amplitude,
-            closed,
+            reached_max_amplitude: branch.stop == Stop::Bound,
+            closed: branch.stop == Stop::Closed,
         }
     }
 
@@ -446,12 +338,20 @@ impl RotatingFrame {
         guess: Vec<f64>,
         s: &Settings,
     ) -> Result<Branch, ContinuationError> {
-        let y = self
-            .solve_at(guess, omega_start)
-            .ok_or(ContinuationError::Start { omega: omega_start })?;
-        let n = y.len();
-        let mut u = y;
+        let mut p = FrameProblem {
+            frame: self,
+            lu: None,
+            max_amplitude: s.max_amplitude,
+        };
+        let mut u = guess;
         u.push(omega_start);
+        let n = u.len() - 1;
+        let cs = core::Settings {
+            max_newton: 50,
+            ..Self::core_settings(s)
+        };
+        let u = solve_at_parameter(&mut p, u, &cs)
+            .map_err(|_| ContinuationError::Start { omega: omega_start })?;
         let mut t0 = vec![0.0; n + 1];
         t0[n] = 1.0;
         Ok(self.continue_branch(u, t0, s))
@@ -459,9 +359,9 @@ impl RotatingFrame {
 
     /// The point of this frame's branch nearest `point` of the branch of
     /// `other` (the same dynamics truncated differently): the corrector from
-    /// `point` in the hyperplane normal to `other`'s branch there, whose
-    /// unit tangent is the null vector of `other`'s `[F_y F_Omega]` (regular
-    /// at folds). `None` when the corrector does not converge: this frame has
+    /// `point` with the largest component of `other`'s unit tangent there
+    /// held (the null vector of `other`'s `[F_y F_Omega]`, regular at
+    /// folds). `None` when the corrector does not converge: this frame has
     /// no branch near `point`.
     pub fn nearest_point(&self, other: &RotatingFrame, point: &BranchPoint) -> Option<BranchPoint> {
         let n = point.q.len() * 2;
@@ -471,8 +371,18 @@ impl RotatingFrame {
         let v = svd.V();
         let t: Vec<f64> = (0..=n).map(|r| v[(r, n)]).collect();
         u.push(point.omega);
-        let (w, _) = self.correct(&u, &t)?;
-        Some(self.point(&w, &t))
+        let mut p = FrameProblem {
+            frame: self,
+            lu: None,
+            max_amplitude: None,
+        };
+        let cs = core::Settings {
+            tol: 1e-13,
+            ..core::Settings::new((f64::NEG_INFINITY, f64::INFINITY), 1.0)
+        };
+        let (w, _) = correct(&mut p, u.clone(), &u, local_parameter(&t), &cs).ok()?;
+        let stable = self.tests(&w, &t).3;
+        Some(self.point(&w, stable))
     }
 
     /// The other branch through a located branch point, in both directions.
@@ -505,6 +415,12 @@ impl RotatingFrame {
         d.iter_mut().zip(&at.tangent).for_each(|(x, t)| *x -= p * t);
         let nd = dot(&d, &d).sqrt();
         d.iter_mut().for_each(|x| *x /= nd);
+        let mut problem = FrameProblem {
+            frame: self,
+            lu: None,
+            max_amplitude: s.max_amplitude,
+        };
+        let cs = Self::core_settings(s);
         let mut out = Vec::new();
         for sign in [1.0, -1.0] {
             let dir: Vec<f64> = d.iter().map(|x| sign * x).collect();
@@ -513,7 +429,13 @@ impl RotatingFrame {
                 .zip(&dir)
                 .map(|(a, b)| a + 0.5 * s.h_max * b)
                 .collect();
-            if let Some((u1, _)) = self.correct(&start, &dir) {
+            if let Ok((u1, _)) = correct(
+                &mut problem,
+                start.clone(),
+                &start,
+                local_parameter(&dir),
+                &cs,
+            ) {
                 let branch = self.continue_branch(u1, dir, s);
                 let closed = branch.closed;
                 out.push(branch);
@@ -528,20 +450,78 @@ impl RotatingFrame {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+/// The rotating-frame dynamics as a continuation problem of the shared core:
+/// dense, with the finite-difference Jacobian.
+struct FrameProblem<'a> {
+    frame: &'a RotatingFrame,
+    lu: Option<PartialPivLu<f64>>,
+    max_amplitude: Option<f64>,
 }
 
-/// True when the segment from `a` to `b` passes within `tol` of `p`.
-fn passes_through(a: &[f64], b: &[f64], p: &[f64], tol: f64) -> bool {
-    let ab: Vec<f64> = b.iter().zip(a).map(|(x, y)| x - y).collect();
-    let ap: Vec<f64> = p.iter().zip(a).map(|(x, y)| x - y).collect();
-    let len2 = dot(&ab, &ab);
-    let s = if len2 > 0.0 {
-        (dot(&ap, &ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let d2: f64 = ap.iter().zip(&ab).map(|(x, y)| (x - s * y).powi(2)).sum();
-    d2.sqrt() <= tol
+impl Problem for FrameProblem<'_> {
+    /// Stable.
+    type Info = bool;
+
+    fn dim(&self) -> usize {
+        2 * self.frame.m() + 1
+    }
+
+    fn residual(&mut self, u: &[f64]) -> Result<Vec<f64>, ProblemFailure> {
+        let n = u.len() - 1;
+        let r = self.frame.rhs(&u[..n], u[n]);
+        if r.iter().all(|v| v.is_finite()) {
+            Ok(r)
+        } else {
+            Err(ProblemFailure("the reduced dynamics are not finite".into()))
+        }
+    }
+
+    fn factor(&mut self, u: &[f64], k: usize) -> Result<(), ProblemFailure> {
+        let n = u.len() - 1;
+        let j = self.frame.jacobian(&u[..n], u[n]);
+        let a = Mat::<f64>::from_fn(n + 1, n + 1, |r, c| {
+            if r < n {
+                j[(r, c)]
+            } else {
+                f64::from(u8::from(c == k))
+            }
+        });
+        self.lu = Some(a.partial_piv_lu());
+        Ok(())
+    }
+
+    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), ProblemFailure> {
+        let lu = self
+            .lu
+            .as_ref()
+            .ok_or_else(|| ProblemFailure("solve before factor".into()))?;
+        let b = Mat::<f64>::from_fn(rhs.len(), 1, |i, _| rhs[i]);
+        let x = lu.solve(&b);
+        for (i, r) in rhs.iter_mut().enumerate() {
+            *r = x[(i, 0)];
+        }
+        if rhs.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(ProblemFailure("singular bordered Jacobian".into()))
+        }
+    }
+
+    fn monitor(&mut self, u: &[f64], t: &[f64]) -> Result<Monitor<bool>, ProblemFailure> {
+        let (det, bp, unstable, stable) = self.frame.tests(u, t);
+        Ok(Monitor {
+            tests: vec![Test::Sign(det), Test::Sign(bp), Test::Count(unstable)],
+            info: stable,
+        })
+    }
+
+    fn beyond(&self, u: &[f64]) -> bool {
+        let n = u.len() - 1;
+        self.max_amplitude
+            .is_some_and(|r| (0..n / 2).any(|j| u[2 * j].hypot(u[2 * j + 1]) > r))
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

@@ -114,7 +114,7 @@ pub enum CurveDetails {
         /// Order of the non-autonomous terms used.
         nonautonomous_order: usize,
     },
-    /// Several pairs: pseudo-arclength continuation with branch switching.
+    /// Several pairs: continuation (the shared core) with branch switching.
     Continuation {
         /// Branches switched to at branch points.
         branch_switches: usize,

@@ -136,11 +136,11 @@ impl SceneFile {
             ));
         }
         let step = *r.step.get_ref();
-        if !(step.is_finite() && step > 0.0 && step <= 10.0) {
+        if !(step.is_finite() && (1e-4..=10.0).contains(&step)) {
             return Err(self.invalid(
                 r.step.span(),
                 "reference.step",
-                format!("must lie in (0, 10] (scaled arclength), found {step}"),
+                format!("must lie in [1e-4, 10] (scaled arclength; 0.5 crosses a resonance peak in about 100 steps), found {step}"),
             ));
         }
         let tol = *r.tol.get_ref();
