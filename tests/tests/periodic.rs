@@ -21,6 +21,24 @@ fn orbit_at(hb: &mut HarmonicBalance<'_>, c: &[f64], omega: f64) -> Vec<f64> {
     hb.unscale(&u).0
 }
 
+/// One classical RK4 step of `y' = f(t, y)` (the tests' independent
+/// integrator).
+fn rk4_step<const N: usize>(
+    f: &dyn Fn(f64, &[f64; N]) -> [f64; N],
+    t: f64,
+    y: &[f64; N],
+    h: f64,
+) -> [f64; N] {
+    let add = |a: &[f64; N], b: &[f64; N], s: f64| -> [f64; N] {
+        std::array::from_fn(|j| a[j] + s * b[j])
+    };
+    let k1 = f(t, y);
+    let k2 = f(t + 0.5 * h, &add(y, &k1, 0.5 * h));
+    let k3 = f(t + 0.5 * h, &add(y, &k2, 0.5 * h));
+    let k4 = f(t + h, &add(y, &k3, h));
+    std::array::from_fn(|j| y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]))
+}
+
 fn x_output() -> Vec<OutputMap> {
     vec![OutputMap {
         name: "x".into(),
@@ -196,14 +214,7 @@ fn rk4_period(x0: f64, v0: f64, omega: f64) -> ([f64; 2], [f64; 4]) {
     let mut y = [x0, v0, 1.0, 0.0, 0.0, 1.0];
     for i in 0..n {
         let t = i as f64 * h;
-        let add = |a: &[f64; 6], b: &[f64; 6], s: f64| -> [f64; 6] {
-            std::array::from_fn(|j| a[j] + s * b[j])
-        };
-        let k1 = f(t, &y);
-        let k2 = f(t + 0.5 * h, &add(&y, &k1, 0.5 * h));
-        let k3 = f(t + 0.5 * h, &add(&y, &k2, 0.5 * h));
-        let k4 = f(t + h, &add(&y, &k3, h));
-        y = std::array::from_fn(|j| y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]));
+        y = rk4_step(&f, t, &y, h);
     }
     ([y[0], y[1]], [y[2], y[3], y[4], y[5]])
 }
@@ -549,16 +560,7 @@ fn period_doublings_of_a_parametric_pump_and_the_doubled_branch() {
         let mut y = [1.0, 0.0, 0.0, 1.0];
         for i in 0..n {
             let t = i as f64 * h;
-            let add = |a: &[f64; 4], b: &[f64; 4], s: f64| -> [f64; 4] {
-                std::array::from_fn(|j| a[j] + s * b[j])
-            };
-            let k1 = rhs(t, &y);
-            let k2 = rhs(t + 0.5 * h, &add(&y, &k1, 0.5 * h));
-            let k3 = rhs(t + 0.5 * h, &add(&y, &k2, 0.5 * h));
-            let k4 = rhs(t + h, &add(&y, &k3, h));
-            y = std::array::from_fn(|j| {
-                y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
-            });
+            y = rk4_step(&rhs, t, &y, h);
         }
         // M = [[y0, y1], [y2, y3]]: det(M + I)
         (y[0] + 1.0) * (y[3] + 1.0) - y[1] * y[2]
@@ -671,14 +673,7 @@ fn period_doublings_of_a_parametric_pump_and_the_doubled_branch() {
             after_t = y;
         }
         let t = i as f64 * h;
-        let add = |a: &[f64; 4], b: &[f64; 4], s: f64| -> [f64; 4] {
-            std::array::from_fn(|j| a[j] + s * b[j])
-        };
-        let k1 = full(t, &y);
-        let k2 = full(t + 0.5 * h, &add(&y, &k1, 0.5 * h));
-        let k3 = full(t + 0.5 * h, &add(&y, &k2, 0.5 * h));
-        let k4 = full(t + h, &add(&y, &k3, h));
-        y = std::array::from_fn(|j| y[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]));
+        y = rk4_step(&full, t, &y, h);
     }
     let amp = z0.iter().map(|v| v.abs()).fold(0.0, f64::max);
     let gap2 = (0..4).map(|j| (y[j] - z0[j]).abs()).fold(0.0, f64::max);

@@ -468,32 +468,29 @@ where
             .map(|(a, b)| a + h * b)
             .collect();
         let k_local = local_parameter(&last.tangent);
-        let corrected = correct(p, pred.clone(), &pred, k_local, s)
-            .and_then(|(u, it)| tangent(p, &u, &last.tangent).map(|t| (u, t, it)));
-        let (u_new, t_new, iters) = match corrected {
-            Ok(v) => v,
-            Err(e) => {
-                h *= 0.5;
-                if h < s.h_min {
-                    break Stop::StepTooSmall {
-                        parameter: last.u[k],
-                        cause: e.0,
-                    };
+        // correct, then the tangent; the problem's monitor only where the
+        // tangent turned little enough for the step to be kept
+        let step = correct(p, pred.clone(), &pred, k_local, s)
+            .and_then(|(u, it)| tangent(p, &u, &last.tangent).map(|t| (u, t, it)))
+            .and_then(|(u, t, it)| {
+                let turn = dot(&t, &last.tangent).clamp(-1.0, 1.0).acos();
+                if turn > s.max_turn && h > s.h_min * 2.0 {
+                    return Ok(None);
                 }
+                let monitor = p.monitor(&u, &t)?;
+                let next = Point {
+                    u,
+                    tangent: t,
+                    monitor,
+                };
+                Ok(Some((next, it, turn)))
+            });
+        let (next, iters, turn) = match step {
+            Ok(Some(v)) => v,
+            Ok(None) => {
+                h *= 0.5;
                 continue;
             }
-        };
-        let turn = dot(&t_new, &last.tangent).clamp(-1.0, 1.0).acos();
-        if turn > s.max_turn && h > s.h_min * 2.0 {
-            h *= 0.5;
-            continue;
-        }
-        let next = match p.monitor(&u_new, &t_new) {
-            Ok(monitor) => Point {
-                u: u_new,
-                tangent: t_new,
-                monitor,
-            },
             Err(e) => {
                 h *= 0.5;
                 if h < s.h_min {
