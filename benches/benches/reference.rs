@@ -32,6 +32,7 @@ fn settings(
         max_steps: 5000,
         outputs,
         points_at: Vec::new(),
+        seeds: Vec::new(),
         period_doubling: true,
     }
 }

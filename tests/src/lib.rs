@@ -624,6 +624,74 @@ pub fn forced_duffing(zeta: f64, gamma: f64, loads: &[(f64, f64)]) -> System {
     System::from_model("catalogue", m.into_model().expect("valid model")).expect("valid system")
 }
 
+/// The one-harmonic balance of [`forced_duffing`] (one load `eps cos Omega t`)
+/// in closed form:
+/// `G(a, W) = ((1 + 3/4 gamma a^2 - W)^2 + 4 zeta^2 W) a^2 - eps^2 = 0`,
+/// `W = Omega^2`; its folds in `Omega` are where also `G_a = 0`. Newton on
+/// `(G, G_a)` from `(a, Omega)`; returns `(a, Omega)`.
+pub fn duffing_fold(zeta: f64, gamma: f64, eps: f64, a: f64, omega: f64) -> (f64, f64) {
+    let g = |a: f64, w: f64| {
+        let d = 1.0 + 0.75 * gamma * a * a - w;
+        (d * d + 4.0 * zeta * zeta * w) * a * a - eps * eps
+    };
+    let ga = |a: f64, w: f64| (g(a + 1e-7, w) - g(a - 1e-7, w)) / 2e-7;
+    let (mut a, mut w) = (a, omega * omega);
+    for _ in 0..60 {
+        let (f1, f2) = (g(a, w), ga(a, w));
+        let (da, dw) = (1e-6 * a, 1e-6 * w);
+        let j11 = (g(a + da, w) - g(a - da, w)) / (2.0 * da);
+        let j12 = (g(a, w + dw) - g(a, w - dw)) / (2.0 * dw);
+        let j21 = (ga(a + da, w) - ga(a - da, w)) / (2.0 * da);
+        let j22 = (ga(a, w + dw) - ga(a, w - dw)) / (2.0 * dw);
+        let det = j11 * j22 - j12 * j21;
+        let (sa, sw) = ((f1 * j22 - f2 * j12) / det, (j11 * f2 - j21 * f1) / det);
+        a -= sa;
+        w -= sw;
+        if sa.abs() < 1e-15 * a && sw.abs() < 1e-15 {
+            break;
+        }
+    }
+    (a, w.sqrt())
+}
+
+/// The one-harmonic orbits `x = A cos Omega t + B sin Omega t` of
+/// [`forced_duffing`] (one load `eps cos Omega t`) at `omega`, by amplitude:
+/// the positive roots `y = a^2` of the cubic `G` of [`duffing_fold`] by a
+/// scan and bisection, then `A = eps d / q`, `B = 2 zeta Omega eps / q`,
+/// `d = 1 + 3/4 gamma a^2 - Omega^2`, `q = d^2 + 4 zeta^2 Omega^2`.
+pub fn duffing_orbits(zeta: f64, gamma: f64, eps: f64, omega: f64) -> Vec<(f64, f64)> {
+    let w = omega * omega;
+    let g = |y: f64| {
+        let d = 1.0 + 0.75 * gamma * y - w;
+        (d * d + 4.0 * zeta * zeta * w) * y - eps * eps
+    };
+    let y_max = 4.0 * (eps / (2.0 * zeta * omega)).powi(2) + 1.0;
+    let n = 200_000;
+    let mut roots = Vec::new();
+    for k in 0..n {
+        let (mut lo, mut hi) = (
+            y_max * k as f64 / n as f64,
+            y_max * (k + 1) as f64 / n as f64,
+        );
+        if (g(lo) > 0.0) == (g(hi) > 0.0) {
+            continue;
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if (g(mid) > 0.0) == (g(lo) > 0.0) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let y = 0.5 * (lo + hi);
+        let d = 1.0 + 0.75 * gamma * y - w;
+        let q = d * d + 4.0 * zeta * zeta * w;
+        roots.push((eps * d / q, 2.0 * zeta * omega * eps / q));
+    }
+    roots
+}
+
 /// The closed-form steady state `x(t)` of [`forced_duffing`] with `gamma =
 /// 0`: `sum_k eps a_k Re[e^(i k Omega t) / (1 - (k Omega)^2 + 2 i zeta k
 /// Omega)]`, restricted to the harmonics `k > above` (the tail a truncation

@@ -7,7 +7,7 @@ use ssm_engine::fom::periodic::{
     floquet::floquet, reference_frc, HarmonicBalance, ReferenceEventKind, ReferenceSettings,
 };
 use ssm_engine::model::system::OutputMap;
-use ssm_tests::{forced_duffing, linear_steady_state};
+use ssm_tests::{duffing_fold, forced_duffing, linear_steady_state};
 
 /// The orbit of `hb` at fixed `omega` by Newton from the coefficients `c`.
 fn orbit_at(hb: &mut HarmonicBalance<'_>, c: &[f64], omega: f64) -> Vec<f64> {
@@ -90,35 +90,6 @@ fn linear_orbit_error_is_the_truncated_tail_and_falls_geometrically() {
     }
 }
 
-/// The one-harmonic balance of the Duffing oscillator in closed form:
-/// `G(a, W) = ((1 + 3/4 gamma a^2 - W)^2 + 4 zeta^2 W) a^2 - eps^2 = 0`,
-/// `W = Omega^2`; its folds in `Omega` are where also `G_a = 0`. Newton on
-/// `(G, G_a)` from `(a, Omega)`; returns `(a, Omega)`.
-fn closed_form_fold(zeta: f64, gamma: f64, eps: f64, a: f64, omega: f64) -> (f64, f64) {
-    let g = |a: f64, w: f64| {
-        let d = 1.0 + 0.75 * gamma * a * a - w;
-        (d * d + 4.0 * zeta * zeta * w) * a * a - eps * eps
-    };
-    let ga = |a: f64, w: f64| (g(a + 1e-7, w) - g(a - 1e-7, w)) / 2e-7;
-    let (mut a, mut w) = (a, omega * omega);
-    for _ in 0..60 {
-        let (f1, f2) = (g(a, w), ga(a, w));
-        let (da, dw) = (1e-6 * a, 1e-6 * w);
-        let j11 = (g(a + da, w) - g(a - da, w)) / (2.0 * da);
-        let j12 = (g(a, w + dw) - g(a, w - dw)) / (2.0 * dw);
-        let j21 = (ga(a + da, w) - ga(a - da, w)) / (2.0 * da);
-        let j22 = (ga(a, w + dw) - ga(a, w - dw)) / (2.0 * dw);
-        let det = j11 * j22 - j12 * j21;
-        let (sa, sw) = ((f1 * j22 - f2 * j12) / det, (j11 * f2 - j21 * f1) / det);
-        a -= sa;
-        w -= sw;
-        if sa.abs() < 1e-15 * a && sw.abs() < 1e-15 {
-            break;
-        }
-    }
-    (a, w.sqrt())
-}
-
 const ZETA: f64 = 0.005;
 const GAMMA: f64 = 1.0;
 const EPS: f64 = 0.002;
@@ -133,6 +104,7 @@ fn duffing_settings(harmonics: usize) -> ReferenceSettings {
         max_steps: 2000,
         outputs: x_output(),
         points_at: Vec::new(),
+        seeds: Vec::new(),
         period_doubling: true,
     }
 }
@@ -156,7 +128,7 @@ fn duffing_folds_agree_with_the_harmonic_balance_closed_form() {
             .collect();
         assert_eq!(folds.len(), 2, "H = {h}: {:?}", b.events);
         for f in folds {
-            let (a, w) = closed_form_fold(ZETA, GAMMA, EPS, f.orbit.linf[0], f.orbit.omega);
+            let (a, w) = duffing_fold(ZETA, GAMMA, EPS, f.orbit.linf[0], f.orbit.omega);
             let (ea, ew) = (
                 (f.orbit.linf[0] - a).abs() / a,
                 (f.orbit.omega - w).abs() / w,
@@ -490,6 +462,7 @@ fn chain_reference_agrees_with_steady_states_by_integration() {
         max_steps: 2000,
         outputs: outputs.clone(),
         points_at: omegas.to_vec(),
+        seeds: Vec::new(),
         period_doubling: false,
     };
     let b = reference_frc(&sys, &settings, |_| true).expect("reference");
@@ -599,6 +572,7 @@ fn period_doublings_of_a_parametric_pump_and_the_doubled_branch() {
             },
         ],
         points_at: vec![0.5 * (exact[0] + exact[1])],
+        seeds: Vec::new(),
         period_doubling: true,
     };
     let b = reference_frc(&sys, &settings, |_| true).expect("reference");

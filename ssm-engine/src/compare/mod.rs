@@ -11,6 +11,7 @@
 pub mod instantaneous;
 pub mod pod;
 pub mod report;
+pub mod seeds;
 pub mod ssm_run;
 pub mod validation;
 

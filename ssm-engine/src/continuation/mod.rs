@@ -556,6 +556,11 @@ where
 
 /// True when the segment from `a` to `b` passes within `tol` of `p`.
 fn passes_through(a: &[f64], b: &[f64], p: &[f64], tol: f64) -> bool {
+    segment_distance(a, b, p) <= tol
+}
+
+/// The Euclidean distance from `p` to the segment from `a` to `b`.
+pub fn segment_distance(a: &[f64], b: &[f64], p: &[f64]) -> f64 {
     let ab: Vec<f64> = b.iter().zip(a).map(|(x, y)| x - y).collect();
     let ap: Vec<f64> = p.iter().zip(a).map(|(x, y)| x - y).collect();
     let len2 = dot(&ab, &ab);
@@ -565,7 +570,7 @@ fn passes_through(a: &[f64], b: &[f64], p: &[f64], tol: f64) -> bool {
         0.0
     };
     let d2: f64 = ap.iter().zip(&ab).map(|(x, y)| (x - s * y).powi(2)).sum();
-    d2.sqrt() <= tol
+    d2.sqrt()
 }
 
 pub mod sparse;

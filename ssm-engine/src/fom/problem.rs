@@ -188,6 +188,18 @@ impl<'a> DaeProblem<'a> {
         }
     }
 
+    /// The forcing `Fext(z, Omega t)` alone (per unit amplitude): the
+    /// derivative of [`DaeProblem::rhs`] in `eps`. Empty (zero) for a problem
+    /// prepared with `epsilon = 0`.
+    pub fn forcing_rhs(&self, t: f64, z: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|o| *o = 0.0);
+        for h in &self.forcing {
+            let (s, c) = (h.multiple * self.omega * t).sin_cos();
+            eval_into(&h.cos.poly, z, c, out);
+            eval_into(&h.sin.poly, z, s, out);
+        }
+    }
+
     /// The autonomous part `A z + F(z)` (no forcing).
     pub fn autonomous_rhs(&self, z: &[f64], out: &mut [f64]) {
         out.iter_mut().for_each(|o| *o = 0.0);

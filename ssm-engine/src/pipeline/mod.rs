@@ -473,8 +473,15 @@ pub fn run(
 
     let full_frc = match &sc.reference {
         Some(sec) => {
-            let (r, w) =
-                reference::reference_stage(scene, sec, &system, &coordinates, tolerance, progress)?;
+            let (r, w) = reference::reference_stage(
+                scene,
+                sec,
+                &system,
+                &coordinates,
+                frc.as_ref().map(|f| (&expansion, f)),
+                tolerance,
+                progress,
+            )?;
             warnings.extend(w);
             timing.reference = r.seconds;
             Some(r)

@@ -8,6 +8,7 @@ use std::time::Instant;
 use super::checks::named_outputs;
 use super::error::JobError;
 use super::Progress;
+use crate::compare::seeds::ssm_seeds;
 use crate::compare::validation::{frc_error_at, reference_points};
 use crate::continuation::Stop;
 use crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS;
@@ -17,13 +18,17 @@ use crate::model::system::{OutputMap, System};
 use crate::rom::accuracy::MeasuredError;
 use crate::rom::forced_response::ForcedResponse;
 use crate::scene::{ReferenceSection, SceneFile, MAX_REFERENCE_COEFFICIENTS};
+use crate::ssm::SsmExpansion;
 
-/// Runs `[reference]`; returns the curves and the warnings.
+/// Runs `[reference]`, with seeds from the reduced model's forced response
+/// `reduced` where it starts from the SSM; returns the curves and the
+/// warnings.
 pub fn reference_stage(
     scene: &SceneFile,
     sec: &ReferenceSection,
     system: &System,
     coordinates: &[&OutputMap],
+    reduced: Option<(&SsmExpansion, &ForcedResponse)>,
     tolerance: f64,
     progress: &dyn Progress,
 ) -> Result<(ReferenceFrc, Vec<String>), JobError> {
@@ -75,6 +80,15 @@ pub fn reference_stage(
     let mut samples = 0;
     for &eps in sec.epsilon.get_ref() {
         progress.stage(&format!("full-system reference, eps = {eps:e}"));
+        let seeds = match reduced.filter(|_| sec.from_ssm(scene)) {
+            Some((ssm, frc)) => ssm_seeds(ssm, frc, system.n_states(), eps, range, h),
+            None => Vec::new(),
+        };
+        if sec.from_ssm(scene) && seeds.is_empty() {
+            warnings.push(format!(
+                "[reference] eps = {eps}: no forced response of the reduced model at this amplitude to start from; the reference starts from rest only (add eps to [forcing] epsilon)"
+            ));
+        }
         let settings = ReferenceSettings {
             epsilon: eps,
             omega_range: range,
@@ -85,6 +99,7 @@ pub fn reference_stage(
             outputs: outputs.clone(),
             points_at: Vec::new(),
             period_doubling: *sec.period_doubling.get_ref(),
+            seeds,
         };
         let (lo, hi) = range;
         let mut count = 0usize;
@@ -118,9 +133,18 @@ pub fn reference_stage(
                 "[reference] eps = {eps}: the branch ended early ({other:?})"
             )),
         }
+        warnings.extend(branch.notes.iter().map(|n| {
+            format!("[reference] eps = {eps}: a start from the reduced model was dropped: {n}")
+        }));
         let mut doubled = std::mem::take(&mut branch.doubled);
+        let seeded = std::mem::take(&mut branch.seeded);
         branches.push(branch);
         branches.append(&mut doubled);
+        for mut b in seeded {
+            let mut doubled = std::mem::take(&mut b.doubled);
+            branches.push(b);
+            branches.append(&mut doubled);
+        }
     }
     Ok((
         ReferenceFrc {

@@ -45,6 +45,11 @@ pub struct ReferenceSection {
     /// Outputs whose amplitudes are written (default: `[outputs] coordinates`).
     #[serde(default)]
     pub outputs: Option<Spanned<Vec<String>>>,
+    /// `"rest"`: one branch from rest at `Omega_min`; `"ssm"` (the default
+    /// with `[forcing]`): also a branch from the peak of each branch of the
+    /// reduced model's FRC, lifted by `W`, that is not on one traced already.
+    #[serde(default)]
+    pub start: Option<Spanned<String>>,
 }
 
 fn default_harmonics() -> Spanned<usize> {
@@ -64,6 +69,15 @@ fn default_max_steps() -> Spanned<usize> {
 }
 
 impl ReferenceSection {
+    /// Whether branches also start from the reduced model's forced response:
+    /// `start = "ssm"`, or no `start` and a `[forcing]` section.
+    pub fn from_ssm(&self, scene: &SceneFile) -> bool {
+        match self.start.as_ref().map(|s| s.get_ref().as_str()) {
+            Some(s) => s == "ssm",
+            None => scene.scene.forcing.is_some(),
+        }
+    }
+
     /// The frequency range: this section's, else `[forcing]`'s.
     pub fn omega_range(&self, scene: &SceneFile) -> Option<(f64, f64)> {
         self.omega_range
@@ -150,6 +164,26 @@ impl SceneFile {
                 "reference.tol",
                 format!("must lie in [1e-14, 1e-3], found {tol}"),
             ));
+        }
+        if let Some(st) = &r.start {
+            match st.get_ref().as_str() {
+                "rest" => {}
+                "ssm" if self.scene.forcing.is_some() => {}
+                "ssm" => {
+                    return Err(self.invalid(
+                        st.span(),
+                        "reference.start",
+                        "start = \"ssm\" starts from the reduced model's forced response: add [forcing]".into(),
+                    ))
+                }
+                other => {
+                    return Err(self.invalid(
+                        st.span(),
+                        "reference.start",
+                        format!("unknown start \"{other}\"; expected \"rest\" or \"ssm\""),
+                    ))
+                }
+            }
         }
         let steps = *r.max_steps.get_ref();
         if !(1..=MAX_REFERENCE_STEPS).contains(&steps) {

@@ -26,6 +26,7 @@ use crate::model::system::System;
 use super::frc::{
     classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit, ReferenceSettings,
 };
+use super::seed::Path;
 use super::{HarmonicBalance, OrbitInfo};
 
 /// The branch of period `2T` from the period doubling `pd` of the
@@ -38,7 +39,7 @@ pub(super) fn doubled_branch<O>(
     cs: &Settings,
     number: usize,
     observe: &mut O,
-) -> Result<ReferenceBranch, ReferenceError>
+) -> Result<(ReferenceBranch, Path), ReferenceError>
 where
     O: FnMut(&ReferenceOrbit) -> bool,
 {
@@ -95,7 +96,7 @@ where
     };
     hb.odd_floor = Some(0.25 * odd_norm(&u0));
     let t0: Vec<f64> = u0.iter().zip(&u).map(|(a, b)| a - b).collect();
-    let reader = Reader::of(&hb, settings);
+    let reader = Reader::of(&hb, settings.epsilon, &settings.outputs);
     let branch = continuation::continue_branch(&mut hb, u0, &t0, cs, |p, _| {
         observe(&reader.orbit(p, number))
     })?;
@@ -108,16 +109,22 @@ where
         number,
     );
     let (orbits, events, _) = classify(&branch, &reader, number);
-    Ok(ReferenceBranch {
-        orbits,
-        events,
-        stop: branch.stop,
-        factorizations: hb.factorizations(),
-        coefficients: nu,
-        samples: hb.samples(),
-        at,
-        doubled: Vec::new(),
-    })
+    let path = Path::of(2, &branch.points);
+    Ok((
+        ReferenceBranch {
+            orbits,
+            events,
+            stop: branch.stop,
+            factorizations: hb.factorizations(),
+            coefficients: nu,
+            samples: hb.samples(),
+            at,
+            doubled: Vec::new(),
+            seeded: Vec::new(),
+            notes: Vec::new(),
+        },
+        path,
+    ))
 }
 
 fn fail(u: &[f64], hb: &HarmonicBalance<'_>, cause: String) -> ReferenceError {

@@ -27,7 +27,8 @@ use crate::continuation::{
 use crate::model::system::{OutputMap, System};
 use crate::C64;
 
-use super::{HarmonicBalance, HarmonicBalanceError, OrbitInfo};
+use super::seed::{seeded_branch, Path, Seed, Seeded};
+use super::{HarmonicBalance, HarmonicBalanceError, OrbitInfo, Parameter};
 
 /// Settings of a reference forced response.
 #[derive(Debug, Clone, PartialEq)]
@@ -53,6 +54,9 @@ pub struct ReferenceSettings {
     /// (every crossing of the branch), e.g. those of steady states to
     /// compare with.
     pub points_at: Vec<f64>,
+    /// Predicted orbits to start further branches from (`start = "ssm"`):
+    /// each one not on a branch already traced starts a branch of its own.
+    pub seeds: Vec<Seed>,
 }
 
 /// What was located on the reference branch.
@@ -135,6 +139,12 @@ pub struct ReferenceBranch {
     /// The branches of period `2T` switched to at this branch's period
     /// doublings.
     pub doubled: Vec<ReferenceBranch>,
+    /// Branches traced from [`ReferenceSettings::seeds`] (not connected to
+    /// the main branch inside the range), each with its own doubled
+    /// branches.
+    pub seeded: Vec<ReferenceBranch>,
+    /// What became of the seeds that started no branch.
+    pub notes: Vec<String>,
 }
 
 /// Why no reference was computed.
@@ -210,7 +220,7 @@ where
     let u0 = solve_at_parameter(&mut hb, guess, &cs)?;
     let mut t0 = vec![0.0; nu + 1];
     t0[nu] = 1.0;
-    let reader = Reader::of(&hb, settings);
+    let reader = Reader::of(&hb, settings.epsilon, &settings.outputs);
     let branch =
         continuation::continue_branch(&mut hb, u0, &t0, &cs, |p, _| observe(&reader.orbit(p, 1)))?;
     let at = orbits_at(
@@ -222,31 +232,39 @@ where
         1,
     );
     let (orbits, events, doublings) = classify(&branch, &reader, 1);
-    let mut doubled = Vec::new();
-    if settings.period_doubling {
-        for pd in &doublings {
-            // a doubled branch that rejoined the period-T branch here (within
-            // 2 % of the range) was traced from its other end already
-            let w = pd.parameter();
-            let reached = doubled.iter().any(|d: &ReferenceBranch| {
-                d.stop == Stop::Bound
-                    && d.orbits
-                        .last()
-                        .is_some_and(|o| (o.omega / hb.frequency_scale - w).abs() < 0.02)
-            });
-            if reached {
-                continue;
+    let mut paths = vec![Path::of(1, &branch.points)];
+    let mut next = 2;
+    let doubled = switch_all(
+        sys,
+        settings,
+        &hb,
+        &doublings,
+        &cs,
+        &mut next,
+        &mut paths,
+        &mut observe,
+    )?;
+    let mut seeded = Vec::new();
+    let mut notes = Vec::new();
+    for seed in &settings.seeds {
+        match seeded_branch(sys, settings, &hb, seed, &cs, next, &paths, &mut observe)? {
+            Seeded::Branch(mut b, path, pds) => {
+                next += 1;
+                paths.push(path);
+                b.doubled = switch_all(
+                    sys,
+                    settings,
+                    &hb,
+                    &pds,
+                    &cs,
+                    &mut next,
+                    &mut paths,
+                    &mut observe,
+                )?;
+                seeded.push(*b);
             }
-            let number = 2 + doubled.len();
-            doubled.push(super::doubling::doubled_branch(
-                sys,
-                settings,
-                &hb,
-                pd,
-                &cs,
-                number,
-                &mut observe,
-            )?);
+            Seeded::Known => {}
+            Seeded::Dropped(note) => notes.push(note),
         }
     }
     Ok(ReferenceBranch {
@@ -258,7 +276,51 @@ where
         samples: hb.samples(),
         at,
         doubled,
+        seeded,
+        notes,
     })
+}
+
+/// The branches of period `2T` at the period doublings `pds` of a
+/// period-`T` branch of `hb` (when [`ReferenceSettings::period_doubling`]),
+/// numbered from `next`; a doubling where a branch traced earlier ended
+/// (it rejoined the period-`T` branch there) starts none.
+#[allow(clippy::too_many_arguments)]
+fn switch_all<O>(
+    sys: &System,
+    settings: &ReferenceSettings,
+    hb: &HarmonicBalance<'_>,
+    pds: &[Point<OrbitInfo>],
+    cs: &Settings,
+    next: &mut usize,
+    paths: &mut Vec<Path>,
+    observe: &mut O,
+) -> Result<Vec<ReferenceBranch>, ReferenceError>
+where
+    O: FnMut(&ReferenceOrbit) -> bool,
+{
+    let mut doubled: Vec<ReferenceBranch> = Vec::new();
+    if !settings.period_doubling {
+        return Ok(doubled);
+    }
+    for pd in pds {
+        // a branch of period 2T that ends here (within 2 % of the range)
+        // rejoined the period-T branch here: it was traced already
+        let w = pd.parameter();
+        let near = |u: &Vec<f64>| (u[u.len() - 1] - w).abs() < 0.02;
+        let reached = paths.iter().any(|p| {
+            p.multiple == 2
+                && (p.points.last().is_some_and(near) || p.points.first().is_some_and(near))
+        });
+        if reached {
+            continue;
+        }
+        let (b, path) = super::doubling::doubled_branch(sys, settings, hb, pd, cs, *next, observe)?;
+        *next += 1;
+        paths.push(path);
+        doubled.push(b);
+    }
+    Ok(doubled)
 }
 
 /// The orbits of a traced branch, its located bifurcations (a multiplier
@@ -394,6 +456,8 @@ fn linear_peak(sys: &System, epsilon: f64, range: (f64, f64)) -> f64 {
 pub(super) struct Reader {
     pub amplitude_scale: f64,
     pub frequency_scale: f64,
+    pub epsilon_scale: f64,
+    pub parameter: Parameter,
     pub n: usize,
     pub harmonics: usize,
     pub multiple: usize,
@@ -402,16 +466,19 @@ pub(super) struct Reader {
 }
 
 impl Reader {
-    /// The reader of `hb`'s orbits.
-    pub fn of(hb: &HarmonicBalance<'_>, settings: &ReferenceSettings) -> Self {
+    /// The reader of `hb`'s orbits at forcing amplitude `epsilon` (unused
+    /// when the amplitude is the parameter) with the `outputs`.
+    pub fn of(hb: &HarmonicBalance<'_>, epsilon: f64, outputs: &[OutputMap]) -> Self {
         Reader {
             amplitude_scale: hb.amplitude_scale,
             frequency_scale: hb.frequency_scale,
+            epsilon_scale: hb.epsilon_scale,
+            parameter: hb.parameter,
             n: hb.n_states(),
             harmonics: hb.harmonics(),
             multiple: hb.period_multiple(),
-            epsilon: settings.epsilon,
-            outputs: settings.outputs.iter().map(|o| o.weights.clone()).collect(),
+            epsilon,
+            outputs: outputs.iter().map(|o| o.weights.clone()).collect(),
         }
     }
 
@@ -419,7 +486,10 @@ impl Reader {
         let kk = 2 * self.harmonics + 1;
         let nu = self.n * kk;
         let c: Vec<f64> = p.u[..nu].iter().map(|v| v * self.amplitude_scale).collect();
-        let omega = p.u[nu] * self.frequency_scale;
+        let (omega, epsilon) = match self.parameter {
+            Parameter::Frequency => (p.u[nu] * self.frequency_scale, self.epsilon),
+            Parameter::Amplitude { omega } => (omega, p.u[nu] * self.epsilon_scale),
+        };
         let linf = self
             .outputs
             .iter()
@@ -444,7 +514,7 @@ impl Reader {
         let floquet = p.monitor.info.floquet.as_ref();
         ReferenceOrbit {
             omega,
-            epsilon: self.epsilon,
+            epsilon,
             stable: floquet.map(|f| f.stable()),
             branch,
             period_multiple: self.multiple,

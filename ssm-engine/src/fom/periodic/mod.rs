@@ -53,25 +53,30 @@
 //! The harmonic balance method with arc-length continuation in rotor/stator
 //! contact problems, J. Sound Vib. 241 (2001) 223-233.
 
+pub mod amplitude;
 mod doubling;
 pub mod floquet;
 pub mod frc;
 mod gauge;
+mod problem;
+pub mod seed;
 
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 
 use crate::continuation::sparse::SparseBordered;
-use crate::continuation::{Monitor, Problem, ProblemFailure, Test};
 use crate::fom::problem::DaeProblem;
 use crate::model::system::System;
 use crate::spectrum::dense::FiniteStructure;
 use gauge::Gauge;
 
+pub use amplitude::{reference_amplitude, AmplitudeSettings};
 pub use floquet::{Floquet, FloquetError};
 pub use frc::{
     reference_frc, ReferenceBranch, ReferenceError, ReferenceEvent, ReferenceEventKind,
     ReferenceOrbit, ReferenceSettings,
 };
+pub use problem::Parameter;
+pub use seed::Seed;
 
 /// Why a harmonic-balance discretization cannot be set up.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -126,6 +131,11 @@ pub struct HarmonicBalance<'a> {
     pub amplitude_scale: f64,
     /// Frequency scale `w`.
     pub frequency_scale: f64,
+    /// The continuation parameter (the last unknown).
+    pub parameter: Parameter,
+    /// Forcing-amplitude scale (the last unknown is `eps / scale` when the
+    /// parameter is the amplitude).
+    pub epsilon_scale: f64,
     /// The Hill pencil's nilpotent structure, found at the first orbit.
     hill_structure: Option<FiniteStructure>,
     /// The recast's gauge conditions (rows `aux K`).
@@ -296,6 +306,8 @@ impl<'a> HarmonicBalance<'a> {
             solver: SparseBordered::new(pattern),
             amplitude_scale: 1.0,
             frequency_scale: 1.0,
+            parameter: Parameter::Frequency,
+            epsilon_scale: 1.0,
             hill_structure: None,
             gauges,
             odd_floor: None,
@@ -432,6 +444,40 @@ impl<'a> HarmonicBalance<'a> {
         r
     }
 
+    /// `P Fext(Z(c), m psi)`: the Fourier coefficients of the forcing per
+    /// unit amplitude on the orbit (`R` is affine in `eps`, `R_eps = -P
+    /// Fext`).
+    fn forcing_projection(&self, c: &[f64]) -> Vec<f64> {
+        let kk = self.kk();
+        let (n, m) = (self.n, self.samples);
+        let mut r = vec![0.0; c.len()];
+        let mut z = vec![0.0; n];
+        let mut f = vec![0.0; n];
+        let inv = 1.0 / m as f64;
+        for s in 0..m {
+            self.z_at(c, s, &mut z);
+            self.prob
+                .forcing_rhs(self.multiple as f64 * self.psi(s), &z, &mut f);
+            let (co, si) = (&self.cos[s * kk..], &self.sin[s * kk..]);
+            for (i, fi) in f.iter().enumerate() {
+                let ri = &mut r[i * kk..(i + 1) * kk];
+                ri[0] += inv * fi;
+                for k in 1..=self.harmonics {
+                    ri[2 * k - 1] += 2.0 * inv * fi * co[k];
+                    ri[2 * k] += 2.0 * inv * fi * si[k];
+                }
+            }
+        }
+        r
+    }
+
+    /// Sets the forcing amplitude (the parameter of an amplitude
+    /// continuation). The forcing's terms are prepared only for a
+    /// discretization made with `epsilon != 0`.
+    pub fn set_epsilon(&mut self, epsilon: f64) {
+        self.prob.epsilon = epsilon;
+    }
+
     fn psi(&self, s: usize) -> f64 {
         2.0 * std::f64::consts::PI * s as f64 / self.samples as f64
     }
@@ -510,13 +556,18 @@ impl<'a> HarmonicBalance<'a> {
                 }
             }
         }
-        // the Omega column
+        // the parameter's column: R_Omega w, or R_eps s = -P Fext s
         let col_ptr = pattern.col_ptr();
         let rows = pattern.row_idx();
-        let r_omega = self.b_derivative(c);
-        let wscale = self.frequency_scale / self.multiple as f64;
+        let (r_par, pscale) = match self.parameter {
+            Parameter::Frequency => (
+                self.b_derivative(c),
+                self.frequency_scale / self.multiple as f64,
+            ),
+            Parameter::Amplitude { .. } => (self.forcing_projection(c), -self.epsilon_scale),
+        };
         for p in col_ptr[nu]..col_ptr[nu + 1] {
-            vals[p] = r_omega[rows[p]] * wscale;
+            vals[p] = r_par[rows[p]] * pscale;
         }
         self.gauge_rows(c, &mut vals);
         vals
@@ -588,19 +639,26 @@ impl<'a> HarmonicBalance<'a> {
         SparseColMat::try_new_from_triplets(nu, nu, &trip).expect("indices are in range")
     }
 
-    /// Physical coefficients and frequency from scaled unknowns.
+    /// Physical coefficients and frequency from scaled unknowns (the fixed
+    /// frequency when the parameter is the amplitude).
     pub fn unscale(&self, u: &[f64]) -> (Vec<f64>, f64) {
         let nu = self.n_coefficients();
-        (
-            u[..nu].iter().map(|v| v * self.amplitude_scale).collect(),
-            u[nu] * self.frequency_scale,
-        )
+        let c = u[..nu].iter().map(|v| v * self.amplitude_scale).collect();
+        match self.parameter {
+            Parameter::Frequency => (c, u[nu] * self.frequency_scale),
+            Parameter::Amplitude { omega } => (c, omega),
+        }
     }
 
-    /// Scaled unknowns from physical coefficients and frequency.
-    pub fn scale(&self, c: &[f64], omega: f64) -> Vec<f64> {
+    /// Scaled unknowns from physical coefficients and the parameter's value
+    /// (the frequency, or the forcing amplitude when the parameter is the
+    /// amplitude).
+    pub fn scale(&self, c: &[f64], parameter: f64) -> Vec<f64> {
         let mut u: Vec<f64> = c.iter().map(|v| v / self.amplitude_scale).collect();
-        u.push(omega / self.frequency_scale);
+        u.push(match self.parameter {
+            Parameter::Frequency => parameter / self.frequency_scale,
+            Parameter::Amplitude { .. } => parameter / self.epsilon_scale,
+        });
         u
     }
 
@@ -708,76 +766,6 @@ pub fn galerkin_block(cs: &[f64], h: usize, out: &mut [f64]) {
 pub struct OrbitInfo {
     /// Floquet analysis, when computed.
     pub floquet: Option<Floquet>,
-}
-
-impl Problem for HarmonicBalance<'_> {
-    type Info = OrbitInfo;
-
-    fn dim(&self) -> usize {
-        self.n_coefficients() + 1
-    }
-
-    fn residual(&mut self, u: &[f64]) -> Result<Vec<f64>, ProblemFailure> {
-        let (c, omega) = self.unscale(u);
-        let r = self.residual_physical(&c, omega);
-        if r.iter().all(|v| v.is_finite()) {
-            Ok(r)
-        } else {
-            Err(ProblemFailure(format!(
-                "the harmonic-balance residual is not finite at Omega = {omega}"
-            )))
-        }
-    }
-
-    fn factor(&mut self, u: &[f64], k: usize) -> Result<(), ProblemFailure> {
-        let (c, omega) = self.unscale(u);
-        let vals = self.jacobian_values(&c, omega);
-        if !vals.iter().all(|v| v.is_finite()) {
-            return Err(ProblemFailure(format!(
-                "the harmonic-balance Jacobian is not finite at Omega = {omega}"
-            )));
-        }
-        self.solver
-            .factor(&vals, k)
-            .map_err(|e| ProblemFailure(format!("harmonic balance at Omega = {omega}: {}", e.0)))
-    }
-
-    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), ProblemFailure> {
-        self.solver.solve(rhs)
-    }
-
-    fn beyond(&self, u: &[f64]) -> bool {
-        let Some(floor) = self.odd_floor else {
-            return false;
-        };
-        let kk = self.kk();
-        let odd: f64 = (0..self.n_coefficients())
-            .filter(|p| {
-                let q = p % kk;
-                q > 0 && q.div_ceil(2) % 2 == 1
-            })
-            .map(|p| u[p] * u[p])
-            .sum();
-        odd.sqrt() < floor
-    }
-
-    fn monitor(&mut self, u: &[f64], _t: &[f64]) -> Result<Monitor<OrbitInfo>, ProblemFailure> {
-        let (c, omega) = self.unscale(u);
-        let mut structure = self.hill_structure;
-        let fl = floquet::floquet_with(self, &c, omega, &mut structure).ok();
-        self.hill_structure = structure;
-        let tests = match &fl {
-            Some(f) => vec![
-                Test::Sign(f.real_crossing_test()),
-                Test::Count(f.complex_unstable()),
-            ],
-            None => Vec::new(),
-        };
-        Ok(Monitor {
-            tests,
-            info: OrbitInfo { floquet: fl },
-        })
-    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,143 @@
+//! The full system's amplitude response at a fixed forcing frequency: the
+//! harmonic-balance orbits traced in the forcing amplitude `eps` by the
+//! shared continuation core, with Floquet stability and the located folds
+//! (jumps as the load grows or shrinks), period doublings, Neimark-Sacker and
+//! branch points.
+//!
+//! The branch starts at the low end of the amplitude range: from rest when
+//! it is `eps = 0` (the equilibrium is the orbit there), else from the linear
+//! response, corrected by Newton. The residual is affine in `eps`, `R =
+//! R_0(c) - eps P Fext(Z(c), psi)`, so the parameter's Jacobian column is the
+//! projected forcing itself. The coefficients are scaled by the largest
+//! coefficient of the linear response at the top of the range, the forcing
+//! amplitude by the range's width.
+//!
+//! # References
+//! M. Krack, J. Gross, *Harmonic Balance for Nonlinear Vibration Problems*,
+//! Springer (2019), Sect. 4.2 (continuation in any parameter); A. H. Nayfeh,
+//! D. T. Mook, *Nonlinear Oscillations*, Wiley (1979), Sect. 4.1.4 (the
+//! amplitude response of the Duffing oscillator and its jumps).
+
+use crate::continuation::{self, solve_at_parameter, Settings};
+use crate::model::system::{OutputMap, System};
+
+use super::frc::{classify, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit};
+use super::{HarmonicBalance, Parameter};
+
+/// Settings of a reference amplitude response.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AmplitudeSettings {
+    /// The fixed forcing frequency `Omega`.
+    pub omega: f64,
+    /// `[eps_min, eps_max]`, `eps_min >= 0`; the branch starts at `eps_min`.
+    pub epsilon_range: (f64, f64),
+    /// Harmonics `H`.
+    pub harmonics: usize,
+    /// Largest arclength step in scaled unknowns (amplitude by the linear
+    /// response at `eps_max`, the forcing amplitude by the range's width).
+    pub step: f64,
+    /// Newton tolerance (relative update).
+    pub tol: f64,
+    /// Largest number of continuation steps.
+    pub max_steps: usize,
+    /// Outputs whose amplitudes are reported.
+    pub outputs: Vec<OutputMap>,
+}
+
+/// The reference amplitude response of `sys` at the frequency of
+/// `settings`, numbered `number`; `observe` sees each orbit as it is
+/// accepted and returns `false` to stop. Period doublings are located and
+/// noted; the branch of period `2T` is switched to only in `Omega`
+/// ([`super::reference_frc`]).
+pub fn reference_amplitude<O>(
+    sys: &System,
+    settings: &AmplitudeSettings,
+    number: usize,
+    mut observe: O,
+) -> Result<ReferenceBranch, ReferenceError>
+where
+    O: FnMut(&ReferenceOrbit) -> bool,
+{
+    let (lo, hi) = settings.epsilon_range;
+    let omega = settings.omega;
+    if !(omega.is_finite() && omega > 0.0) {
+        return Err(ReferenceError::Settings(format!(
+            "the frequency {omega} of an amplitude response must be finite and positive"
+        )));
+    }
+    if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo) {
+        return Err(ReferenceError::Settings(format!(
+            "epsilon_range [{lo}, {hi}] must be finite, non-negative and increasing"
+        )));
+    }
+    if let ssm_api::TimeKind::Map { .. } = sys.time {
+        return Err(ReferenceError::Settings(format!(
+            "model '{}' is a map (discrete time): periodic orbits of a forced flow do not apply",
+            sys.name
+        )));
+    }
+    if settings.harmonics == 0 {
+        return Err(ReferenceError::Settings(
+            "harmonics must be at least 1".into(),
+        ));
+    }
+    // prepared at eps_max > 0, so that the forcing's terms are in it
+    let mut hb = HarmonicBalance::new(sys, hi, settings.harmonics, 1)?;
+    hb.parameter = Parameter::Amplitude { omega };
+    hb.epsilon_scale = hi - lo;
+    let nu = hb.n_coefficients();
+    let cs = Settings {
+        tol: settings.tol,
+        max_steps: settings.max_steps,
+        ..Settings::new((lo / (hi - lo), hi / (hi - lo)), settings.step)
+    };
+    // one Newton step from rest at eps_max is the linear response there; its
+    // largest coefficient is the amplitude scale
+    let lin = Settings {
+        max_newton: 1,
+        tol: f64::INFINITY,
+        ..cs
+    };
+    let rest = hb.scale(&vec![0.0; nu], hi);
+    let top = solve_at_parameter(&mut hb, rest, &lin)?;
+    let (c_top, _) = hb.unscale(&top);
+    let scale = c_top.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(ReferenceError::Settings(format!(
+            "the linear response at Omega = {omega}, eps = {hi} is {scale}: no forcing reaches the model"
+        )));
+    }
+    hb.amplitude_scale = scale;
+    // the linear response at eps_min (rest at eps_min = 0), then Newton
+    let guess: Vec<f64> = c_top.iter().map(|v| v * lo / hi).collect();
+    let guess = hb.scale(&guess, lo);
+    let u0 = solve_at_parameter(&mut hb, guess, &cs)?;
+    let mut t0 = vec![0.0; nu + 1];
+    t0[nu] = 1.0;
+    let reader = Reader::of(&hb, lo, &settings.outputs);
+    let branch = continuation::continue_branch(&mut hb, u0, &t0, &cs, |p, _| {
+        observe(&reader.orbit(p, number))
+    })?;
+    let (orbits, events, doublings) = classify(&branch, &reader, number);
+    let notes = doublings
+        .iter()
+        .map(|pd| {
+            format!(
+                "period doubling at Omega = {omega}, eps = {:e}: the branch of period 2T is traced only in a continuation in Omega",
+                pd.parameter() * hb.epsilon_scale
+            )
+        })
+        .collect();
+    Ok(ReferenceBranch {
+        orbits,
+        events,
+        stop: branch.stop,
+        factorizations: hb.factorizations(),
+        coefficients: nu,
+        samples: hb.samples(),
+        at: Vec::new(),
+        doubled: Vec::new(),
+        seeded: Vec::new(),
+        notes,
+    })
+}

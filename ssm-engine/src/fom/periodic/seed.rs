@@ -1,0 +1,254 @@
+//! Reference branches started from predicted orbits (`start = "ssm"`): a
+//! seed is one period of an orbit predicted by another method (the SSM's
+//! forced response lifted by `W`), projected on the Fourier basis, corrected
+//! by Newton at its frequency and continued in both directions.
+//!
+//! A branch traced from rest at the low end of the range misses every branch
+//! that is not connected to it inside the range: isolas, and upper branches
+//! cut by the range's ends. A seed on each of the reduced model's branches
+//! reaches them. A seed whose corrected orbit lies on a branch already traced
+//! (within [`SAME_BRANCH`] of its polyline in scaled unknowns) adds nothing
+//! and is dropped.
+//!
+//! # References
+//! M. Krack, J. Gross, *Harmonic Balance for Nonlinear Vibration Problems*,
+//! Springer (2019), Sect. 4.3 (initial guesses, isolated branches);
+//! G. Haller, S. Ponsioen, Nonlinear normal modes and spectral submanifolds,
+//! Nonlinear Dyn. 86 (2016) 1493-1534 (the SSM's periodic orbits as
+//! predictions of the full system's).
+
+use crate::continuation::{self, dot, solve_at_parameter, Point, Settings, Stop};
+use crate::model::system::System;
+
+use super::frc::{
+    classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit, ReferenceSettings,
+};
+use super::{HarmonicBalance, OrbitInfo};
+
+/// Largest distance (scaled unknowns: amplitudes by the amplitude scale,
+/// frequency by the range width) from a corrected seed to a traced branch's
+/// polyline at which the seed counts as lying on that branch. The chords of
+/// a branch traced with steps up to `h` and tangent turns up to 0.1 rad stay
+/// within `h / 80` of the arc, so `0.05` holds for the default steps, while
+/// distinct orbits at one frequency differ by much more outside the
+/// immediate neighbourhood of a fold or branch point (where they meet).
+pub const SAME_BRANCH: f64 = 0.05;
+
+/// A predicted orbit to start a reference branch from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Seed {
+    /// Forcing frequency.
+    pub omega: f64,
+    /// The orbit's period as a multiple `m` of the forcing period.
+    pub period_multiple: usize,
+    /// The full state at `S` equally spaced times `t_s = s m T / S` over one
+    /// period, from `t = 0` (the forcing's phase origin); `S` must exceed
+    /// twice the harmonics of the orbit.
+    pub states: Vec<Vec<f64>>,
+    /// Where the prediction comes from (for notes), e.g. `"O(7) branch 2"`.
+    pub origin: String,
+}
+
+impl Seed {
+    /// Fourier coefficients `(c_0, c_1^c, c_1^s, ...)` per state (state-major,
+    /// `2h + 1` each) of the sampled orbit: the discrete projection, exact for
+    /// a trigonometric polynomial of degree below `S / 2`.
+    pub fn coefficients(&self, n: usize, h: usize) -> Result<Vec<f64>, String> {
+        let s = self.states.len();
+        if s <= 2 * h {
+            return Err(format!(
+                "{} samples cannot resolve {h} harmonics (need more than {})",
+                s,
+                2 * h
+            ));
+        }
+        if let Some(bad) = self.states.iter().position(|z| z.len() != n) {
+            return Err(format!(
+                "sample {bad} has {} states, the model {n}",
+                self.states[bad].len()
+            ));
+        }
+        if self.states.iter().flatten().any(|v| !v.is_finite()) {
+            return Err("the predicted orbit is not finite".into());
+        }
+        let kk = 2 * h + 1;
+        let mut c = vec![0.0; n * kk];
+        let inv = 1.0 / s as f64;
+        for (j, z) in self.states.iter().enumerate() {
+            let psi = 2.0 * std::f64::consts::PI * j as f64 * inv;
+            for (i, zi) in z.iter().enumerate() {
+                let ci = &mut c[i * kk..(i + 1) * kk];
+                ci[0] += inv * zi;
+                for k in 1..=h {
+                    let (sn, cs) = (k as f64 * psi).sin_cos();
+                    ci[2 * k - 1] += 2.0 * inv * zi * cs;
+                    ci[2 * k] += 2.0 * inv * zi * sn;
+                }
+            }
+        }
+        Ok(c)
+    }
+}
+
+/// A traced branch's polyline in scaled unknowns, with its period multiple.
+#[derive(Debug, Clone)]
+pub(super) struct Path {
+    pub multiple: usize,
+    pub points: Vec<Vec<f64>>,
+}
+
+impl Path {
+    /// The polyline of a traced branch.
+    pub fn of(multiple: usize, points: &[Point<OrbitInfo>]) -> Self {
+        Path {
+            multiple,
+            points: points.iter().map(|p| p.u.clone()).collect(),
+        }
+    }
+
+    /// The distance from `u` to the polyline.
+    fn distance(&self, u: &[f64]) -> f64 {
+        match self.points.as_slice() {
+            [] => f64::INFINITY,
+            [only] => continuation::segment_distance(only, only, u),
+            pts => pts
+                .windows(2)
+                .map(|w| continuation::segment_distance(&w[0], &w[1], u))
+                .fold(f64::INFINITY, f64::min),
+        }
+    }
+}
+
+/// What a seed gave.
+pub(super) enum Seeded {
+    /// A new branch, its polyline, and its period doublings.
+    Branch(Box<ReferenceBranch>, Path, Vec<Point<OrbitInfo>>),
+    /// The seed lies on a branch traced already.
+    Known,
+    /// Why the seed could not start a branch (a note for the user).
+    Dropped(String),
+}
+
+/// The branch through `seed`, numbered `number`, continued both ways from
+/// its corrected orbit until it leaves the range, closes (an isola), or
+/// rejoins the period-`T` branch (a seed of period `2T`); `template` gives
+/// the harmonics and scales.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn seeded_branch<O>(
+    sys: &System,
+    settings: &ReferenceSettings,
+    template: &HarmonicBalance<'_>,
+    seed: &Seed,
+    cs: &Settings,
+    number: usize,
+    known: &[Path],
+    observe: &mut O,
+) -> Result<Seeded, ReferenceError>
+where
+    O: FnMut(&ReferenceOrbit) -> bool,
+{
+    let m = seed.period_multiple.max(1);
+    let mut hb = HarmonicBalance::new(sys, settings.epsilon, m * template.harmonics(), m)?;
+    hb.amplitude_scale = template.amplitude_scale;
+    hb.frequency_scale = template.frequency_scale;
+    let (lo, hi) = (cs.range.0, cs.range.1);
+    let w = seed.omega / hb.frequency_scale;
+    // a seed outside the range has no branch to start inside it
+    if !(w >= lo && w <= hi) {
+        return Ok(Seeded::Known);
+    }
+    let c = match seed.coefficients(hb.n_states(), hb.harmonics()) {
+        Ok(c) => c,
+        Err(e) => return Ok(Seeded::Dropped(format!("{}: {e}", seed.origin))),
+    };
+    let guess = hb.scale(&c, seed.omega);
+    let u0 = match solve_at_parameter(&mut hb, guess, cs) {
+        Ok(u) => u,
+        Err(e) => {
+            return Ok(Seeded::Dropped(format!(
+                "{} at Omega = {:.6}: Newton from the prediction failed ({e})",
+                seed.origin, seed.omega
+            )))
+        }
+    };
+    let nu = hb.n_coefficients();
+    let kk = 2 * hb.harmonics() + 1;
+    let odd_norm = |u: &[f64]| -> f64 {
+        (0..nu)
+            .filter(|p| {
+                let q = p % kk;
+                q > 0 && q.div_ceil(2) % m != 0
+            })
+            .map(|p| u[p] * u[p])
+            .sum::<f64>()
+            .sqrt()
+    };
+    if m > 1 {
+        let odd = odd_norm(&u0);
+        if odd < 1e-6 * (1.0 + dot(&u0[..nu], &u0[..nu]).sqrt()) {
+            return Ok(Seeded::Dropped(format!(
+                "{} at Omega = {:.6}: the corrected orbit has period T, not {m}T",
+                seed.origin, seed.omega
+            )));
+        }
+        hb.odd_floor = Some(0.25 * odd);
+    }
+    if known
+        .iter()
+        .any(|p| p.multiple == m && p.distance(&u0) <= SAME_BRANCH)
+    {
+        return Ok(Seeded::Known);
+    }
+    let reader = Reader::of(&hb, settings.epsilon, &settings.outputs);
+    let mut up = vec![0.0; nu + 1];
+    up[nu] = 1.0;
+    let forward = continuation::continue_branch(&mut hb, u0.clone(), &up, cs, |p, _| {
+        observe(&reader.orbit(p, number))
+    })?;
+    let backward = if forward.stop == Stop::Closed || forward.stop == Stop::Interrupted {
+        None
+    } else {
+        up[nu] = -1.0;
+        let mut first = true;
+        Some(continuation::continue_branch(
+            &mut hb,
+            u0,
+            &up,
+            cs,
+            |p, _| {
+                // the seed's own orbit was observed with the forward half
+                std::mem::take(&mut first) || observe(&reader.orbit(p, number))
+            },
+        )?)
+    };
+    let (mut orbits, mut events, mut doublings) = classify(&forward, &reader, number);
+    let mut points = forward.points;
+    let mut stop = forward.stop;
+    if let Some(b) = backward {
+        let (o, e, d) = classify(&b, &reader, number);
+        orbits = o.into_iter().skip(1).rev().chain(orbits).collect();
+        events = e.into_iter().rev().chain(events).collect();
+        doublings.extend(d);
+        points = b.points.into_iter().skip(1).rev().chain(points).collect();
+        if b.stop != Stop::Range && b.stop != Stop::Bound {
+            stop = b.stop;
+        }
+    }
+    let at = orbits_at(&mut hb, &points, &settings.points_at, cs, &reader, number);
+    Ok(Seeded::Branch(
+        Box::new(ReferenceBranch {
+            orbits,
+            events,
+            stop,
+            factorizations: hb.factorizations(),
+            coefficients: nu,
+            samples: hb.samples(),
+            at,
+            doubled: Vec::new(),
+            seeded: Vec::new(),
+            notes: Vec::new(),
+        }),
+        Path::of(m, &points),
+        if m == 1 { doublings } else { Vec::new() },
+    ))
+}
