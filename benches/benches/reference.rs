@@ -1,13 +1,15 @@
 //! The full system's forced response (`[reference]`: harmonic balance,
 //! continuation, Floquet multipliers) on the Duffing oscillator through its
-//! folds, the spatial oscillator with the cubic constraint (index-3 DAE) and
-//! the 405-state chain of pendulums of Fig. 15. Each first prints its error
+//! folds, the spatial oscillator with the cubic constraint (index-3 DAE),
+//! the 405-state chain of pendulums of Fig. 15 and the 146-state frequency
+//! divider of Figs. 18-19 (main and period-2T branches). Each first prints its error
 //! against an independent reference (the one-harmonic closed form of the
 //! folds; the truncation estimate; the chain's steady state by Radau
 //! integration at Omega = 2), the orbits and factorizations, then is timed.
 //!
 //! Run with `cargo build --release --workspace && cargo bench -p ssm-benches --bench reference`
-//! (the chain alone: `... --bench reference -- chain`, about 10 minutes).
+//! (the chain alone: `... --bench reference -- chain`, about 10 minutes; the
+//! divider: `... -- divider`, about 30 minutes).
 
 use std::hint::black_box;
 
@@ -156,5 +158,97 @@ fn chain(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, duffing, spatial, chain);
+/// The frequency divider of Sect. 5.3 (146 states, index-3 joint) at eps =
+/// 0.1 over Fig. 18's range with 5 harmonics (1606 Fourier coefficients:
+/// multipliers by the monodromy matrix): the main branch, its two period
+/// doublings, and the branch of period 2T between them with its
+/// saddle-node. Printed first: the period doublings and the saddle-node
+/// against the O(5) SSM's branch points and saddle-node (the reduced
+/// model's 1:2 rotating frame turns the period doublings into branch
+/// points).
+fn divider(c: &mut Criterion) {
+    let sys = system("divider", "", "");
+    let mut s = settings(
+        0.1,
+        (43.07, 49.87),
+        5,
+        outputs(&sys, &["w_hori_mid", "w_vert_mid"]),
+    );
+    s.period_doubling = true;
+    let scene = r#"
+[model]
+plugin = "divider"
+[spectrum]
+method = "sparse"
+modes = 20
+[ssm]
+master_pairs = [1, 2]
+order = 5
+[outputs]
+coordinates = ["w_hori_mid", "w_vert_mid"]
+[forcing]
+epsilon = [0.1]
+omega_range = [43.07, 49.87]
+orders = [5]
+"#;
+    let rom = ssm_tests::run_scene_text(scene).expect("divider ROM");
+    let frc = rom.frc.expect("forced response");
+    let rom_at = |kind: &str, branch: usize| -> Vec<f64> {
+        frc.curves
+            .iter()
+            .flat_map(|c| &c.bifurcations)
+            .filter(|b| b.kind == kind && b.branch == branch)
+            .map(|b| b.omega)
+            .collect()
+    };
+    let t = std::time::Instant::now();
+    let b = reference_frc(&sys, &s, |_| true).expect("reference");
+    let seconds = t.elapsed().as_secs_f64();
+    let nearest = |w: f64, list: &[f64]| {
+        list.iter()
+            .map(|r| (w - r).abs() / r)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let pds: Vec<String> = b
+        .events
+        .iter()
+        .filter(|e| e.kind == ReferenceEventKind::PeriodDoubling)
+        .map(|e| {
+            format!(
+                "{:.5} ({:.1e} from the SSM's BP)",
+                e.orbit.omega,
+                nearest(e.orbit.omega, &rom_at("BP", 1))
+            )
+        })
+        .collect();
+    let sns: Vec<String> = b
+        .doubled
+        .iter()
+        .flat_map(|d| &d.events)
+        .filter(|e| e.kind == ReferenceEventKind::Fold)
+        .map(|e| {
+            format!(
+                "{:.5} ({:.1e} from the SSM's SN)",
+                e.orbit.omega,
+                nearest(e.orbit.omega, &rom_at("SN", 2))
+            )
+        })
+        .collect();
+    println!(
+        "divider (146 states), eps = 0.1, H = 5: main branch {} orbits, period doublings {}; {} branch(es) of period 2T, {} orbits, saddle-nodes {}; {seconds:.0} s once",
+        b.orbits.len(),
+        pds.join(", "),
+        b.doubled.len(),
+        b.doubled.iter().map(|d| d.orbits.len()).sum::<usize>(),
+        sns.join(", ")
+    );
+    let mut g = c.benchmark_group("reference divider");
+    g.sample_size(10);
+    g.bench_function("main and 2T branches, eps = 0.1, H = 5", |bch| {
+        bch.iter(|| black_box(reference_frc(&sys, &s, |_| true).expect("reference")))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, duffing, spatial, chain, divider);
 criterion_main!(benches);

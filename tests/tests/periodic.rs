@@ -403,6 +403,46 @@ coordinates = ["x1"]
             "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\noutputs = [\"nope\"]\n",
             "reference.outputs",
         ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\nstart = \"ssm\"\n",
+            "reference.start",
+        ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\nstart = \"peak\"\n",
+            "reference.start",
+        ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\namplitude_at = []\n",
+            "reference.amplitude_at",
+        ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\namplitude_at = [-1.0]\n",
+            "reference.amplitude_at",
+        ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\namplitude_at = [nan]\n",
+            "reference.amplitude_at",
+        ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\namplitude_range = [0, 0.1]\n",
+            "reference.amplitude_range",
+        ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\namplitude_at = [2.0]\namplitude_range = [0.1, 0.0]\n",
+            "reference.amplitude_range",
+        ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\namplitude_at = [2.0]\namplitude_range = [-0.1, 0.1]\n",
+            "reference.amplitude_range",
+        ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\namplitude_at = [2.0]\namplitude_range = [0.1]\n",
+            "reference.amplitude_range",
+        ),
+        (
+            "[reference]\nepsilon = 0.02\nomega_range = [1.9, 2.1]\namplitude_at = [2.0]\namplitude_range = [0, inf]\n",
+            "reference.amplitude_range",
+        ),
     ];
     for (section, key) in cases {
         let (_, message) = ssm_tests::scene_error(&format!("{base}{section}"));

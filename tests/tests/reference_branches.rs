@@ -299,6 +299,7 @@ fn amplitude_settings(omega: f64, range: (f64, f64)) -> AmplitudeSettings {
         tol: 1e-11,
         max_steps: 2000,
         outputs: settings(0.9, Vec::new()).outputs,
+        points_at: Vec::new(),
     }
 }
 
@@ -416,4 +417,139 @@ fn amplitude_response_refuses_bad_settings() {
         Ok(b) => assert!(b.orbits.iter().all(|o| o.linf[0].is_finite())),
         Err(e) => assert!(!e.to_string().is_empty()),
     }
+}
+
+/// The spatial oscillator with the cubic constraint (an index-3 DAE), 9
+/// harmonics, at `Omega = 1.97`, inside its bistable band at eps = 0.03,
+/// where the amplitude response is S-shaped in eps up to 0.1. References,
+/// both from the frequency continuation (an independent path through the
+/// same orbits):
+/// - the three orbits at `Omega = 1.97`, eps = 0.03, solved on the frequency
+///   branch (`points_at`): the amplitude response's own orbits at eps = 0.03
+///   (`points_at`, three crossings) must have their amplitudes (1e-8
+///   relative: both are Newton solutions of one system to `tol = 1e-11`);
+/// - at each fold of the amplitude response (eps_f), the frequency response
+///   at eps_f must have a fold at `Omega = 1.97` (1e-7 relative, the
+///   location tolerance of both).
+#[test]
+fn amplitude_and_frequency_continuations_meet_on_the_index_3_oscillator() {
+    let sys = ssm_tests::system("spatial-oscillator", "", "constraint = \"cubic\"");
+    let x1 = vec![OutputMap {
+        name: "x1".into(),
+        weights: vec![(0, 1.0)],
+    }];
+    let omega = 1.97;
+    let frequency = |eps: f64, points_at: Vec<f64>| ReferenceSettings {
+        epsilon: eps,
+        omega_range: (1.8, 2.2),
+        harmonics: 9,
+        step: 0.5,
+        tol: 1e-11,
+        max_steps: 2000,
+        outputs: x1.clone(),
+        points_at,
+        seeds: Vec::new(),
+        period_doubling: false,
+    };
+    let f = reference_frc(&sys, &frequency(0.03, vec![omega]), |_| true).expect("frequency");
+    assert_eq!(f.at.len(), 3, "three orbits at Omega = {omega}");
+    let a = reference_amplitude(
+        &sys,
+        &AmplitudeSettings {
+            omega,
+            epsilon_range: (0.0, 0.1),
+            harmonics: 9,
+            step: 0.5,
+            tol: 1e-11,
+            max_steps: 2000,
+            outputs: x1.clone(),
+            points_at: vec![0.03],
+        },
+        1,
+        |_| true,
+    )
+    .expect("amplitude");
+    assert_eq!(a.stop, Stop::Range);
+    assert_eq!(a.at.len(), 3, "three crossings of eps = 0.03");
+    let mut worst = 0.0f64;
+    for (o, _) in &f.at {
+        let best =
+            a.at.iter()
+                .map(|(p, _)| (p.linf[0] - o.linf[0]).abs() / o.linf[0])
+                .fold(f64::INFINITY, f64::min);
+        worst = worst.max(best);
+    }
+    eprintln!("orbits at eps = 0.03 from the two continuations: worst {worst:e}");
+    assert!(worst < 1e-8, "{worst:e}");
+    let folds: Vec<f64> = a
+        .events
+        .iter()
+        .filter(|e| e.kind == ReferenceEventKind::Fold)
+        .map(|e| e.orbit.epsilon)
+        .collect();
+    assert_eq!(folds.len(), 2, "{:?}", a.events);
+    for eps in folds {
+        let b = reference_frc(&sys, &frequency(eps, Vec::new()), |_| true).expect("frequency");
+        let near = b
+            .events
+            .iter()
+            .filter(|e| e.kind == ReferenceEventKind::Fold)
+            .map(|e| (e.orbit.omega - omega).abs() / omega)
+            .fold(f64::INFINITY, f64::min);
+        eprintln!(
+            "amplitude fold at eps = {eps}: the frequency response's fold {near:e} from Omega"
+        );
+        assert!(
+            near < 1e-7,
+            "eps = {eps}: nearest fold in Omega at {near:e}"
+        );
+    }
+}
+
+/// The zoo scene of Fig. 5 against the full system writes the amplitude
+/// response at `Omega = 1.97` (`amplitude_at`): `reference_amplitude.csv`
+/// with one row per orbit of the summary's `amplitude_responses`, all at
+/// that frequency, from rest (eps = 0, amplitude 0) to past eps = 0.1, with
+/// the two jump folds of
+/// [`amplitude_and_frequency_continuations_meet_on_the_index_3_oscillator`]
+/// and rows on both sides of each fold; and the plot.
+#[test]
+fn zoo_reference_scene_writes_the_amplitude_response() {
+    let (summary, out) = ssm_tests::run_zoo_in("spatial_oscillator_cubic_reference.toml");
+    let amp = &summary["reference"]["amplitude_responses"];
+    assert_eq!(amp.as_array().map(|a| a.len()), Some(1), "{amp}");
+    let b = &amp[0];
+    assert_eq!(b["omega"], 1.97);
+    assert_eq!(b["stop"], "range");
+    let folds: Vec<f64> = b["bifurcations"]
+        .as_array()
+        .expect("bifurcations")
+        .iter()
+        .filter(|e| e["kind"] == "SN")
+        .map(|e| e["epsilon"].as_f64().expect("epsilon"))
+        .collect();
+    assert_eq!(folds.len(), 2, "{b}");
+    let csv = std::fs::read_to_string(out.join("reference_amplitude.csv")).expect("csv");
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("omega,epsilon,stable,branch,period_multiple,x1_linf,max_multiplier,tail")
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len() as u64, b["orbits"].as_u64().expect("orbits"));
+    assert!(rows.iter().all(|r| r[0] == 1.97 && r[3] == 1.0));
+    assert!(rows[0][1] == 0.0 && rows[0][5] == 0.0, "{:?}", rows[0]);
+    assert!(rows[rows.len() - 1][1] >= 0.1);
+    for f in folds {
+        assert!(rows.iter().any(|r| r[1] < f) && rows.iter().any(|r| r[1] > f));
+    }
+    let svg = std::fs::read_to_string(out.join("reference_amplitude.svg")).expect("svg");
+    assert!(svg.contains("<svg") && svg.contains("Omega = 1.97"));
+    let _ = std::fs::remove_dir_all(&out);
 }

@@ -89,8 +89,9 @@ pub trait Problem {
     /// Test functions and data at a corrected point with unit tangent `t`.
     fn monitor(&mut self, u: &[f64], t: &[f64]) -> Result<Monitor<Self::Info>, ProblemFailure>;
     /// True where the branch must stop although the parameter is in range
-    /// (the problem's own bound).
-    fn beyond(&self, _u: &[f64]) -> bool {
+    /// (the problem's own bound), on the step from the accepted point
+    /// `_last` to the accepted point `_next`.
+    fn beyond(&self, _last: &[f64], _next: &[f64]) -> bool {
         false
     }
 }
@@ -533,7 +534,7 @@ where
         if u_next[k] < s.range.0 || u_next[k] > s.range.1 {
             break Stop::Range;
         }
-        if p.beyond(&u_next) {
+        if p.beyond(&last.u, &u_next) {
             break Stop::Bound;
         }
         let start = &points[0];

@@ -117,6 +117,10 @@ pub fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
         if s.frc.is_none() {
             out.add("reference_frc.svg", reference::reference_svg(r)?);
         }
+        if !r.amplitude.is_empty() {
+            out.add("reference_amplitude.csv", reference::amplitude_csv(r));
+            out.add("reference_amplitude.svg", reference::amplitude_svg(r)?);
+        }
     }
     if let Some(r) = s.report {
         out.add("report.csv", report::csv(r));

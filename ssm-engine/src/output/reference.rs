@@ -1,23 +1,34 @@
 //! Writers of `[reference]`: `reference_frc.csv`, the reference curves drawn
-//! on `frc.svg` (or `reference_frc.svg` without `[forcing]`), and the
-//! summary's `reference`. They format a [`ReferenceFrc`] and compute nothing.
+//! on `frc.svg` (or `reference_frc.svg` without `[forcing]`), the amplitude
+//! responses' `reference_amplitude.csv`/`.svg`, and the summary's
+//! `reference`. They format a [`ReferenceFrc`] and compute nothing.
 
 use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
 use crate::continuation::Stop;
-use crate::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
+use crate::fom::periodic::frc::{ReferenceBranch, ReferenceFrc, ReferenceOrbit};
 
 /// `reference_frc.csv`: `omega,epsilon,stable,branch,period_multiple,
 /// <out>_linf...,max_multiplier,tail`, one row per orbit (`stable` and
 /// `max_multiplier` empty where the multipliers were not computed).
 pub fn reference_csv(r: &ReferenceFrc) -> String {
+    orbits_csv(&r.outputs, &r.branches)
+}
+
+/// `reference_amplitude.csv`: the amplitude responses, with the columns of
+/// [`reference_csv`] (`branch` numbers the frequencies of `amplitude_at`).
+pub fn amplitude_csv(r: &ReferenceFrc) -> String {
+    orbits_csv(&r.outputs, &r.amplitude)
+}
+
+fn orbits_csv(outputs: &[String], branches: &[ReferenceBranch]) -> String {
     let mut csv = String::from("omega,epsilon,stable,branch,period_multiple");
-    for o in &r.outputs {
+    for o in outputs {
         csv.push_str(&format!(",{o}_linf"));
     }
     csv.push_str(",max_multiplier,tail\n");
-    for o in r.branches.iter().flat_map(|b| &b.orbits) {
+    for o in branches.iter().flat_map(|b| &b.orbits) {
         csv.push_str(&format!(
             "{:.12e},{:e},{},{},{}",
             o.omega,
@@ -43,12 +54,29 @@ pub fn reference_csv(r: &ReferenceFrc) -> String {
 /// stability (dashed when unstable), and its bifurcations as markers; the
 /// first output's amplitude (nothing when the scene names no output).
 pub fn reference_curves(r: &ReferenceFrc) -> Vec<Curve> {
+    let label = |o: &ReferenceOrbit| {
+        format!(
+            "full system (harmonic balance, H = {}), eps = {}",
+            r.harmonics, o.epsilon
+        )
+    };
+    curves(r, &r.branches, |o| o.omega, label)
+}
+
+/// The curves of `branches` over `x` (the frequency, or the forcing
+/// amplitude), each labelled once by `label` of its first orbit.
+fn curves(
+    r: &ReferenceFrc,
+    branches: &[ReferenceBranch],
+    x: impl Fn(&ReferenceOrbit) -> f64,
+    label: impl Fn(&ReferenceOrbit) -> String,
+) -> Vec<Curve> {
     let mut drawn = Vec::new();
     if r.outputs.is_empty() {
         return drawn;
     }
-    let y = |o: &ReferenceOrbit| (o.omega, o.linf[0]);
-    for b in &r.branches {
+    let y = |o: &ReferenceOrbit| (x(o), o.linf[0]);
+    for b in branches {
         let mut labelled = false;
         let mut k = 0;
         let orbits = &b.orbits;
@@ -66,11 +94,7 @@ pub fn reference_curves(r: &ReferenceFrc) -> Vec<Curve> {
                 label: if labelled {
                     String::new()
                 } else {
-                    format!(
-                        "full system (harmonic balance, H = {}), eps = {}",
-                        r.harmonics,
-                        orbits.first().map_or(0.0, |o| o.epsilon)
-                    )
+                    label(&orbits[0])
                 },
                 points: seg,
                 dashed: st == Some(false),
@@ -102,6 +126,27 @@ pub fn reference_svg(r: &ReferenceFrc) -> Result<String, PlotError> {
     )
 }
 
+/// `reference_amplitude.svg`: the amplitude responses over `eps`.
+pub fn amplitude_svg(r: &ReferenceFrc) -> Result<String, PlotError> {
+    let y_label = r
+        .outputs
+        .first()
+        .map_or("amplitude".to_owned(), |o| format!("max |{o}|"));
+    let label = |o: &ReferenceOrbit| {
+        format!(
+            "full system (harmonic balance, H = {}), Omega = {}",
+            r.harmonics, o.omega
+        )
+    };
+    line_plot(
+        "full-system amplitude response (dashed: unstable, circles: bifurcations)",
+        "eps",
+        &y_label,
+        &curves(r, &r.amplitude, |o| o.epsilon, label),
+        Scale::Linear,
+    )
+}
+
 fn stop_text(s: &Stop) -> String {
     match s {
         Stop::Range => "range".into(),
@@ -113,44 +158,59 @@ fn stop_text(s: &Stop) -> String {
     }
 }
 
-/// The summary's `reference`.
+/// The summary's `reference`: per branch its parameter's fixed value, the
+/// orbit count, why it stopped, its costs and bifurcations.
 pub fn reference_json(r: &ReferenceFrc) -> Value {
     let branches: Vec<Value> = r
         .branches
         .iter()
         .map(|b| {
-            let eps = b.orbits.first().map_or(0.0, |o| o.epsilon);
-            json!({
-                "epsilon": eps,
-                "orbits": b.orbits.len(),
-                "stop": stop_text(&b.stop),
-                "factorizations": b.factorizations,
-                "coefficients": b.coefficients,
-                "largest_tail": b.orbits.iter().map(|o| o.tail).fold(0.0, f64::max),
-                "stability_computed": b.orbits.iter().all(|o| o.stable.is_some()),
-                "bifurcations": b.events.iter().map(|e| {
-                    let mut v = json!({
-                        "kind": e.kind.label(),
-                        "omega": e.orbit.omega,
-                        "epsilon": e.orbit.epsilon,
-                        "branch": e.orbit.branch,
-                        "period_multiple": e.orbit.period_multiple,
-                        "multiplier": e.multiplier.map(|m| json!({"re": m.re, "im": m.im})),
-                    });
-                    for (name, a) in r.outputs.iter().zip(&e.orbit.linf) {
-                        v[format!("{name}_linf")] = json!(a);
-                    }
-                    v
-                }).collect::<Vec<_>>(),
-            })
+            let mut v = branch_json(r, b);
+            v["epsilon"] = json!(b.orbits.first().map_or(0.0, |o| o.epsilon));
+            v
+        })
+        .collect();
+    let amplitude: Vec<Value> = r
+        .amplitude
+        .iter()
+        .map(|b| {
+            let mut v = branch_json(r, b);
+            v["omega"] = json!(b.orbits.first().map_or(0.0, |o| o.omega));
+            v
         })
         .collect();
     json!({
-        "method": "harmonic balance (AFT) continued in Omega (local parametrization), Hill's method for Floquet multipliers",
+        "method": "harmonic balance (AFT) continued in Omega (and in eps at the frequencies of amplitude_at) by local parametrization; Floquet multipliers by Hill's method up to 1500 Fourier coefficients, above by the monodromy matrix (Radau IIA on the variational DAE)",
         "harmonics": r.harmonics,
         "samples_per_period": r.samples,
         "outputs": r.outputs,
         "branches": branches,
+        "amplitude_responses": amplitude,
         "seconds": r.seconds,
+    })
+}
+
+fn branch_json(r: &ReferenceFrc, b: &ReferenceBranch) -> Value {
+    json!({
+        "orbits": b.orbits.len(),
+        "stop": stop_text(&b.stop),
+        "factorizations": b.factorizations,
+        "coefficients": b.coefficients,
+        "largest_tail": b.orbits.iter().map(|o| o.tail).fold(0.0, f64::max),
+        "stability_computed": b.orbits.iter().all(|o| o.stable.is_some()),
+        "bifurcations": b.events.iter().map(|e| {
+            let mut v = json!({
+                "kind": e.kind.label(),
+                "omega": e.orbit.omega,
+                "epsilon": e.orbit.epsilon,
+                "branch": e.orbit.branch,
+                "period_multiple": e.orbit.period_multiple,
+                "multiplier": e.multiplier.map(|m| json!({"re": m.re, "im": m.im})),
+            });
+            for (name, a) in r.outputs.iter().zip(&e.orbit.linf) {
+                v[format!("{name}_linf")] = json!(a);
+            }
+            v
+        }).collect::<Vec<_>>(),
     })
 }

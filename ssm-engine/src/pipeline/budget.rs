@@ -501,7 +501,8 @@ const REFERENCE_STEPS: f64 = 500.0;
 /// Refuses a `[reference]` that would not finish within `limits`: per step
 /// five sparse factorizations of the harmonic-balance Jacobian (a dense
 /// `(2H+1)^2` block per nonzero of the pencil, eliminated at `(2H+1)^3` each)
-/// and, up to the dense Hill limit, one Hill eigenproblem (`(N (2H+1))^3`).
+/// and one Floquet analysis: up to the dense Hill limit one Hill
+/// eigenproblem (`(N (2H+1))^3`), above it the monodromy matrix.
 pub fn check_reference(
     scene: &SceneFile,
     system: &System,
@@ -514,12 +515,19 @@ pub fn check_reference(
     let k = 2.0 * *r.harmonics.get_ref() as f64 + 1.0;
     let nu = sizes.states * k;
     let factor = 2.0 * (sizes.nnz + sizes.factors) * k.powi(3);
+    // multipliers: the dense Hill eigenproblem, or the monodromy matrix (16
+    // H steps, each a sparse LU of the 3N stages and N solves, then a dense
+    // N x N eigenproblem; measured 0.23 s per orbit on the divider, N = 146,
+    // H = 5, which this estimate puts at 0.3 s)
+    let n = sizes.states;
     let hill = if nu <= crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64 {
         nu.powi(3)
+    } else if n <= crate::fom::periodic::monodromy::MAX_MONODROMY_STATES as f64 {
+        8.0 * (k - 1.0) * 2.0 * n * (sizes.nnz + sizes.factors) + 10.0 * n.powi(3)
     } else {
         0.0
     };
-    let branches = r.epsilon.get_ref().len() as f64;
+    let branches = (r.epsilon.get_ref().len() + r.amplitude_frequencies().len()) as f64;
     // a branch's scaled arclength is of order ten: small steps take more
     let steps = (*r.max_steps.get_ref() as f64).min(REFERENCE_STEPS.max(10.0 / *r.step.get_ref()));
     let cost = Cost {
@@ -535,6 +543,6 @@ pub fn check_reference(
         ),
         &cost,
         limits,
-        "lower harmonics or max_steps, or give fewer epsilon",
+        "lower harmonics or max_steps, or give fewer epsilon or amplitude_at",
     )
 }

@@ -1,5 +1,6 @@
 //! `[reference]`: the full system's forced response curves by harmonic
-//! balance and continuation, one branch per forcing amplitude, with the
+//! balance and continuation, one branch per forcing amplitude (and one
+//! amplitude response per frequency of `amplitude_at`), with the
 //! warnings a user must see (truncation estimate above the accuracy target,
 //! multipliers not computed, a branch that stopped short).
 
@@ -13,7 +14,10 @@ use crate::compare::validation::{frc_error_at, reference_points};
 use crate::continuation::Stop;
 use crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS;
 use crate::fom::periodic::frc::ReferenceFrc;
-use crate::fom::periodic::{reference_frc, ReferenceSettings};
+use crate::fom::periodic::monodromy::MAX_MONODROMY_STATES;
+use crate::fom::periodic::{
+    reference_amplitude, reference_frc, AmplitudeSettings, ReferenceSettings,
+};
 use crate::model::system::{OutputMap, System};
 use crate::rom::accuracy::MeasuredError;
 use crate::rom::forced_response::ForcedResponse;
@@ -71,9 +75,10 @@ pub fn reference_stage(
         .omega_range(scene)
         .expect("the scene check requires a frequency range");
     let mut warnings = Vec::new();
-    if coefficients > MAX_HILL_COEFFICIENTS {
+    if coefficients > MAX_HILL_COEFFICIENTS && system.n_states() > MAX_MONODROMY_STATES {
         warnings.push(format!(
-            "[reference]: {coefficients} Fourier coefficients per orbit exceed the dense Floquet limit {MAX_HILL_COEFFICIENTS}: stability and bifurcations of the reference are not computed (stable column empty); lower harmonics for them"
+            "[reference]: {coefficients} Fourier coefficients per orbit exceed the dense Hill limit {MAX_HILL_COEFFICIENTS}, and {} states the monodromy limit {MAX_MONODROMY_STATES}: stability and bifurcations of the reference are not computed (stable column empty); lower harmonics for them",
+            system.n_states()
         ));
     }
     let mut branches = Vec::new();
@@ -146,12 +151,58 @@ pub fn reference_stage(
             branches.append(&mut doubled);
         }
     }
+    let mut amplitude = Vec::new();
+    let eps_range = sec.amplitude_range();
+    for (k, &omega) in sec.amplitude_frequencies().iter().enumerate() {
+        progress.stage(&format!("full-system amplitude response, Omega = {omega}"));
+        let settings = AmplitudeSettings {
+            omega,
+            epsilon_range: eps_range,
+            harmonics: h,
+            step: *sec.step.get_ref(),
+            tol: *sec.tol.get_ref(),
+            max_steps: *sec.max_steps.get_ref(),
+            outputs: outputs.clone(),
+            points_at: Vec::new(),
+        };
+        let mut count = 0usize;
+        let branch = reference_amplitude(system, &settings, k + 1, |o| {
+            count += 1;
+            progress.detail(&format!(
+                "full-system amplitude response, Omega = {omega}: orbit {count}, eps = {:.4e}",
+                o.epsilon
+            ));
+            true
+        })?;
+        samples = branch.samples;
+        let at = format!("[reference] amplitude response at Omega = {omega}");
+        let tail = branch.orbits.iter().map(|o| o.tail).fold(0.0, f64::max);
+        if tail > tolerance {
+            warnings.push(format!(
+                "{at}: the highest harmonic carries {tail:.2e} of the orbit amplitude, above the accuracy target {tolerance:e}: the reference is truncated; raise harmonics"
+            ));
+        }
+        match &branch.stop {
+            Stop::Range => {}
+            Stop::StepTooSmall { parameter, cause } => warnings.push(format!(
+                "{at}: the continuation stopped at eps = {:e}: {cause}; the curve ends there (lower step, raise harmonics or tol)",
+                parameter * (eps_range.1 - eps_range.0)
+            )),
+            Stop::MaxSteps => warnings.push(format!(
+                "{at}: max_steps reached before eps left the range; the curve ends there (raise max_steps or step)"
+            )),
+            other => warnings.push(format!("{at}: the branch ended early ({other:?})")),
+        }
+        warnings.extend(branch.notes.iter().map(|n| format!("{at}: {n}")));
+        amplitude.push(branch);
+    }
     Ok((
         ReferenceFrc {
             outputs: outputs.iter().map(|o| o.name.clone()).collect(),
             harmonics: h,
             samples,
             branches,
+            amplitude,
             seconds: t.elapsed().as_secs_f64(),
         },
         warnings,

@@ -515,7 +515,7 @@ impl Problem for FrameProblem<'_> {
         })
     }
 
-    fn beyond(&self, u: &[f64]) -> bool {
+    fn beyond(&self, _last: &[f64], u: &[f64]) -> bool {
         let n = u.len() - 1;
         self.max_amplitude
             .is_some_and(|r| (0..n / 2).any(|j| u[2 * j].hypot(u[2 * j + 1]) > r))

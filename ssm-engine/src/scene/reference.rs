@@ -50,6 +50,14 @@ pub struct ReferenceSection {
     /// reduced model's FRC, lifted by `W`, that is not on one traced already.
     #[serde(default)]
     pub start: Option<Spanned<String>>,
+    /// Frequencies at which the amplitude response (continuation in `eps`
+    /// at fixed `Omega`) is also traced, one branch each.
+    #[serde(default)]
+    pub amplitude_at: Option<Spanned<Vec<f64>>>,
+    /// `[eps_min, eps_max]` of the amplitude responses (default `[0, the
+    /// largest epsilon]`).
+    #[serde(default)]
+    pub amplitude_range: Option<Spanned<Vec<f64>>>,
 }
 
 fn default_harmonics() -> Spanned<usize> {
@@ -75,6 +83,23 @@ impl ReferenceSection {
         match self.start.as_ref().map(|s| s.get_ref().as_str()) {
             Some(s) => s == "ssm",
             None => scene.scene.forcing.is_some(),
+        }
+    }
+
+    /// The frequencies of the amplitude responses (none by default).
+    pub fn amplitude_frequencies(&self) -> &[f64] {
+        self.amplitude_at.as_ref().map_or(&[], |a| a.get_ref())
+    }
+
+    /// The amplitude responses' range: this section's `amplitude_range`,
+    /// else `[0, the largest epsilon]`.
+    pub fn amplitude_range(&self) -> (f64, f64) {
+        match self.amplitude_range.as_ref().map(|r| r.get_ref()) {
+            Some(r) if r.len() == 2 => (r[0], r[1]),
+            _ => (
+                0.0,
+                self.epsilon.get_ref().iter().copied().fold(0.0, f64::max),
+            ),
         }
     }
 
@@ -185,6 +210,7 @@ impl SceneFile {
                 }
             }
         }
+        self.check_amplitude_responses(r)?;
         let steps = *r.max_steps.get_ref();
         if !(1..=MAX_REFERENCE_STEPS).contains(&steps) {
             return Err(self.invalid(
@@ -192,6 +218,47 @@ impl SceneFile {
                 "reference.max_steps",
                 format!("must lie in 1..={MAX_REFERENCE_STEPS}, found {steps}"),
             ));
+        }
+        Ok(())
+    }
+
+    /// `amplitude_at` and `amplitude_range`.
+    fn check_amplitude_responses(&self, r: &ReferenceSection) -> Result<(), SceneError> {
+        if let Some(at) = &r.amplitude_at {
+            let w = at.get_ref();
+            if w.is_empty()
+                || w.len() > MAX_REFERENCE_CURVES
+                || w.iter().any(|v| !(v.is_finite() && *v > 0.0))
+            {
+                return Err(self.invalid(
+                    at.span(),
+                    "reference.amplitude_at",
+                    format!(
+                        "give 1 to {MAX_REFERENCE_CURVES} positive, finite forcing frequencies, found {w:?}"
+                    ),
+                ));
+            }
+        }
+        if let Some(range) = &r.amplitude_range {
+            let v = range.get_ref();
+            let message = if r.amplitude_at.is_none() {
+                Some("traces the amplitude responses of amplitude_at: give the frequencies in amplitude_at".to_owned())
+            } else if v.len() != 2 {
+                Some(format!(
+                    "give [eps_min, eps_max], found {} numbers",
+                    v.len()
+                ))
+            } else if !(v[0].is_finite() && v[1].is_finite() && v[0] >= 0.0 && v[1] > v[0]) {
+                Some(format!(
+                    "must be finite, non-negative and increasing, found [{}, {}]",
+                    v[0], v[1]
+                ))
+            } else {
+                None
+            };
+            if let Some(m) = message {
+                return Err(self.invalid(range.span(), "reference.amplitude_range", m));
+            }
         }
         Ok(())
     }

@@ -21,7 +21,7 @@
 use crate::continuation::{self, solve_at_parameter, Settings};
 use crate::model::system::{OutputMap, System};
 
-use super::frc::{classify, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit};
+use super::frc::{classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit};
 use super::{HarmonicBalance, Parameter};
 
 /// Settings of a reference amplitude response.
@@ -42,6 +42,9 @@ pub struct AmplitudeSettings {
     pub max_steps: usize,
     /// Outputs whose amplitudes are reported.
     pub outputs: Vec<OutputMap>,
+    /// Forcing amplitudes at which the orbits of the branch are also solved
+    /// exactly (every crossing of the branch).
+    pub points_at: Vec<f64>,
 }
 
 /// The reference amplitude response of `sys` at the frequency of
@@ -118,6 +121,14 @@ where
     let branch = continuation::continue_branch(&mut hb, u0, &t0, &cs, |p, _| {
         observe(&reader.orbit(p, number))
     })?;
+    let at = orbits_at(
+        &mut hb,
+        &branch.points,
+        &settings.points_at,
+        &cs,
+        &reader,
+        number,
+    );
     let (orbits, events, doublings) = classify(&branch, &reader, number);
     let notes = doublings
         .iter()
@@ -135,7 +146,7 @@ where
         factorizations: hb.factorizations(),
         coefficients: nu,
         samples: hb.samples(),
-        at: Vec::new(),
+        at,
         doubled: Vec::new(),
         seeded: Vec::new(),
         notes,

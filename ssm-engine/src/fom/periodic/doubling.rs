@@ -24,7 +24,8 @@ use crate::continuation::{self, correct, local_parameter, Point, Problem, Settin
 use crate::model::system::System;
 
 use super::frc::{
-    classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit, ReferenceSettings,
+    classify, drop_rejoining_step, orbits_at, Reader, ReferenceBranch, ReferenceError,
+    ReferenceOrbit, ReferenceSettings,
 };
 use super::seed::Path;
 use super::{HarmonicBalance, OrbitInfo};
@@ -97,9 +98,10 @@ where
     hb.odd_floor = Some(0.25 * odd_norm(&u0));
     let t0: Vec<f64> = u0.iter().zip(&u).map(|(a, b)| a - b).collect();
     let reader = Reader::of(&hb, settings.epsilon, &settings.outputs);
-    let branch = continuation::continue_branch(&mut hb, u0, &t0, cs, |p, _| {
+    let mut branch = continuation::continue_branch(&mut hb, u0, &t0, cs, |p, _| {
         observe(&reader.orbit(p, number))
     })?;
+    drop_rejoining_step(&mut branch);
     let at = orbits_at(
         &mut hb,
         &branch.points,

@@ -19,7 +19,8 @@
 //! on the strip's edge, so the edge is half-open, with a tolerance.
 //!
 //! This path is dense in `N (2H + 1)` and limited to
-//! [`MAX_HILL_COEFFICIENTS`] coefficients.
+//! [`MAX_HILL_COEFFICIENTS`] coefficients; larger orbits get their
+//! multipliers from the monodromy matrix ([`super::monodromy`]).
 //!
 //! # References
 //! M. Krack, J. Gross, *Harmonic Balance for Nonlinear Vibration Problems*,
@@ -33,14 +34,16 @@ use super::HarmonicBalance;
 use crate::spectrum::dense::{finite_eigenvalues_with, FiniteStructure};
 use crate::C64;
 
-/// Largest `N (2H + 1)` for which the dense Hill eigenproblem is solved.
+/// Largest `N (2H + 1)` for which the dense Hill eigenproblem is solved;
+/// above it the multipliers come from the monodromy matrix
+/// ([`super::monodromy`]) up to its own limit.
 pub const MAX_HILL_COEFFICIENTS: usize = 1500;
 
 /// Why no Floquet multipliers were computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FloquetError {
-    /// The dense Hill eigenproblem is too large.
-    #[error("Floquet multipliers: {coefficients} Fourier coefficients exceed the dense Hill limit {limit}")]
+    /// The dense Hill eigenproblem and the monodromy matrix are too large.
+    #[error("Floquet multipliers: {coefficients} Fourier coefficients exceed the dense Hill limit {limit}, and the states the monodromy limit")]
     TooLarge {
         /// `N (2H + 1)`.
         coefficients: usize,
@@ -83,16 +86,18 @@ impl Floquet {
 
     /// The test function of real multipliers crossing the unit circle
     /// (folds and branch points through `+1`, period doublings through
-    /// `-1`): the sign of `prod ln |rho|` over the real multipliers times the
-    /// smallest `|ln |rho||` among them. It is continuous and vanishes where
-    /// a real multiplier is on the circle; two real multipliers merging into
-    /// a complex pair do not change its sign.
+    /// `-1`): `(-1)^k`, `k` the number of real multipliers outside the
+    /// circle, times the smallest `|ln |rho||` among the real multipliers.
+    /// It is continuous and vanishes where a real multiplier is on the
+    /// circle; two real multipliers merging into a complex pair change `k` by
+    /// 0 or 2, not its sign, and multipliers deep inside the circle (which
+    /// the monodromy path drops below a threshold) do not enter it.
     pub fn real_crossing_test(&self) -> f64 {
         let mut sign = 1.0;
         let mut near = f64::INFINITY;
         for r in self.multipliers.iter().filter(|r| is_real(r)) {
             let l = r.norm().ln();
-            if l < 0.0 {
+            if l > 0.0 {
                 sign = -sign;
             }
             near = near.min(l.abs());
@@ -150,10 +155,7 @@ pub fn floquet_with(
 ) -> Result<Floquet, FloquetError> {
     let nu = hb.n_coefficients();
     if nu > MAX_HILL_COEFFICIENTS {
-        return Err(FloquetError::TooLarge {
-            coefficients: nu,
-            limit: MAX_HILL_COEFFICIENTS,
-        });
+        return super::monodromy::floquet_by_monodromy(hb, c, omega, None);
     }
     let m = hb.period_multiple() as f64;
     let wb = omega / m;

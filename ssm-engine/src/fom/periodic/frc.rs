@@ -323,6 +323,18 @@ where
     Ok(doubled)
 }
 
+/// Drops what a branch of period `m T` that ended at its bound ([`Stop::Bound`]:
+/// it rejoined the period-`T` branch) located on its last step: that step
+/// crossed the period-`T` branch at the period doubling reported there, onto
+/// the same orbits shifted by `T`, and its tangent's turn and multipliers
+/// are that crossing, not a fold or a bifurcation of the branch.
+pub(super) fn drop_rejoining_step(branch: &mut continuation::Branch<OrbitInfo>) {
+    if branch.stop == Stop::Bound {
+        let last = branch.points.len().saturating_sub(2);
+        branch.events.retain(|e| e.after < last);
+    }
+}
+
 /// The orbits of a traced branch, its located bifurcations (a multiplier
 /// through `+1` in the step of a fold is that fold), and the points of its
 /// period doublings.
@@ -378,21 +390,26 @@ pub(super) fn classify(
     (orbits, events, doublings)
 }
 
-/// The orbits at the frequencies `omegas`: at each crossing of the branch,
-/// Newton at fixed `Omega` from the chord between the two points around it.
+/// The orbits at the parameter's values `values` (frequencies, or forcing
+/// amplitudes when the amplitude is the parameter): at each crossing of the
+/// branch, Newton at the fixed parameter from the chord between the two
+/// points around it.
 pub(super) fn orbits_at(
     hb: &mut HarmonicBalance<'_>,
     points: &[Point<OrbitInfo>],
-    omegas: &[f64],
+    values: &[f64],
     cs: &Settings,
     reader: &Reader,
     number: usize,
 ) -> Vec<(ReferenceOrbit, Vec<f64>)> {
     let nu = hb.n_coefficients();
-    let w = hb.frequency_scale;
+    let w = match hb.parameter {
+        Parameter::Frequency => hb.frequency_scale,
+        Parameter::Amplitude { .. } => hb.epsilon_scale,
+    };
     let mut out = Vec::new();
-    for &omega in omegas {
-        let target = omega / w;
+    for &value in values {
+        let target = value / w;
         for pair in points.windows(2) {
             let (a, b) = (pair[0].u[nu], pair[1].u[nu]);
             if (a - target) * (b - target) > 0.0 || a == b {
@@ -578,8 +595,11 @@ pub struct ReferenceFrc {
     pub harmonics: usize,
     /// Time samples per period of the AFT.
     pub samples: usize,
-    /// One branch per forcing amplitude.
+    /// One branch per forcing amplitude, then the branches of period `2T`
+    /// and those started from the reduced model.
     pub branches: Vec<ReferenceBranch>,
+    /// The amplitude responses (continuation in `eps`), one per frequency.
+    pub amplitude: Vec<ReferenceBranch>,
     /// Wall-clock seconds.
     pub seconds: f64,
 }

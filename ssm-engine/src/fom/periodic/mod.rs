@@ -58,6 +58,7 @@ mod doubling;
 pub mod floquet;
 pub mod frc;
 mod gauge;
+pub mod monodromy;
 mod problem;
 pub mod seed;
 

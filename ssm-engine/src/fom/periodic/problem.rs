@@ -87,19 +87,25 @@ impl Problem for HarmonicBalance<'_> {
         self.solver.solve(rhs)
     }
 
-    fn beyond(&self, u: &[f64]) -> bool {
+    /// A branch of period `2T` has rejoined the period-`T` branch where its
+    /// odd harmonics (those of `Omega / 2` alone) fall below the floor, or
+    /// where they change sign over a step: there the branch crossed the
+    /// period-`T` branch at a period doubling and the step landed on the
+    /// other half of the pitchfork (the same orbits shifted by `T`).
+    fn beyond(&self, last: &[f64], next: &[f64]) -> bool {
         let Some(floor) = self.odd_floor else {
             return false;
         };
         let kk = self.kk();
-        let odd: f64 = (0..self.n_coefficients())
+        let odd: Vec<usize> = (0..self.n_coefficients())
             .filter(|p| {
                 let q = p % kk;
                 q > 0 && q.div_ceil(2) % 2 == 1
             })
-            .map(|p| u[p] * u[p])
-            .sum();
-        odd.sqrt() < floor
+            .collect();
+        let norm2: f64 = odd.iter().map(|&p| next[p] * next[p]).sum();
+        let turn: f64 = odd.iter().map(|&p| last[p] * next[p]).sum();
+        norm2.sqrt() < floor || turn < 0.0
     }
 
     fn monitor(&mut self, u: &[f64], _t: &[f64]) -> Result<Monitor<OrbitInfo>, ProblemFailure> {

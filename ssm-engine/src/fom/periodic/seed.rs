@@ -21,7 +21,8 @@ use crate::continuation::{self, dot, solve_at_parameter, Point, Settings, Stop};
 use crate::model::system::System;
 
 use super::frc::{
-    classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit, ReferenceSettings,
+    classify, drop_rejoining_step, orbits_at, Reader, ReferenceBranch, ReferenceError,
+    ReferenceOrbit, ReferenceSettings,
 };
 use super::{HarmonicBalance, OrbitInfo};
 
@@ -202,9 +203,10 @@ where
     let reader = Reader::of(&hb, settings.epsilon, &settings.outputs);
     let mut up = vec![0.0; nu + 1];
     up[nu] = 1.0;
-    let forward = continuation::continue_branch(&mut hb, u0.clone(), &up, cs, |p, _| {
+    let mut forward = continuation::continue_branch(&mut hb, u0.clone(), &up, cs, |p, _| {
         observe(&reader.orbit(p, number))
     })?;
+    drop_rejoining_step(&mut forward);
     let backward = if forward.stop == Stop::Closed || forward.stop == Stop::Interrupted {
         None
     } else {
@@ -224,7 +226,8 @@ where
     let (mut orbits, mut events, mut doublings) = classify(&forward, &reader, number);
     let mut points = forward.points;
     let mut stop = forward.stop;
-    if let Some(b) = backward {
+    if let Some(mut b) = backward {
+        drop_rejoining_step(&mut b);
         let (o, e, d) = classify(&b, &reader, number);
         orbits = o.into_iter().skip(1).rev().chain(orbits).collect();
         events = e.into_iter().rev().chain(events).collect();
