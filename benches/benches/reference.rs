@@ -17,7 +17,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use ssm_engine::fom::periodic::{reference_frc, ReferenceEventKind, ReferenceSettings};
 use ssm_engine::fom::{steady_state, DaeProblem, SteadyOptions};
 use ssm_engine::model::system::{OutputMap, System};
-use ssm_tests::{forced_duffing, system};
+use ssm_tests::{duffing_fold, forced_duffing, system};
 
 fn settings(
     epsilon: f64,
@@ -46,28 +46,6 @@ fn outputs(sys: &System, names: &[&str]) -> Vec<OutputMap> {
         .collect()
 }
 
-/// `((1 + 3/4 a^2 - W)^2 + 4 zeta^2 W) a^2 = eps^2` at the fold nearest
-/// `(a, Omega)` (Newton on the curve and its `a`-derivative).
-fn closed_form_fold(zeta: f64, eps: f64, a: f64, omega: f64) -> f64 {
-    let g = |a: f64, w: f64| {
-        ((1.0 + 0.75 * a * a - w).powi(2) + 4.0 * zeta * zeta * w) * a * a - eps * eps
-    };
-    let ga = |a: f64, w: f64| (g(a + 1e-7, w) - g(a - 1e-7, w)) / 2e-7;
-    let (mut a, mut w) = (a, omega * omega);
-    for _ in 0..60 {
-        let (f1, f2) = (g(a, w), ga(a, w));
-        let (da, dw) = (1e-6 * a, 1e-6 * w);
-        let j11 = (g(a + da, w) - g(a - da, w)) / (2.0 * da);
-        let j12 = (g(a, w + dw) - g(a, w - dw)) / (2.0 * dw);
-        let j21 = (ga(a + da, w) - ga(a - da, w)) / (2.0 * da);
-        let j22 = (ga(a, w + dw) - ga(a, w - dw)) / (2.0 * dw);
-        let det = j11 * j22 - j12 * j21;
-        a -= (f1 * j22 - f2 * j12) / det;
-        w -= (j11 * f2 - j21 * f1) / det;
-    }
-    w.sqrt()
-}
-
 fn duffing(c: &mut Criterion) {
     let (zeta, eps) = (0.005, 0.002);
     let sys = forced_duffing(zeta, 1.0, &[(1.0, 1.0)]);
@@ -84,7 +62,7 @@ fn duffing(c: &mut Criterion) {
             .iter()
             .filter(|e| e.kind == ReferenceEventKind::Fold)
             .map(|e| {
-                let w = closed_form_fold(zeta, eps, e.orbit.linf[0], e.orbit.omega);
+                let (_, w) = duffing_fold(zeta, 1.0, eps, e.orbit.linf[0], e.orbit.omega);
                 format!("{:.2e}", (e.orbit.omega - w).abs() / w)
             })
             .collect();

@@ -1,13 +1,17 @@
 //! `ssm-engine`: run a scene, or list plugins.
 
+use std::cell::{Cell, RefCell};
 use std::fmt::Write as _;
 use std::io::IsTerminal;
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use ssm_engine::fom::periodic::ReferenceOrbit;
 use ssm_engine::model::plugin::Registry;
+use ssm_engine::output;
 use ssm_engine::pipeline::{self, export, Progress};
 use ssm_engine::scene::{ReportSection, SceneFile};
 
@@ -95,6 +99,105 @@ impl Progress for Spinner {
         if let Spinner::Bar(bar) = self {
             bar.set_message(what.to_owned());
         }
+    }
+}
+
+/// The full-system reference's orbits written down as they are accepted,
+/// beside the output directory (`<out>.reference-partial.csv`, or with the
+/// process id when that exists: an earlier stopped run's, or a concurrent
+/// one's), so that a run stopped before its outputs are written keeps them.
+/// Created with the first orbit, never over an existing file or through a
+/// link; removed once the run's outputs are written.
+struct Journal {
+    path: Option<PathBuf>,
+    file: RefCell<Option<(PathBuf, std::fs::File)>>,
+    failed: Cell<bool>,
+}
+
+impl Journal {
+    fn beside(out: &std::path::Path) -> Self {
+        let path = out
+            .file_name()
+            .map(|n| out.with_file_name(format!("{}.reference-partial", n.to_string_lossy())));
+        Journal {
+            path,
+            file: RefCell::new(None),
+            failed: Cell::new(false),
+        }
+    }
+
+    fn open(&self, header: &str) -> Option<(PathBuf, std::fs::File)> {
+        let base = self.path.as_ref()?;
+        let mut last = None;
+        for name in [
+            format!("{}.csv", base.display()),
+            format!("{}.{}.csv", base.display(), std::process::id()),
+        ] {
+            let path = PathBuf::from(name);
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(mut f) => {
+                    return f.write_all(header.as_bytes()).ok().map(|_| (path, f));
+                }
+                Err(e) => last = Some((path, e)),
+            }
+        }
+        if let Some((path, e)) = last {
+            eprintln!(
+                "warning: cannot write the reference's orbits as they go to {}: {e}",
+                path.display()
+            );
+        }
+        None
+    }
+
+    fn record(&self, outputs: &[String], orbit: &ReferenceOrbit) {
+        if self.failed.get() {
+            return;
+        }
+        let mut slot = self.file.borrow_mut();
+        if slot.is_none() {
+            *slot = self.open(&output::reference::orbit_header(outputs));
+            if slot.is_none() {
+                self.failed.set(true);
+                return;
+            }
+        }
+        if let Some((_, f)) = slot.as_mut() {
+            if f.write_all(output::reference::orbit_row(orbit).as_bytes())
+                .is_err()
+            {
+                self.failed.set(true);
+            }
+        }
+    }
+
+    /// The journal's path, if one was written.
+    fn written(&self) -> Option<PathBuf> {
+        self.file.borrow().as_ref().map(|(p, _)| p.clone())
+    }
+}
+
+/// The spinner and the reference journal.
+struct Display {
+    spinner: Spinner,
+    journal: Journal,
+}
+
+impl Progress for Display {
+    fn stage(&self, name: &str) {
+        self.spinner.stage(name);
+    }
+
+    fn detail(&self, what: &str) {
+        self.spinner.detail(what);
+    }
+
+    fn reference_orbit(&self, outputs: &[String], orbit: &ReferenceOrbit) {
+        self.journal.record(outputs, orbit);
     }
 }
 
@@ -210,12 +313,28 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     if report && scene.scene.report.is_none() {
         scene.scene.report = Some(ReportSection { orders: None });
     }
-    let progress = spinner();
-    let result = pipeline::run(&scene, &mut registry, &progress);
-    progress.finish();
-    let result = result?;
     let out = out.unwrap_or_else(|| pipeline::default_out_dir(&scene));
-    result.outputs.write(&out)?;
+    let progress = Display {
+        spinner: spinner(),
+        journal: Journal::beside(&out),
+    };
+    let result = pipeline::run(&scene, &mut registry, &progress);
+    progress.spinner.finish();
+    let journal = progress.journal.written();
+    let kept = |e: anyhow::Error| {
+        if let Some(p) = &journal {
+            eprintln!(
+                "note: the full-system reference's orbits computed before the stop are in {}",
+                p.display()
+            );
+        }
+        e
+    };
+    let result = result.map_err(|e| kept(e.into()))?;
+    result.outputs.write(&out).map_err(|e| kept(e.into()))?;
+    if let Some(p) = &journal {
+        let _ = std::fs::remove_file(p);
+    }
     for w in &result.warnings {
         eprintln!("warning: {w}");
     }

@@ -551,5 +551,109 @@ fn zoo_reference_scene_writes_the_amplitude_response() {
     }
     let svg = std::fs::read_to_string(out.join("reference_amplitude.svg")).expect("svg");
     assert!(svg.contains("<svg") && svg.contains("Omega = 1.97"));
+    // the orbits written as they went are removed with the outputs written
+    assert_eq!(journals(&out), Vec::<std::path::PathBuf>::new());
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The journals `<out>.reference-partial*.csv` beside the output directory.
+fn journals(out: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let name = out
+        .file_name()
+        .expect("name")
+        .to_string_lossy()
+        .into_owned();
+    let mut found: Vec<_> = std::fs::read_dir(out.parent().expect("parent"))
+        .expect("parent")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name().is_some_and(|f| {
+                f.to_string_lossy()
+                    .starts_with(&format!("{name}.reference-partial"))
+            })
+        })
+        .collect();
+    found.sort();
+    found
+}
+
+/// A run stopped (killed) in the middle of its full-system reference keeps
+/// the orbits it computed: the journal beside the output directory has the
+/// header of `reference_frc.csv` and one complete row per accepted orbit
+/// (finite, inside the scene's range and amplitudes), and the output
+/// directory is untouched (not created). A second run into the same place
+/// leaves the first journal alone (its own goes under its process id) and
+/// removes its own when its outputs are written.
+#[test]
+fn a_stopped_reference_keeps_the_orbits_it_computed() {
+    let out = ssm_tests::tmp_dir("stopped-reference");
+    let scene = ssm_tests::repo_root().join("zoo/spatial_oscillator_cubic_reference.toml");
+    let mut child = std::process::Command::new(ssm_tests::engine_binary())
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("engine starts");
+    let journal = out.with_file_name(format!(
+        "{}.reference-partial.csv",
+        out.file_name().expect("name").to_string_lossy()
+    ));
+    let rows = |p: &std::path::Path| {
+        std::fs::read_to_string(p)
+            .map(|t| {
+                t.lines()
+                    .filter(|l| l.ends_with(|c: char| c.is_ascii_digit()))
+                    .count()
+            })
+            .unwrap_or(0)
+    };
+    let t = std::time::Instant::now();
+    while rows(&journal) < 60 && t.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().expect("kill");
+    let _ = child.wait();
+    let text = std::fs::read_to_string(&journal).expect("journal kept");
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("omega,epsilon,stable,branch,period_multiple,x1_linf,max_multiplier,tail")
+    );
+    let mut complete = 0;
+    for l in lines {
+        let v: Vec<&str> = l.split(',').collect();
+        if v.len() < 8 {
+            continue; // the row being written at the kill
+        }
+        let (w, e, a): (f64, f64, f64) = (
+            v[0].parse().expect("omega"),
+            v[1].parse().expect("epsilon"),
+            v[5].parse().expect("amplitude"),
+        );
+        assert!(w.is_finite() && a.is_finite() && a >= 0.0, "{l}");
+        assert!(
+            (1.79..=2.21).contains(&w) && [0.01, 0.02, 0.03].contains(&e) || w == 1.97,
+            "{l}"
+        );
+        complete += 1;
+    }
+    assert!(complete >= 60, "{complete} rows");
+    assert!(
+        !out.join("summary.json").exists(),
+        "no outputs of the stopped run"
+    );
+    // a second run: the first journal stays, the second's goes
+    let o = std::process::Command::new(ssm_tests::engine_binary())
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("engine runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(journals(&out), vec![journal.clone()]);
+    assert_eq!(std::fs::read_to_string(&journal).expect("journal"), text);
+    let _ = std::fs::remove_file(&journal);
     let _ = std::fs::remove_dir_all(&out);
 }

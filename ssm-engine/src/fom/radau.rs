@@ -28,6 +28,25 @@ const SQ6: f64 = 2.449_489_742_783_178;
 /// Collocation nodes.
 const C1: f64 = (4.0 - SQ6) / 10.0;
 const C2: f64 = (4.0 + SQ6) / 10.0;
+
+/// The Radau IIA matrix `A_R` (three stages, order 5; Hairer & Wanner II,
+/// Table IV.5.6).
+pub(crate) const RADAU_A: [[f64; 3]; 3] = [
+    [
+        (88.0 - 7.0 * SQ6) / 360.0,
+        (296.0 - 169.0 * SQ6) / 1800.0,
+        (-2.0 + 3.0 * SQ6) / 225.0,
+    ],
+    [
+        (296.0 + 169.0 * SQ6) / 1800.0,
+        (88.0 + 7.0 * SQ6) / 360.0,
+        (-2.0 - 3.0 * SQ6) / 225.0,
+    ],
+    [(16.0 - SQ6) / 36.0, (16.0 + SQ6) / 36.0, 1.0 / 9.0],
+];
+
+/// The Radau IIA nodes `c`.
+pub(crate) const RADAU_C: [f64; 3] = [C1, C2, 1.0];
 const C1M1: f64 = C1 - 1.0;
 const C2M1: f64 = C2 - 1.0;
 const C1MC2: f64 = C1 - C2;
@@ -704,23 +723,6 @@ enum Newton {
 mod tests {
     use super::*;
 
-    /// The Radau IIA coefficients (Hairer & Wanner II, Table IV.5.6).
-    fn radau_matrix() -> [[f64; 3]; 3] {
-        [
-            [
-                (88.0 - 7.0 * SQ6) / 360.0,
-                (296.0 - 169.0 * SQ6) / 1800.0,
-                (-2.0 + 3.0 * SQ6) / 225.0,
-            ],
-            [
-                (296.0 + 169.0 * SQ6) / 1800.0,
-                (88.0 + 7.0 * SQ6) / 360.0,
-                (-2.0 - 3.0 * SQ6) / 225.0,
-            ],
-            [(16.0 - SQ6) / 36.0, (16.0 + SQ6) / 36.0, 1.0 / 9.0],
-        ]
-    }
-
     fn mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
         let mut c = [[0.0; 3]; 3];
         for i in 0..3 {
@@ -737,7 +739,7 @@ mod tests {
     fn transformation_diagonalizes_the_inverse_radau_matrix() {
         let (g, a, b) = radau_eigenvalues();
         let lambda = [[g, 0.0, 0.0], [0.0, a, -b], [0.0, b, a]];
-        let prod = mul(&radau_matrix(), &mul(&mul(&T, &lambda), &TI));
+        let prod = mul(&RADAU_A, &mul(&mul(&T, &lambda), &TI));
         let id = mul(&T, &TI);
         for i in 0..3 {
             for j in 0..3 {
@@ -755,7 +757,7 @@ mod tests {
             }
         }
         // the nodes are the last row sums (stiff accuracy: c_3 = 1, b = last row)
-        let ar = radau_matrix();
+        let ar = RADAU_A;
         for (row, c) in ar.iter().zip([C1, C2, 1.0]) {
             assert!((row.iter().sum::<f64>() - c).abs() < 1e-15);
         }

@@ -23,31 +23,43 @@ pub fn amplitude_csv(r: &ReferenceFrc) -> String {
 }
 
 fn orbits_csv(outputs: &[String], branches: &[ReferenceBranch]) -> String {
+    let mut csv = orbit_header(outputs);
+    for o in branches.iter().flat_map(|b| &b.orbits) {
+        csv.push_str(&orbit_row(o));
+    }
+    csv
+}
+
+/// The header line of [`reference_csv`] for the output names `outputs`.
+pub fn orbit_header(outputs: &[String]) -> String {
     let mut csv = String::from("omega,epsilon,stable,branch,period_multiple");
     for o in outputs {
         csv.push_str(&format!(",{o}_linf"));
     }
     csv.push_str(",max_multiplier,tail\n");
-    for o in branches.iter().flat_map(|b| &b.orbits) {
-        csv.push_str(&format!(
-            "{:.12e},{:e},{},{},{}",
-            o.omega,
-            o.epsilon,
-            o.stable.map_or(String::new(), |s| u8::from(s).to_string()),
-            o.branch,
-            o.period_multiple
-        ));
-        for v in &o.linf {
-            csv.push_str(&format!(",{v:.12e}"));
-        }
-        csv.push_str(&format!(
-            ",{},{:.3e}\n",
-            o.max_multiplier
-                .map_or(String::new(), |m| format!("{m:.10e}")),
-            o.tail
-        ));
-    }
     csv
+}
+
+/// One line of [`reference_csv`].
+pub fn orbit_row(o: &ReferenceOrbit) -> String {
+    let mut row = format!(
+        "{:.12e},{:e},{},{},{}",
+        o.omega,
+        o.epsilon,
+        o.stable.map_or(String::new(), |s| u8::from(s).to_string()),
+        o.branch,
+        o.period_multiple
+    );
+    for v in &o.linf {
+        row.push_str(&format!(",{v:.12e}"));
+    }
+    row.push_str(&format!(
+        ",{},{:.3e}\n",
+        o.max_multiplier
+            .map_or(String::new(), |m| format!("{m:.10e}")),
+        o.tail
+    ));
+    row
 }
 
 /// The reference curves to draw: per branch one segment per run of equal

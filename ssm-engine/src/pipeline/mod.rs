@@ -27,7 +27,7 @@ use crate::compare::instantaneous::{data_backbones, near_frequency, DataBackbone
 use crate::compare::pod::PodStudy;
 use crate::compare::report::{report, Report, ReportInputs};
 use crate::compare::validation::{validation, Validation};
-use crate::fom::periodic::frc::ReferenceFrc;
+use crate::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
 use crate::model::plugin::{PluginOrigin, Registry};
 use crate::model::source::build_model;
 use crate::model::system::{OutputMap, System};
@@ -51,6 +51,11 @@ pub trait Progress {
     /// Where a long stage is (e.g. the frequency a continuation reached);
     /// a display may show it in place of the stage's name.
     fn detail(&self, _what: &str) {}
+    /// One orbit of the full-system reference (`[reference]`), as it is
+    /// accepted, with the names of its output amplitudes: a display may write
+    /// it down, so that a run stopped before its outputs are written keeps
+    /// what it computed.
+    fn reference_orbit(&self, _outputs: &[String], _orbit: &ReferenceOrbit) {}
 }
 
 /// No progress display.

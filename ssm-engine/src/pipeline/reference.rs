@@ -13,7 +13,7 @@ use crate::compare::seeds::ssm_seeds;
 use crate::compare::validation::{frc_error_at, reference_points};
 use crate::continuation::Stop;
 use crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS;
-use crate::fom::periodic::frc::ReferenceFrc;
+use crate::fom::periodic::frc::{ReferenceBranch, ReferenceFrc};
 use crate::fom::periodic::monodromy::MAX_MONODROMY_STATES;
 use crate::fom::periodic::{
     reference_amplitude, reference_frc, AmplitudeSettings, ReferenceSettings,
@@ -81,6 +81,7 @@ pub fn reference_stage(
             system.n_states()
         ));
     }
+    let names: Vec<String> = outputs.iter().map(|o| o.name.clone()).collect();
     let mut branches = Vec::new();
     let mut samples = 0;
     for &eps in sec.epsilon.get_ref() {
@@ -109,6 +110,7 @@ pub fn reference_stage(
         let (lo, hi) = range;
         let mut count = 0usize;
         let mut branch = reference_frc(system, &settings, |o| {
+            progress.reference_orbit(&names, o);
             count += 1;
             let at = ((o.omega - lo) / (hi - lo) * 100.0).clamp(0.0, 100.0);
             progress.detail(&format!(
@@ -118,26 +120,12 @@ pub fn reference_stage(
             true
         })?;
         samples = branch.samples;
-        let tail = branch.orbits.iter().map(|o| o.tail).fold(0.0, f64::max);
-        if tail > tolerance {
-            warnings.push(format!(
-                "[reference] eps = {eps}: the highest harmonic carries {:.2e} of the orbit amplitude, above the accuracy target {tolerance:e}: the reference is truncated; raise harmonics",
-                tail
-            ));
-        }
-        match &branch.stop {
-            Stop::Range => {}
-            Stop::StepTooSmall { parameter, cause } => warnings.push(format!(
-                "[reference] eps = {eps}: the continuation stopped at Omega = {:.6}: {cause}; the curve ends there (lower step, raise harmonics or tol)",
-                parameter * (range.1 - range.0)
-            )),
-            Stop::MaxSteps => warnings.push(format!(
-                "[reference] eps = {eps}: max_steps reached before Omega left the range; the curve ends there (raise max_steps or step)"
-            )),
-            other => warnings.push(format!(
-                "[reference] eps = {eps}: the branch ended early ({other:?})"
-            )),
-        }
+        warnings.extend(branch_warnings(
+            &branch,
+            &format!("[reference] eps = {eps}"),
+            ("Omega", range.1 - range.0),
+            tolerance,
+        ));
         warnings.extend(branch.notes.iter().map(|n| {
             format!("[reference] eps = {eps}: a start from the reduced model was dropped: {n}")
         }));
@@ -167,6 +155,7 @@ pub fn reference_stage(
         };
         let mut count = 0usize;
         let branch = reference_amplitude(system, &settings, k + 1, |o| {
+            progress.reference_orbit(&names, o);
             count += 1;
             progress.detail(&format!(
                 "full-system amplitude response, Omega = {omega}: orbit {count}, eps = {:.4e}",
@@ -176,29 +165,18 @@ pub fn reference_stage(
         })?;
         samples = branch.samples;
         let at = format!("[reference] amplitude response at Omega = {omega}");
-        let tail = branch.orbits.iter().map(|o| o.tail).fold(0.0, f64::max);
-        if tail > tolerance {
-            warnings.push(format!(
-                "{at}: the highest harmonic carries {tail:.2e} of the orbit amplitude, above the accuracy target {tolerance:e}: the reference is truncated; raise harmonics"
-            ));
-        }
-        match &branch.stop {
-            Stop::Range => {}
-            Stop::StepTooSmall { parameter, cause } => warnings.push(format!(
-                "{at}: the continuation stopped at eps = {:e}: {cause}; the curve ends there (lower step, raise harmonics or tol)",
-                parameter * (eps_range.1 - eps_range.0)
-            )),
-            Stop::MaxSteps => warnings.push(format!(
-                "{at}: max_steps reached before eps left the range; the curve ends there (raise max_steps or step)"
-            )),
-            other => warnings.push(format!("{at}: the branch ended early ({other:?})")),
-        }
+        warnings.extend(branch_warnings(
+            &branch,
+            &at,
+            ("eps", eps_range.1 - eps_range.0),
+            tolerance,
+        ));
         warnings.extend(branch.notes.iter().map(|n| format!("{at}: {n}")));
         amplitude.push(branch);
     }
     Ok((
         ReferenceFrc {
-            outputs: outputs.iter().map(|o| o.name.clone()).collect(),
+            outputs: names,
             harmonics: h,
             samples,
             branches,
@@ -207,6 +185,36 @@ pub fn reference_stage(
         },
         warnings,
     ))
+}
+
+/// What a user must know of a traced branch, each warning led by `at`: a
+/// truncation estimate above the accuracy target, and a stop before the
+/// parameter (`name`, scaled by `scale` in the continuation) left its range.
+fn branch_warnings(
+    branch: &ReferenceBranch,
+    at: &str,
+    (name, scale): (&str, f64),
+    tolerance: f64,
+) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let tail = branch.orbits.iter().map(|o| o.tail).fold(0.0, f64::max);
+    if tail > tolerance {
+        warnings.push(format!(
+            "{at}: the highest harmonic carries {tail:.2e} of the orbit amplitude, above the accuracy target {tolerance:e}: the reference is truncated; raise harmonics"
+        ));
+    }
+    match &branch.stop {
+        Stop::Range => {}
+        Stop::StepTooSmall { parameter, cause } => warnings.push(format!(
+            "{at}: the continuation stopped at {name} = {:.6e}: {cause}; the curve ends there (lower step, raise harmonics or tol)",
+            parameter * scale
+        )),
+        Stop::MaxSteps => warnings.push(format!(
+            "{at}: max_steps reached before {name} left the range; the curve ends there (raise max_steps or step)"
+        )),
+        other => warnings.push(format!("{at}: the branch ended early ({other:?})")),
+    }
+    warnings
 }
 
 /// Each forced response curve's error against the reference curve of its

@@ -21,7 +21,9 @@
 use crate::continuation::{self, solve_at_parameter, Settings};
 use crate::model::system::{OutputMap, System};
 
-use super::frc::{classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit};
+use super::frc::{
+    check_flow, classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit,
+};
 use super::{HarmonicBalance, Parameter};
 
 /// Settings of a reference amplitude response.
@@ -73,17 +75,7 @@ where
             "epsilon_range [{lo}, {hi}] must be finite, non-negative and increasing"
         )));
     }
-    if let ssm_api::TimeKind::Map { .. } = sys.time {
-        return Err(ReferenceError::Settings(format!(
-            "model '{}' is a map (discrete time): periodic orbits of a forced flow do not apply",
-            sys.name
-        )));
-    }
-    if settings.harmonics == 0 {
-        return Err(ReferenceError::Settings(
-            "harmonics must be at least 1".into(),
-        ));
-    }
+    check_flow(sys, settings.harmonics)?;
     // prepared at eps_max > 0, so that the forcing's terms are in it
     let mut hb = HarmonicBalance::new(sys, hi, settings.harmonics, 1)?;
     hb.parameter = Parameter::Amplitude { omega };
@@ -140,15 +132,7 @@ where
         })
         .collect();
     Ok(ReferenceBranch {
-        orbits,
-        events,
-        stop: branch.stop,
-        factorizations: hb.factorizations(),
-        coefficients: nu,
-        samples: hb.samples(),
-        at,
-        doubled: Vec::new(),
-        seeded: Vec::new(),
         notes,
+        ..ReferenceBranch::traced(&hb, orbits, events, branch.stop, at)
     })
 }

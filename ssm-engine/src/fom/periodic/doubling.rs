@@ -113,18 +113,7 @@ where
     let (orbits, events, _) = classify(&branch, &reader, number);
     let path = Path::of(2, &branch.points);
     Ok((
-        ReferenceBranch {
-            orbits,
-            events,
-            stop: branch.stop,
-            factorizations: hb.factorizations(),
-            coefficients: nu,
-            samples: hb.samples(),
-            at,
-            doubled: Vec::new(),
-            seeded: Vec::new(),
-            notes: Vec::new(),
-        },
+        ReferenceBranch::traced(&hb, orbits, events, branch.stop, at),
         path,
     ))
 }

@@ -177,17 +177,7 @@ where
             "omega_range [{lo}, {hi}] must be finite, positive and increasing"
         )));
     }
-    if let ssm_api::TimeKind::Map { .. } = sys.time {
-        return Err(ReferenceError::Settings(format!(
-            "model '{}' is a map (discrete time): periodic orbits of a forced flow do not apply",
-            sys.name
-        )));
-    }
-    if settings.harmonics == 0 {
-        return Err(ReferenceError::Settings(
-            "harmonics must be at least 1".into(),
-        ));
-    }
+    check_flow(sys, settings.harmonics)?;
     let mut hb = HarmonicBalance::new(sys, settings.epsilon, settings.harmonics, 1)?;
     hb.frequency_scale = hi - lo;
     let nu = hb.n_coefficients();
@@ -268,17 +258,53 @@ where
         }
     }
     Ok(ReferenceBranch {
-        orbits,
-        events,
-        stop: branch.stop,
-        factorizations: hb.factorizations(),
-        coefficients: nu,
-        samples: hb.samples(),
-        at,
         doubled,
         seeded,
         notes,
+        ..ReferenceBranch::traced(&hb, orbits, events, branch.stop, at)
     })
+}
+
+/// Refuses what has no forced periodic orbits to compute: a map, or no
+/// harmonics.
+pub(super) fn check_flow(sys: &System, harmonics: usize) -> Result<(), ReferenceError> {
+    if let ssm_api::TimeKind::Map { .. } = sys.time {
+        return Err(ReferenceError::Settings(format!(
+            "model '{}' is a map (discrete time): periodic orbits of a forced flow do not apply",
+            sys.name
+        )));
+    }
+    if harmonics == 0 {
+        return Err(ReferenceError::Settings(
+            "harmonics must be at least 1".into(),
+        ));
+    }
+    Ok(())
+}
+
+impl ReferenceBranch {
+    /// A branch traced with `hb`: its orbits, events, stop and orbits at
+    /// given parameter values, the costs of `hb`, and no further branches.
+    pub(super) fn traced(
+        hb: &HarmonicBalance<'_>,
+        orbits: Vec<ReferenceOrbit>,
+        events: Vec<ReferenceEvent>,
+        stop: Stop,
+        at: Vec<(ReferenceOrbit, Vec<f64>)>,
+    ) -> Self {
+        ReferenceBranch {
+            orbits,
+            events,
+            stop,
+            factorizations: hb.factorizations(),
+            coefficients: hb.n_coefficients(),
+            samples: hb.samples(),
+            at,
+            doubled: Vec::new(),
+            seeded: Vec::new(),
+            notes: Vec::new(),
+        }
+    }
 }
 
 /// The branches of period `2T` at the period doublings `pds` of a

@@ -416,23 +416,9 @@ impl<'a> HarmonicBalance<'a> {
         let mut r = self.b_derivative(c);
         let w = omega / self.multiple as f64;
         r.iter_mut().for_each(|v| *v *= w);
+        self.project_into(c, -1.0, &mut r, |t, z, f| self.prob.rhs(t, z, f));
         let mut z = vec![0.0; n];
-        let mut f = vec![0.0; n];
         let inv = 1.0 / m as f64;
-        for s in 0..m {
-            self.z_at(c, s, &mut z);
-            self.prob
-                .rhs(self.multiple as f64 * self.psi(s), &z, &mut f);
-            let (co, si) = (&self.cos[s * kk..], &self.sin[s * kk..]);
-            for (i, fi) in f.iter().enumerate() {
-                let ri = &mut r[i * kk..(i + 1) * kk];
-                ri[0] -= inv * fi;
-                for k in 1..=self.harmonics {
-                    ri[2 * k - 1] -= 2.0 * inv * fi * co[k];
-                    ri[2 * k] -= 2.0 * inv * fi * si[k];
-                }
-            }
-        }
         for g in &self.gauges {
             r[g.aux * kk] = (0..m)
                 .map(|s| {
@@ -449,16 +435,29 @@ impl<'a> HarmonicBalance<'a> {
     /// unit amplitude on the orbit (`R` is affine in `eps`, `R_eps = -P
     /// Fext`).
     fn forcing_projection(&self, c: &[f64]) -> Vec<f64> {
-        let kk = self.kk();
-        let (n, m) = (self.n, self.samples);
         let mut r = vec![0.0; c.len()];
-        let mut z = vec![0.0; n];
-        let mut f = vec![0.0; n];
-        let inv = 1.0 / m as f64;
+        self.project_into(c, 1.0, &mut r, |t, z, f| self.prob.forcing_rhs(t, z, f));
+        r
+    }
+
+    /// `r += weight P f(Z(c), m psi)`: the discrete Fourier projection of the
+    /// time-domain function `eval(t, z, out)` (at the forcing phase `t = m
+    /// psi`) on the orbit's samples.
+    fn project_into(
+        &self,
+        c: &[f64],
+        weight: f64,
+        r: &mut [f64],
+        eval: impl Fn(f64, &[f64], &mut [f64]),
+    ) {
+        let kk = self.kk();
+        let m = self.samples;
+        let mut z = vec![0.0; self.n];
+        let mut f = vec![0.0; self.n];
+        let inv = weight / m as f64;
         for s in 0..m {
             self.z_at(c, s, &mut z);
-            self.prob
-                .forcing_rhs(self.multiple as f64 * self.psi(s), &z, &mut f);
+            eval(self.multiple as f64 * self.psi(s), &z, &mut f);
             let (co, si) = (&self.cos[s * kk..], &self.sin[s * kk..]);
             for (i, fi) in f.iter().enumerate() {
                 let ri = &mut r[i * kk..(i + 1) * kk];
@@ -469,7 +468,6 @@ impl<'a> HarmonicBalance<'a> {
                 }
             }
         }
-        r
     }
 
     /// Sets the forcing amplitude (the parameter of an amplitude

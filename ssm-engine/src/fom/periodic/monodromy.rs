@@ -40,6 +40,7 @@ use faer::{Conj, Mat, Par};
 
 use super::floquet::{Floquet, FloquetError, UNIT_CIRCLE_TOL};
 use super::HarmonicBalance;
+use crate::fom::radau::{RADAU_A, RADAU_C};
 use crate::C64;
 
 /// Largest number of states `N` for which the monodromy matrix is formed.
@@ -50,26 +51,6 @@ pub const MAX_MONODROMY_STATES: usize = 200;
 /// slider) and modes damped by more than `-ln(1e-9) = 20.7` e-folds per
 /// period.
 pub const NEGLIGIBLE_MULTIPLIER: f64 = 1e-9;
-
-const SQ6: f64 = 2.449_489_742_783_178;
-
-/// The Radau IIA matrix `A_R` (three stages, order 5).
-const RADAU_A: [[f64; 3]; 3] = [
-    [
-        (88.0 - 7.0 * SQ6) / 360.0,
-        (296.0 - 169.0 * SQ6) / 1800.0,
-        (-2.0 + 3.0 * SQ6) / 225.0,
-    ],
-    [
-        (296.0 + 169.0 * SQ6) / 1800.0,
-        (88.0 + 7.0 * SQ6) / 360.0,
-        (-2.0 - 3.0 * SQ6) / 225.0,
-    ],
-    [(16.0 - SQ6) / 36.0, (16.0 + SQ6) / 36.0, 1.0 / 9.0],
-];
-
-/// The Radau IIA nodes `c`.
-const RADAU_C: [f64; 3] = [(4.0 - SQ6) / 10.0, (4.0 + SQ6) / 10.0, 1.0];
 
 /// Default steps per period of the orbit: enough to resolve the highest
 /// harmonic of `J(t)` (`2 H m` for a quadratic `F`) with several steps per

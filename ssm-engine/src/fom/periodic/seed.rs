@@ -239,18 +239,7 @@ where
     }
     let at = orbits_at(&mut hb, &points, &settings.points_at, cs, &reader, number);
     Ok(Seeded::Branch(
-        Box::new(ReferenceBranch {
-            orbits,
-            events,
-            stop,
-            factorizations: hb.factorizations(),
-            coefficients: nu,
-            samples: hb.samples(),
-            at,
-            doubled: Vec::new(),
-            seeded: Vec::new(),
-            notes: Vec::new(),
-        }),
+        Box::new(ReferenceBranch::traced(&hb, orbits, events, stop, at)),
         Path::of(m, &points),
         if m == 1 { doublings } else { Vec::new() },
     ))
