@@ -2,7 +2,8 @@
 //! forced response (`[reference] start = "ssm"`): on each branch of the
 //! highest-order curve at a forcing amplitude, the orbit of largest
 //! amplitude and the orbits where the branch enters or leaves the frequency
-//! range, lifted to the full state by the SSM parametrization. The peak
+//! range (except where a subharmonic branch ends on one of period `T`),
+//! lifted to the full state by the SSM parametrization. The peak
 //! reaches isolas and upper branches; the range's ends reach the sheets of a
 //! bistable band that the range cuts (a start from rest finds one of them).
 //!
@@ -78,10 +79,25 @@ pub fn ssm_seeds(
         {
             picks.push(k);
         }
+        // the subharmonic pairs' amplitude (those at a fractional resonance
+        // ratio): an end where it is below a tenth of the branch's largest is
+        // next to a branch point where the branch meets one of period T
+        // (traced from rest already; the first step off such a pitchfork
+        // carries a few percent, 2.8 % on the divider), and its prediction is
+        // a near-singular start for the period-mT problem
+        let sub = |r: &FrcRow| {
+            r.q.iter()
+                .zip(&frc.resonance)
+                .filter(|(_, ratio)| (*ratio - ratio.round()).abs() > 1e-9)
+                .map(|(q, _)| q.norm())
+                .fold(0.0, f64::max)
+        };
+        let sub_max = points.iter().map(|r| sub(r)).fold(0.0, f64::max);
         for k in 0..points.len() {
             let before = k > 0 && inside(points[k - 1]);
             let after = k + 1 < points.len() && inside(points[k + 1]);
-            if inside(points[k]) && (!before || !after) {
+            let merging = sub_max > 0.0 && sub(points[k]) < 0.1 * sub_max;
+            if inside(points[k]) && (!before || !after) && !merging {
                 picks.push(k);
             }
         }

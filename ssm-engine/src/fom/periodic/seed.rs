@@ -194,9 +194,12 @@ where
         }
         hb.odd_floor = Some(0.25 * odd);
     }
+    // an orbit of period m T shifted by j T is the same orbit: the seed may
+    // lie on any of a traced branch's m copies
+    let copies: Vec<Vec<f64>> = (0..m).map(|j| shifted(&u0, kk, j, m)).collect();
     if known
         .iter()
-        .any(|p| p.multiple == m && p.distance(&u0) <= SAME_BRANCH)
+        .any(|p| p.multiple == m && copies.iter().any(|u| p.distance(u) <= SAME_BRANCH))
     {
         return Ok(Seeded::Known);
     }
@@ -243,4 +246,61 @@ where
         Path::of(m, &points),
         if m == 1 { doublings } else { Vec::new() },
     ))
+}
+
+/// The unknowns `u` (Fourier coefficients of an orbit of period `m T`, `K =
+/// 2H + 1` per state, the parameter last) of the same orbit shifted in time
+/// by `j T`: the angle `psi = Omega t / m` advances by `a = 2 pi j / m`, and
+/// harmonic `k` rotates, `(c, s) -> (c cos ka + s sin ka, s cos ka - c sin
+/// ka)`.
+fn shifted(u: &[f64], kk: usize, j: usize, m: usize) -> Vec<f64> {
+    let mut out = u.to_vec();
+    let a = 2.0 * std::f64::consts::PI * j as f64 / m as f64;
+    let n = (u.len() - 1) / kk;
+    for i in 0..n {
+        for k in 1..=(kk - 1) / 2 {
+            let (sn, cs) = (k as f64 * a).sin_cos();
+            let (c, s) = (u[i * kk + 2 * k - 1], u[i * kk + 2 * k]);
+            out[i * kk + 2 * k - 1] = c * cs + s * sn;
+            out[i * kk + 2 * k] = s * cs - c * sn;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shifted;
+
+    /// Reference: the series evaluated directly at the shifted angle. The
+    /// coefficients shifted by `j T` give `z(psi + 2 pi j / m)` at every
+    /// angle (1e-14), and `m` shifts by `T` are the identity.
+    #[test]
+    fn shifted_coefficients_are_the_orbit_later_by_whole_periods() {
+        let (h, m) = (3usize, 3usize);
+        let kk = 2 * h + 1;
+        let u: Vec<f64> = (0..2 * kk + 1).map(|p| (p as f64 * 0.7).sin()).collect();
+        let eval = |u: &[f64], i: usize, psi: f64| {
+            (1..=h).fold(u[i * kk], |v, k| {
+                let (s, c) = (k as f64 * psi).sin_cos();
+                v + u[i * kk + 2 * k - 1] * c + u[i * kk + 2 * k] * s
+            })
+        };
+        for j in 0..m {
+            let v = shifted(&u, kk, j, m);
+            for q in 0..16 {
+                let psi = 0.4 * q as f64;
+                let later = psi + 2.0 * std::f64::consts::PI * j as f64 / m as f64;
+                for i in 0..2 {
+                    assert!((eval(&v, i, psi) - eval(&u, i, later)).abs() < 1e-14);
+                }
+            }
+            assert_eq!(v[2 * kk], u[2 * kk], "the parameter is kept");
+        }
+        let mut w = u.clone();
+        for _ in 0..m {
+            w = shifted(&w, kk, 1, m);
+        }
+        assert!(w.iter().zip(&u).all(|(a, b)| (a - b).abs() < 1e-14));
+    }
 }
