@@ -9,9 +9,11 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use ssm_engine::fom::periodic::ReferenceOrbit;
+use ssm_engine::continuation::Ledger;
+use ssm_engine::fom::periodic::{OrbitInfo, ReferenceOrbit};
 use ssm_engine::model::plugin::Registry;
 use ssm_engine::output;
+use ssm_engine::output::checkpoint::{create_first, Checkpoint};
 use ssm_engine::pipeline::{self, export, Progress};
 use ssm_engine::scene::{ReportSection, SceneFile};
 
@@ -23,6 +25,9 @@ OUTPUTS (in --out DIR, default ./out/<scene file stem>): summary.json, spectrum.
 backbone.csv/.svg, rom_trajectory.csv, frc.csv/.svg, validation.csv/.svg,
 steady_state.csv (also drawn into frc.svg), report.csv/.md/.svg, identified.json,
 data_backbone.csv, simulation_<k>.csv (as requested).
+While a [reference] runs, <out>.reference-partial.csv (its orbits) and
+<out>.reference-checkpoint.jsonl (its continuation) are written beside DIR; after a stop,
+--resume goes on from the checkpoint to the outputs of an uninterrupted run.
 The new result set replaces the old one as a whole (a fresh private directory swapped in
 with one rename): never a mix, never stale files; a failed run changes nothing. A non-empty
 directory that is not a result set is never replaced.
@@ -49,6 +54,16 @@ struct Cli {
     /// Output directory (default ./out/<scene name>).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// Resume a stopped run's full-system reference from its checkpoint
+    /// <out>.reference-checkpoint.jsonl beside the output directory: the
+    /// continuation runs it kept are restored, the rest computed, and the
+    /// outputs are those of an uninterrupted run.
+    #[arg(long, global = true)]
+    resume: bool,
+    /// Resume from this checkpoint (e.g. one a run wrote under its process
+    /// id because another was in the way).
+    #[arg(long, value_name = "FILE", global = true)]
+    resume_from: Option<PathBuf>,
     #[command(subcommand)]
     command: Option<Command>,
 }
@@ -128,30 +143,18 @@ impl Journal {
 
     fn open(&self, header: &str) -> Option<(PathBuf, std::fs::File)> {
         let base = self.path.as_ref()?;
-        let mut last = None;
-        for name in [
-            format!("{}.csv", base.display()),
-            format!("{}.{}.csv", base.display(), std::process::id()),
-        ] {
-            let path = PathBuf::from(name);
-            match std::fs::OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(&path)
-            {
-                Ok(mut f) => {
-                    return f.write_all(header.as_bytes()).ok().map(|_| (path, f));
-                }
-                Err(e) => last = Some((path, e)),
-            }
-        }
-        if let Some((path, e)) = last {
-            eprintln!(
-                "warning: cannot write the reference's orbits as they go to {}: {e}",
-                path.display()
-            );
-        }
-        None
+        let candidates = [
+            PathBuf::from(format!("{}.csv", base.display())),
+            PathBuf::from(format!("{}.{}.csv", base.display(), std::process::id())),
+        ];
+        create_first(&candidates, header)
+            .map_err(|(path, e)| {
+                eprintln!(
+                    "warning: cannot write the reference's orbits as they go to {}: {e}",
+                    path.display()
+                );
+            })
+            .ok()
     }
 
     fn record(&self, outputs: &[String], orbit: &ReferenceOrbit) {
@@ -181,10 +184,11 @@ impl Journal {
     }
 }
 
-/// The spinner and the reference journal.
+/// The spinner, the reference journal and its checkpoint.
 struct Display {
     spinner: Spinner,
     journal: Journal,
+    checkpoint: Checkpoint,
 }
 
 impl Progress for Display {
@@ -198,6 +202,10 @@ impl Progress for Display {
 
     fn reference_orbit(&self, outputs: &[String], orbit: &ReferenceOrbit) {
         self.journal.record(outputs, orbit);
+    }
+
+    fn checkpoint(&self) -> Option<&dyn Ledger<OrbitInfo>> {
+        Some(&self.checkpoint)
     }
 }
 
@@ -289,6 +297,11 @@ fn list_plugins(registry: &Registry) -> anyhow::Result<()> {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     let mut registry = Registry::discover(&cli.plugins)?;
+    let resume = match (cli.resume_from, cli.resume) {
+        (Some(p), _) => Some(Some(p)),
+        (None, true) => Some(None),
+        (None, false) => None,
+    };
     let (scene_path, out, report) = match cli.command {
         Some(Command::Plugins) => return list_plugins(&registry),
         Some(Command::Report { scene, out }) => (scene, out, true),
@@ -314,25 +327,72 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         scene.scene.report = Some(ReportSection { orders: None });
     }
     let out = out.unwrap_or_else(|| pipeline::default_out_dir(&scene));
+    let name = scene.name();
+    let checkpoint = match &resume {
+        None => {
+            let stopped = Checkpoint::default_path(&out);
+            if stopped.exists() {
+                eprintln!(
+                    "note: {} keeps a stopped run's full-system reference; this run starts over (--resume goes on from it)",
+                    stopped.display()
+                );
+            }
+            Checkpoint::fresh(&out, &name, &scene.text)
+        }
+        Some(None) => Checkpoint::resume(&Checkpoint::default_path(&out), &name, &scene.text)?,
+        Some(Some(p)) => Checkpoint::resume(p, &name, &scene.text)?,
+    };
     let progress = Display {
         spinner: spinner(),
         journal: Journal::beside(&out),
+        checkpoint,
     };
     let result = pipeline::run(&scene, &mut registry, &progress);
     progress.spinner.finish();
     let journal = progress.journal.written();
-    let kept = |e: anyhow::Error| {
+    let kept = progress.checkpoint.written();
+    let stopped = |e: anyhow::Error| {
         if let Some(p) = &journal {
             eprintln!(
                 "note: the full-system reference's orbits computed before the stop are in {}",
                 p.display()
             );
         }
+        if let Some(p) = &kept {
+            eprintln!(
+                "note: its continuation is kept in {}; `ssm-engine {}{} --out {} {}` goes on from there",
+                p.display(),
+                if report { "report " } else { "" },
+                scene_path.display(),
+                out.display(),
+                if *p == Checkpoint::default_path(&out) {
+                    "--resume".to_owned()
+                } else {
+                    format!("--resume-from {}", p.display())
+                }
+            );
+        }
         e
     };
-    let result = result.map_err(|e| kept(e.into()))?;
-    result.outputs.write(&out).map_err(|e| kept(e.into()))?;
-    if let Some(p) = &journal {
+    if let (Some(p), n @ 1..) = (&kept, progress.checkpoint.restored()) {
+        eprintln!(
+            "note: {n} continuation run(s) of the reference restored from {}",
+            p.display()
+        );
+    }
+    let result = result.map_err(|e| stopped(e.into()))?;
+    result.outputs.write(&out).map_err(|e| stopped(e.into()))?;
+    // the run's own journal and checkpoint; a resumed run's outputs also
+    // supersede the stopped run's journal
+    let mut done: Vec<PathBuf> = journal.into_iter().chain(kept).collect();
+    if resume.is_some() {
+        done.extend(
+            Journal::beside(&out)
+                .path
+                .map(|p| PathBuf::from(format!("{}.csv", p.display()))),
+        );
+    }
+    for p in done {
         let _ = std::fs::remove_file(p);
     }
     for w in &result.warnings {

@@ -121,6 +121,27 @@ pub fn tmp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// The files beside the output directory `out` whose names start with
+/// `<out name>.<kind>` (`reference-partial`: the reference's journals,
+/// `reference-checkpoint`: its checkpoints), sorted.
+pub fn files_beside(out: &Path, kind: &str) -> Vec<PathBuf> {
+    let name = out
+        .file_name()
+        .expect("name")
+        .to_string_lossy()
+        .into_owned();
+    let mut found: Vec<_> = std::fs::read_dir(out.parent().expect("parent"))
+        .expect("parent")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|f| f.to_string_lossy().starts_with(&format!("{name}.{kind}")))
+        })
+        .collect();
+    found.sort();
+    found
+}
+
 /// Runs the zoo scene `scene` through the binary (with `args` before it, e.g.
 /// `["report"]`); returns its summary and output directory.
 pub fn run_zoo_with(args: &[&str], scene: &str) -> (serde_json::Value, PathBuf) {
@@ -713,6 +734,30 @@ pub fn linear_steady_state(
             eps * a * (h * C64::new(0.0, w * t).exp()).re
         })
         .sum()
+}
+
+/// The full-system reference of [`parametric_pump`]'s period-doubling
+/// study: `eps = 1` over `[1.8, 2.2]`, 6 harmonics, both states as outputs,
+/// the branch of period `2T` switched to, and orbits also at `points_at`.
+pub fn parametric_pump_reference(
+    points_at: Vec<f64>,
+) -> ssm_engine::fom::periodic::ReferenceSettings {
+    let output = |name: &str, state: usize| ssm_engine::model::system::OutputMap {
+        name: name.into(),
+        weights: vec![(state, 1.0)],
+    };
+    ssm_engine::fom::periodic::ReferenceSettings {
+        epsilon: 1.0,
+        omega_range: (1.8, 2.2),
+        harmonics: 6,
+        step: 0.5,
+        tol: 1e-11,
+        max_steps: 2000,
+        outputs: vec![output("x1", 0), output("x2", 1)],
+        points_at,
+        seeds: Vec::new(),
+        period_doubling: true,
+    }
 }
 
 /// Two oscillators in 1:2 resonance where the second pumps the first

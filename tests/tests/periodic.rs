@@ -594,27 +594,7 @@ fn period_doublings_of_a_parametric_pump_and_the_doubled_branch() {
     let averaged =
         |w: f64| (1.0 - w * w / 4.0).powi(2) + (z1 * w).powi(2) - (alpha * x2_amp(w) / 2.0).powi(2);
     let closed = [bisect(&averaged, 1.8, 2.0), bisect(&averaged, 2.0, 2.2)];
-    let settings = ReferenceSettings {
-        epsilon: 1.0,
-        omega_range: (1.8, 2.2),
-        harmonics: 6,
-        step: 0.5,
-        tol: 1e-11,
-        max_steps: 2000,
-        outputs: vec![
-            OutputMap {
-                name: "x1".into(),
-                weights: vec![(0, 1.0)],
-            },
-            OutputMap {
-                name: "x2".into(),
-                weights: vec![(1, 1.0)],
-            },
-        ],
-        points_at: vec![0.5 * (exact[0] + exact[1])],
-        seeds: Vec::new(),
-        period_doubling: true,
-    };
+    let settings = ssm_tests::parametric_pump_reference(vec![0.5 * (exact[0] + exact[1])]);
     let b = reference_frc(&sys, &settings, |_| true).expect("reference");
     let pds: Vec<f64> = b
         .events

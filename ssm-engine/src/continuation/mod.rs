@@ -47,7 +47,7 @@
 pub struct ProblemFailure(pub String);
 
 /// One test function at a point.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Test {
     /// A signed value: an event where the sign changes.
     Sign(f64),
@@ -66,7 +66,7 @@ impl Test {
 }
 
 /// What a problem reports at a corrected point.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Monitor<I> {
     /// Test functions, in a fixed order.
     pub tests: Vec<Test>,
@@ -134,7 +134,7 @@ impl Settings {
 }
 
 /// A corrected point of a branch.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Point<I> {
     /// The unknowns, the parameter last.
     pub u: Vec<f64>,
@@ -152,7 +152,7 @@ impl<I> Point<I> {
 }
 
 /// What was located on a branch.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum EventKind {
     /// A fold in the parameter.
     Fold,
@@ -161,7 +161,7 @@ pub enum EventKind {
 }
 
 /// A located event.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Event<I> {
     /// What changed.
     pub kind: EventKind,
@@ -172,7 +172,7 @@ pub struct Event<I> {
 }
 
 /// Why a branch ended.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Stop {
     /// The parameter left its range.
     Range,
@@ -226,6 +226,15 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
+}
+
+/// The Euclidean distance of `a` and `b`.
+pub fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// The index of the largest component of `t`: the local parameter.
@@ -429,6 +438,63 @@ fn locate<P: Problem>(
     Some(best)
 }
 
+/// A branch as far as it was traced, with the step size and the count of
+/// steps (tried, accepted or not) at which it goes on: everything the next
+/// step depends on, so that [`resume_branch`] from a stored trace computes
+/// what the uninterrupted continuation would have.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Trace<I> {
+    /// Accepted points in order (at least the start).
+    pub points: Vec<Point<I>>,
+    /// Located events in order.
+    pub events: Vec<Event<I>>,
+    /// The next step's size.
+    pub h: f64,
+    /// Steps tried so far.
+    pub steps: usize,
+}
+
+/// An accepted point as the observer of a continuation sees it: the point,
+/// the events located on the step to it, and the state the next step starts
+/// from (what a checkpoint stores).
+#[derive(Debug, Clone, Copy)]
+pub struct Step<'a, I> {
+    /// The accepted point.
+    pub point: &'a Point<I>,
+    /// The events located between the previous point and this one.
+    pub events: &'a [Event<I>],
+    /// The next step's size.
+    pub h: f64,
+    /// Steps tried so far.
+    pub steps: usize,
+}
+
+/// Where continuation runs are kept as they go, so that a stopped
+/// computation resumes where it stopped: a computation opens its runs in a
+/// fixed order, and a resumed one gets back what was kept of each.
+/// Implementations keep their own state (methods take `&self`, as a
+/// progress display's do).
+pub trait Ledger<I> {
+    /// Opens the next run, and returns what is kept of it: its trace so far
+    /// and, when it ended, why.
+    fn open(&self) -> Option<(Trace<I>, Option<Stop>)>;
+    /// Records an accepted step of the open run.
+    fn step(&self, step: &Step<'_, I>);
+    /// Records the end of the open run.
+    fn close(&self, stop: &Stop);
+}
+
+/// A ledger that keeps nothing.
+pub struct NoLedger;
+
+impl<I> Ledger<I> for NoLedger {
+    fn open(&self) -> Option<(Trace<I>, Option<Stop>)> {
+        None
+    }
+    fn step(&self, _step: &Step<'_, I>) {}
+    fn close(&self, _stop: &Stop) {}
+}
+
 /// Continues the branch through the solution `u0` in the direction `t0`,
 /// calling `observe` with each accepted point (and its events); the
 /// observer returns `false` to stop.
@@ -441,21 +507,59 @@ pub fn continue_branch<P, O>(
 ) -> Result<Branch<P::Info>, ContinuationError>
 where
     P: Problem,
-    O: FnMut(&Point<P::Info>, &[Event<P::Info>]) -> bool,
+    O: FnMut(&Step<'_, P::Info>) -> bool,
 {
-    let k = u0.len() - 1;
     let first = point_at(p, u0, t0)?;
-    let mut points = vec![first];
-    let mut events: Vec<Event<P::Info>> = Vec::new();
-    if !observe(&points[0], &[]) {
+    let trace = Trace {
+        points: vec![first],
+        events: Vec::new(),
+        h: s.h0.min(s.h_max),
+        steps: 0,
+    };
+    let start = Step {
+        point: &trace.points[0],
+        events: &[],
+        h: trace.h,
+        steps: 0,
+    };
+    if !observe(&start) {
         return Ok(Branch {
-            points,
-            events,
+            points: trace.points,
+            events: trace.events,
             stop: Stop::Interrupted,
         });
     }
-    let mut h = s.h0.min(s.h_max);
-    let mut steps = 0;
+    Ok(resume_branch(p, trace, s, observe))
+}
+
+/// Continues a traced branch from its last point with the trace's step size
+/// and step count (a branch resumed from a checkpoint), calling `observe`
+/// with each new accepted point; a trace whose last step ended the branch
+/// (range, bound, closed) ends there.
+pub fn resume_branch<P, O>(
+    p: &mut P,
+    trace: Trace<P::Info>,
+    s: &Settings,
+    mut observe: O,
+) -> Branch<P::Info>
+where
+    P: Problem,
+    O: FnMut(&Step<'_, P::Info>) -> bool,
+{
+    let k = trace.points[0].u.len() - 1;
+    let Trace {
+        mut points,
+        mut events,
+        mut h,
+        mut steps,
+    } = trace;
+    if let Some(stop) = stop_after(p, &points, s) {
+        return Branch {
+            points,
+            events,
+            stop,
+        };
+    }
     let stop = loop {
         if steps >= s.max_steps {
             break Stop::MaxSteps;
@@ -525,34 +629,52 @@ where
             .filter_map(|kind| locate(p, &last, &next, kind, s).map(|at| Event { kind, after, at }))
             .collect();
         events.extend(new_events.iter().cloned());
-        let u_next = next.u.clone();
         points.push(next);
-        let newest = points.last().expect("just pushed");
-        if !observe(newest, &new_events) {
-            break Stop::Interrupted;
-        }
-        if u_next[k] < s.range.0 || u_next[k] > s.range.1 {
-            break Stop::Range;
-        }
-        if p.beyond(&last.u, &u_next) {
-            break Stop::Bound;
-        }
-        let start = &points[0];
-        if points.len() > 10
-            && passes_through(&last.u, &u_next, &start.u, 0.1 * s.h_max)
-            && dot(&newest.tangent, &start.tangent) > 0.5
-        {
-            break Stop::Closed;
-        }
         if turn < 0.25 * s.max_turn && iters <= 5 {
             h = (1.3 * h).min(s.h_max);
         }
+        let accepted = Step {
+            point: points.last().expect("just pushed"),
+            events: &new_events,
+            h,
+            steps,
+        };
+        if !observe(&accepted) {
+            break Stop::Interrupted;
+        }
+        if let Some(stop) = stop_after(p, &points, s) {
+            break stop;
+        }
     };
-    Ok(Branch {
+    Branch {
         points,
         events,
         stop,
-    })
+    }
+}
+
+/// Whether the branch ends with its last step: the parameter left its
+/// range, the problem's own bound, or the branch came back through its
+/// start.
+fn stop_after<P: Problem>(p: &P, points: &[Point<P::Info>], s: &Settings) -> Option<Stop> {
+    let [.., last, next] = points else {
+        return None;
+    };
+    let k = next.u.len() - 1;
+    if next.u[k] < s.range.0 || next.u[k] > s.range.1 {
+        return Some(Stop::Range);
+    }
+    if p.beyond(&last.u, &next.u) {
+        return Some(Stop::Bound);
+    }
+    let start = &points[0];
+    if points.len() > 10
+        && passes_through(&last.u, &next.u, &start.u, 0.1 * s.h_max)
+        && dot(&next.tangent, &start.tangent) > 0.5
+    {
+        return Some(Stop::Closed);
+    }
+    None
 }
 
 /// True when the segment from `a` to `b` passes within `tol` of `p`.

@@ -58,7 +58,7 @@ fn circle_folds_are_located_and_the_loop_closes() {
     let u0 = solve_at_parameter(&mut p, vec![1.5, 0.5], &s).expect("start");
     assert!((u0[0] - (r * r - 0.25f64).sqrt()).abs() < 1e-12);
     let mut seen = 0;
-    let b = continue_branch(&mut p, u0, &[0.0, 1.0], &s, |_, _| {
+    let b = continue_branch(&mut p, u0, &[0.0, 1.0], &s, |_| {
         seen += 1;
         true
     })
@@ -105,7 +105,7 @@ fn observer_interrupts() {
     let s = Settings::new((-10.0, 10.0), 0.1);
     let u0 = solve_at_parameter(&mut p, vec![1.0, 0.0], &s).expect("start");
     let mut n = 0;
-    let b = continue_branch(&mut p, u0, &[0.0, 1.0], &s, |_, _| {
+    let b = continue_branch(&mut p, u0, &[0.0, 1.0], &s, |_| {
         n += 1;
         n < 4
     })
@@ -121,4 +121,42 @@ fn no_start_is_an_error() {
     let s = Settings::new((-10.0, 10.0), 0.1);
     let e = solve_at_parameter(&mut p, vec![0.5, 3.0], &s).unwrap_err();
     assert!(matches!(e, ContinuationError::Start { .. }), "{e}");
+}
+
+/// Reference: the uninterrupted continuation around the circle. A run
+/// stopped after 7 points and resumed from what its observer saw (the
+/// points, the events of each step, the step size and count) gives the same
+/// branch, point for point and bit for bit, with the same events and stop;
+/// the resumed observer sees only the new points.
+#[test]
+fn a_resumed_branch_is_the_uninterrupted_branch() {
+    let s = Settings::new((-10.0, 10.0), 0.2);
+    let mut p = Circle { r: 2.0, lu: None };
+    let u0 = solve_at_parameter(&mut p, vec![1.5, 0.5], &s).expect("start");
+    let whole = continue_branch(&mut p, u0.clone(), &[0.0, 1.0], &s, |_| true).expect("whole");
+    assert!(whole.points.len() > 20 && whole.events.len() >= 2);
+    let mut kept: Option<Trace<()>> = None;
+    let stopped = continue_branch(&mut p, u0, &[0.0, 1.0], &s, |step| {
+        let t = kept.get_or_insert_with(|| Trace {
+            points: Vec::new(),
+            events: Vec::new(),
+            h: 0.0,
+            steps: 0,
+        });
+        t.points.push(step.point.clone());
+        t.events.extend(step.events.iter().cloned());
+        t.h = step.h;
+        t.steps = step.steps;
+        t.points.len() < 7
+    })
+    .expect("stopped");
+    assert_eq!(stopped.stop, Stop::Interrupted);
+    let mut fresh = Circle { r: 2.0, lu: None };
+    let mut seen = 0;
+    let resumed = resume_branch(&mut fresh, kept.expect("kept"), &s, |_| {
+        seen += 1;
+        true
+    });
+    assert_eq!(resumed, whole);
+    assert_eq!(seen, whole.points.len() - 7);
 }

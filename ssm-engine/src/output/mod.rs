@@ -3,6 +3,7 @@
 //! [`OutputSet`] that holds them in memory until they are written to the
 //! output directory.
 
+pub mod checkpoint;
 mod files;
 pub mod frc;
 pub mod identified;

@@ -27,7 +27,9 @@ use crate::compare::instantaneous::{data_backbones, near_frequency, DataBackbone
 use crate::compare::pod::PodStudy;
 use crate::compare::report::{report, Report, ReportInputs};
 use crate::compare::validation::{validation, Validation};
+use crate::continuation::Ledger;
 use crate::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
+use crate::fom::periodic::OrbitInfo;
 use crate::model::plugin::{PluginOrigin, Registry};
 use crate::model::source::build_model;
 use crate::model::system::{OutputMap, System};
@@ -56,6 +58,12 @@ pub trait Progress {
     /// it down, so that a run stopped before its outputs are written keeps
     /// what it computed.
     fn reference_orbit(&self, _outputs: &[String], _orbit: &ReferenceOrbit) {}
+    /// The ledger of the full-system reference's continuation runs: a
+    /// checkpoint that keeps each step, from which a stopped run resumes
+    /// (none by default).
+    fn checkpoint(&self) -> Option<&dyn Ledger<OrbitInfo>> {
+        None
+    }
 }
 
 /// No progress display.

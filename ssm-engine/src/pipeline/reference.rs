@@ -11,12 +11,13 @@ use super::error::JobError;
 use super::Progress;
 use crate::compare::seeds::ssm_seeds;
 use crate::compare::validation::{frc_error_at, reference_points};
-use crate::continuation::Stop;
+use crate::continuation::{NoLedger, Stop};
 use crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS;
 use crate::fom::periodic::frc::{ReferenceBranch, ReferenceFrc};
 use crate::fom::periodic::monodromy::MAX_MONODROMY_STATES;
 use crate::fom::periodic::{
-    reference_amplitude, reference_frc, AmplitudeSettings, ReferenceSettings,
+    reference_amplitude_resumable, reference_frc_resumable, AmplitudeSettings, ReferenceOrbit,
+    ReferenceSettings, Runs,
 };
 use crate::model::system::{OutputMap, System};
 use crate::rom::accuracy::MeasuredError;
@@ -82,6 +83,7 @@ pub fn reference_stage(
         ));
     }
     let names: Vec<String> = outputs.iter().map(|o| o.name.clone()).collect();
+    let ledger = progress.checkpoint().unwrap_or(&NoLedger);
     let mut branches = Vec::new();
     let mut samples = 0;
     for &eps in sec.epsilon.get_ref() {
@@ -109,7 +111,7 @@ pub fn reference_stage(
         };
         let (lo, hi) = range;
         let mut count = 0usize;
-        let mut branch = reference_frc(system, &settings, |o| {
+        let mut runs = Runs::new(ledger, |o: &ReferenceOrbit| {
             progress.reference_orbit(&names, o);
             count += 1;
             let at = ((o.omega - lo) / (hi - lo) * 100.0).clamp(0.0, 100.0);
@@ -118,7 +120,8 @@ pub fn reference_stage(
                 o.branch, o.period_multiple, o.omega
             ));
             true
-        })?;
+        });
+        let mut branch = reference_frc_resumable(system, &settings, &mut runs)?;
         samples = branch.samples;
         warnings.extend(branch_warnings(
             &branch,
@@ -154,7 +157,7 @@ pub fn reference_stage(
             points_at: Vec::new(),
         };
         let mut count = 0usize;
-        let branch = reference_amplitude(system, &settings, k + 1, |o| {
+        let mut runs = Runs::new(ledger, |o: &ReferenceOrbit| {
             progress.reference_orbit(&names, o);
             count += 1;
             progress.detail(&format!(
@@ -162,7 +165,8 @@ pub fn reference_stage(
                 o.epsilon
             ));
             true
-        })?;
+        });
+        let branch = reference_amplitude_resumable(system, &settings, k + 1, &mut runs)?;
         samples = branch.samples;
         let at = format!("[reference] amplitude response at Omega = {omega}");
         warnings.extend(branch_warnings(

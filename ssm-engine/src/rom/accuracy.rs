@@ -298,7 +298,7 @@ fn drift(
     let stride = times.len().div_ceil(TRANSIENT_SAMPLES).max(1);
     let picked = (0..times.len())
         .step_by(stride)
-        .chain(((times.len() - 1) % stride != 0).then_some(times.len() - 1));
+        .chain((!(times.len() - 1).is_multiple_of(stride)).then_some(times.len() - 1));
     for i in picked {
         let (t, p) = (times[i], &states[i]);
         let mut rate = 0.0;

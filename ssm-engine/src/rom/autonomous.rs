@@ -154,7 +154,7 @@ fn estimate_along(
     let stride = (n - 1).div_ceil(BACKBONE_ESTIMATES - 1).max(1);
     let at: Vec<(usize, f64)> = (0..n)
         .step_by(stride)
-        .chain(((n - 1) % stride != 0).then_some(n - 1))
+        .chain((!(n - 1).is_multiple_of(stride)).then_some(n - 1))
         .map(|i| (i, points[i].rho))
         .collect();
     let knots: Vec<(usize, f64)> = at

@@ -274,8 +274,7 @@ impl RotatingFrame {
             lu: None,
             max_amplitude: s.max_amplitude,
         };
-        let Ok(branch) =
-            core::continue_branch(&mut p, u0, &t0, &Self::core_settings(s), |_, _| true)
+        let Ok(branch) = core::continue_branch(&mut p, u0, &t0, &Self::core_settings(s), |_| true)
         else {
             return Branch {
                 points: Vec::new(),

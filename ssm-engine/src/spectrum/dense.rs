@@ -154,7 +154,10 @@ fn eigenvalues_on(t: &Mat<f64>, q: &Mat<f64>, shift: f64) -> Result<Vec<C64>, Sp
 /// `range(T^power)` from a column-pivoted QR instead of the rank search by
 /// SVDs of every power. The structure is checked (a gap of six decades in
 /// the diagonal of `R` after `rank` columns) and searched anew, and
-/// `structure` updated, when it does not hold.
+/// `structure` updated, when it does not hold. The eigenvalues come from the
+/// QR basis whether the structure was known or just found, so that they do
+/// not depend on which earlier pencil set it (a branch resumed from a
+/// checkpoint computes the same numbers as the uninterrupted one).
 pub fn finite_eigenvalues_with(
     a: SparseColMatRef<'_, usize, f64>,
     b: SparseColMatRef<'_, usize, f64>,
@@ -162,27 +165,33 @@ pub fn finite_eigenvalues_with(
     structure: &mut Option<FiniteStructure>,
 ) -> Result<Vec<C64>, SpectrumError> {
     let t = shifted_inverse(a, b, shift)?;
-    if let Some(st) = *structure {
-        let mut power = t.clone();
-        for _ in 1..st.power {
-            power = &t * &power;
-        }
-        let qr = power.col_piv_qr();
-        let r = qr.R();
-        let d = |i: usize| r[(i, i)].abs();
-        let n = r.nrows().min(r.ncols());
-        let holds = st.rank >= 1
-            && st.rank <= n
-            && d(st.rank - 1) > RANK_TOL * d(0)
-            && (st.rank == n || d(st.rank) < 1e-6 * d(st.rank - 1));
-        if holds {
-            let q = qr.compute_thin_Q().subcols(0, st.rank).to_owned();
-            return eigenvalues_on(&t, &q, shift);
-        }
+    if let Some(q) = structure.and_then(|st| basis_by_qr(&t, st)) {
+        return eigenvalues_on(&t, &q, shift);
     }
     let (q, st) = finite_subspace(&t)?;
     *structure = Some(st);
-    eigenvalues_on(&t, &q, shift)
+    match basis_by_qr(&t, st) {
+        Some(qr) => eigenvalues_on(&t, &qr, shift),
+        None => eigenvalues_on(&t, &q, shift),
+    }
+}
+
+/// The orthonormal basis of `range(T^power)` of the structure `st` by a
+/// column-pivoted QR of `T^power`, if the structure holds for `t`.
+fn basis_by_qr(t: &Mat<f64>, st: FiniteStructure) -> Option<Mat<f64>> {
+    let mut power = t.clone();
+    for _ in 1..st.power {
+        power = t * &power;
+    }
+    let qr = power.col_piv_qr();
+    let r = qr.R();
+    let d = |i: usize| r[(i, i)].abs();
+    let n = r.nrows().min(r.ncols());
+    let holds = st.rank >= 1
+        && st.rank <= n
+        && d(st.rank - 1) > RANK_TOL * d(0)
+        && (st.rank == n || d(st.rank) < 1e-6 * d(st.rank - 1));
+    holds.then(|| qr.compute_thin_Q().subcols(0, st.rank).to_owned())
 }
 
 /// All finite eigenvalues of `(A, B)`, unsorted.

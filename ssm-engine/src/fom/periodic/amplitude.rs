@@ -18,12 +18,13 @@
 //! D. T. Mook, *Nonlinear Oscillations*, Wiley (1979), Sect. 4.1.4 (the
 //! amplitude response of the Duffing oscillator and its jumps).
 
-use crate::continuation::{self, solve_at_parameter, Settings};
+use crate::continuation::{solve_at_parameter, NoLedger, Settings};
 use crate::model::system::{OutputMap, System};
 
 use super::frc::{
     check_flow, classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit,
 };
+use super::runs::Runs;
 use super::{HarmonicBalance, Parameter};
 
 /// Settings of a reference amplitude response.
@@ -58,7 +59,21 @@ pub fn reference_amplitude<O>(
     sys: &System,
     settings: &AmplitudeSettings,
     number: usize,
-    mut observe: O,
+    observe: O,
+) -> Result<ReferenceBranch, ReferenceError>
+where
+    O: FnMut(&ReferenceOrbit) -> bool,
+{
+    reference_amplitude_resumable(sys, settings, number, &mut Runs::new(&NoLedger, observe))
+}
+
+/// [`reference_amplitude`] with its continuation run kept in (and,
+/// resuming a stopped computation, restored from) the ledger of `runs`.
+pub fn reference_amplitude_resumable<O>(
+    sys: &System,
+    settings: &AmplitudeSettings,
+    number: usize,
+    runs: &mut Runs<'_, O>,
 ) -> Result<ReferenceBranch, ReferenceError>
 where
     O: FnMut(&ReferenceOrbit) -> bool,
@@ -110,9 +125,7 @@ where
     let mut t0 = vec![0.0; nu + 1];
     t0[nu] = 1.0;
     let reader = Reader::of(&hb, lo, &settings.outputs);
-    let branch = continuation::continue_branch(&mut hb, u0, &t0, &cs, |p, _| {
-        observe(&reader.orbit(p, number))
-    })?;
+    let branch = runs.trace(&mut hb, u0, &t0, &cs, &reader, number, true)?;
     let at = orbits_at(
         &mut hb,
         &branch.points,

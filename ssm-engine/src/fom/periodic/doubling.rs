@@ -20,13 +20,14 @@
 //! E. J. Doedel, H. B. Keller, J. P. Kernevez, Numerical analysis and control
 //! of bifurcation problems (II), Int. J. Bifurc. Chaos 1 (1991) 745-772.
 
-use crate::continuation::{self, correct, local_parameter, Point, Problem, Settings};
+use crate::continuation::{correct, local_parameter, Point, Problem, Settings};
 use crate::model::system::System;
 
 use super::frc::{
     classify, drop_rejoining_step, orbits_at, Reader, ReferenceBranch, ReferenceError,
     ReferenceOrbit, ReferenceSettings,
 };
+use super::runs::Runs;
 use super::seed::Path;
 use super::{HarmonicBalance, OrbitInfo};
 
@@ -39,7 +40,7 @@ pub(super) fn doubled_branch<O>(
     pd: &Point<OrbitInfo>,
     cs: &Settings,
     number: usize,
-    observe: &mut O,
+    runs: &mut Runs<'_, O>,
 ) -> Result<(ReferenceBranch, Path), ReferenceError>
 where
     O: FnMut(&ReferenceOrbit) -> bool,
@@ -98,9 +99,7 @@ where
     hb.odd_floor = Some(0.25 * odd_norm(&u0));
     let t0: Vec<f64> = u0.iter().zip(&u).map(|(a, b)| a - b).collect();
     let reader = Reader::of(&hb, settings.epsilon, &settings.outputs);
-    let mut branch = continuation::continue_branch(&mut hb, u0, &t0, cs, |p, _| {
-        observe(&reader.orbit(p, number))
-    })?;
+    let mut branch = runs.trace(&mut hb, u0, &t0, cs, &reader, number, true)?;
     drop_rejoining_step(&mut branch);
     let at = orbits_at(
         &mut hb,

@@ -56,7 +56,7 @@ pub enum FloquetError {
 }
 
 /// Floquet exponents and multipliers of an orbit.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Floquet {
     /// One exponent per finite mode, in the central strip.
     pub exponents: Vec<C64>,

@@ -22,11 +22,13 @@
 //! critical multipliers).
 
 use crate::continuation::{
-    self, solve_at_parameter, ContinuationError, EventKind, Point, Problem, Settings, Stop,
+    self, solve_at_parameter, ContinuationError, EventKind, NoLedger, Point, Problem, Settings,
+    Stop,
 };
 use crate::model::system::{OutputMap, System};
 use crate::C64;
 
+use super::runs::Runs;
 use super::seed::{seeded_branch, Path, Seed, Seeded};
 use super::{HarmonicBalance, HarmonicBalanceError, OrbitInfo, Parameter};
 
@@ -159,6 +161,15 @@ pub enum ReferenceError {
     /// Settings that cannot work.
     #[error("reference: {0}")]
     Settings(String),
+    /// A run kept by the ledger of a stopped computation is not this
+    /// computation's.
+    #[error("reference: the checkpoint's run {run} is not this computation's: {cause}; it was written for another model or other settings (run without resuming)")]
+    Checkpoint {
+        /// The run (1 = the first opened).
+        run: usize,
+        /// What differs.
+        cause: String,
+    },
 }
 
 /// The reference forced response of `sys`; `observe` sees each orbit as it
@@ -166,7 +177,20 @@ pub enum ReferenceError {
 pub fn reference_frc<O>(
     sys: &System,
     settings: &ReferenceSettings,
-    mut observe: O,
+    observe: O,
+) -> Result<ReferenceBranch, ReferenceError>
+where
+    O: FnMut(&ReferenceOrbit) -> bool,
+{
+    reference_frc_resumable(sys, settings, &mut Runs::new(&NoLedger, observe))
+}
+
+/// [`reference_frc`] with its continuation runs kept in (and, resuming a
+/// stopped computation, restored from) the ledger of `runs`.
+pub fn reference_frc_resumable<O>(
+    sys: &System,
+    settings: &ReferenceSettings,
+    runs: &mut Runs<'_, O>,
 ) -> Result<ReferenceBranch, ReferenceError>
 where
     O: FnMut(&ReferenceOrbit) -> bool,
@@ -211,8 +235,7 @@ where
     let mut t0 = vec![0.0; nu + 1];
     t0[nu] = 1.0;
     let reader = Reader::of(&hb, settings.epsilon, &settings.outputs);
-    let branch =
-        continuation::continue_branch(&mut hb, u0, &t0, &cs, |p, _| observe(&reader.orbit(p, 1)))?;
+    let branch = runs.trace(&mut hb, u0, &t0, &cs, &reader, 1, true)?;
     let at = orbits_at(
         &mut hb,
         &branch.points,
@@ -225,32 +248,16 @@ where
     let mut paths = vec![Path::of(1, &branch.points)];
     let mut next = 2;
     let doubled = switch_all(
-        sys,
-        settings,
-        &hb,
-        &doublings,
-        &cs,
-        &mut next,
-        &mut paths,
-        &mut observe,
+        sys, settings, &hb, &doublings, &cs, &mut next, &mut paths, runs,
     )?;
     let mut seeded = Vec::new();
     let mut notes = Vec::new();
     for seed in &settings.seeds {
-        match seeded_branch(sys, settings, &hb, seed, &cs, next, &paths, &mut observe)? {
+        match seeded_branch(sys, settings, &hb, seed, &cs, next, &paths, runs)? {
             Seeded::Branch(mut b, path, pds) => {
                 next += 1;
                 paths.push(path);
-                b.doubled = switch_all(
-                    sys,
-                    settings,
-                    &hb,
-                    &pds,
-                    &cs,
-                    &mut next,
-                    &mut paths,
-                    &mut observe,
-                )?;
+                b.doubled = switch_all(sys, settings, &hb, &pds, &cs, &mut next, &mut paths, runs)?;
                 seeded.push(*b);
             }
             Seeded::Known => {}
@@ -320,7 +327,7 @@ fn switch_all<O>(
     cs: &Settings,
     next: &mut usize,
     paths: &mut Vec<Path>,
-    observe: &mut O,
+    runs: &mut Runs<'_, O>,
 ) -> Result<Vec<ReferenceBranch>, ReferenceError>
 where
     O: FnMut(&ReferenceOrbit) -> bool,
@@ -341,7 +348,7 @@ where
         if reached {
             continue;
         }
-        let (b, path) = super::doubling::doubled_branch(sys, settings, hb, pd, cs, *next, observe)?;
+        let (b, path) = super::doubling::doubled_branch(sys, settings, hb, pd, cs, *next, runs)?;
         *next += 1;
         paths.push(path);
         doubled.push(b);

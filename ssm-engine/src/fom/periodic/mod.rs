@@ -60,6 +60,7 @@ pub mod frc;
 mod gauge;
 pub mod monodromy;
 mod problem;
+pub mod runs;
 pub mod seed;
 
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -70,13 +71,14 @@ use crate::model::system::System;
 use crate::spectrum::dense::FiniteStructure;
 use gauge::Gauge;
 
-pub use amplitude::{reference_amplitude, AmplitudeSettings};
+pub use amplitude::{reference_amplitude, reference_amplitude_resumable, AmplitudeSettings};
 pub use floquet::{Floquet, FloquetError};
 pub use frc::{
-    reference_frc, ReferenceBranch, ReferenceError, ReferenceEvent, ReferenceEventKind,
-    ReferenceOrbit, ReferenceSettings,
+    reference_frc, reference_frc_resumable, ReferenceBranch, ReferenceError, ReferenceEvent,
+    ReferenceEventKind, ReferenceOrbit, ReferenceSettings,
 };
 pub use problem::Parameter;
+pub use runs::Runs;
 pub use seed::Seed;
 
 /// Why a harmonic-balance discretization cannot be set up.
@@ -706,7 +708,7 @@ fn partner(q: usize) -> usize {
 /// `c_k^c` to `-k` on `sin k`.
 fn derivative_entry(q: usize) -> f64 {
     let k = q.div_ceil(2) as f64;
-    if q % 2 == 0 {
+    if q.is_multiple_of(2) {
         k
     } else {
         -k
@@ -761,7 +763,7 @@ pub fn galerkin_block(cs: &[f64], h: usize, out: &mut [f64]) {
 }
 
 /// Information at a point of a harmonic-balance branch.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct OrbitInfo {
     /// Floquet analysis, when computed.
     pub floquet: Option<Floquet>,

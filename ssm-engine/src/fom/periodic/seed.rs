@@ -24,6 +24,7 @@ use super::frc::{
     classify, drop_rejoining_step, orbits_at, Reader, ReferenceBranch, ReferenceError,
     ReferenceOrbit, ReferenceSettings,
 };
+use super::runs::Runs;
 use super::{HarmonicBalance, OrbitInfo};
 
 /// Largest distance (scaled unknowns: amplitudes by the amplitude scale,
@@ -143,7 +144,7 @@ pub(super) fn seeded_branch<O>(
     cs: &Settings,
     number: usize,
     known: &[Path],
-    observe: &mut O,
+    runs: &mut Runs<'_, O>,
 ) -> Result<Seeded, ReferenceError>
 where
     O: FnMut(&ReferenceOrbit) -> bool,
@@ -206,25 +207,14 @@ where
     let reader = Reader::of(&hb, settings.epsilon, &settings.outputs);
     let mut up = vec![0.0; nu + 1];
     up[nu] = 1.0;
-    let mut forward = continuation::continue_branch(&mut hb, u0.clone(), &up, cs, |p, _| {
-        observe(&reader.orbit(p, number))
-    })?;
+    let mut forward = runs.trace(&mut hb, u0.clone(), &up, cs, &reader, number, true)?;
     drop_rejoining_step(&mut forward);
     let backward = if forward.stop == Stop::Closed || forward.stop == Stop::Interrupted {
         None
     } else {
         up[nu] = -1.0;
-        let mut first = true;
-        Some(continuation::continue_branch(
-            &mut hb,
-            u0,
-            &up,
-            cs,
-            |p, _| {
-                // the seed's own orbit was observed with the forward half
-                std::mem::take(&mut first) || observe(&reader.orbit(p, number))
-            },
-        )?)
+        // the seed's own orbit was shown with the forward half
+        Some(runs.trace(&mut hb, u0, &up, cs, &reader, number, false)?)
     };
     let (mut orbits, mut events, mut doublings) = classify(&forward, &reader, number);
     let mut points = forward.points;
