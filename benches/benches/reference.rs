@@ -36,6 +36,7 @@ fn settings(
         points_at: Vec::new(),
         seeds: Vec::new(),
         period_doubling: true,
+        stability: true,
     }
 }
 

@@ -757,6 +757,7 @@ pub fn parametric_pump_reference(
         points_at,
         seeds: Vec::new(),
         period_doubling: true,
+        stability: true,
     }
 }
 

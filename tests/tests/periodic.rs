@@ -4,7 +4,8 @@
 use num_complex::Complex64 as C64;
 use ssm_engine::continuation::{solve_at_parameter, Settings};
 use ssm_engine::fom::periodic::{
-    floquet::floquet, reference_frc, HarmonicBalance, ReferenceEventKind, ReferenceSettings,
+    floquet::floquet, reference_frc, HarmonicBalance, ReferenceBranch, ReferenceEventKind,
+    ReferenceSettings,
 };
 use ssm_engine::model::system::OutputMap;
 use ssm_tests::{duffing_fold, forced_duffing, linear_steady_state};
@@ -106,7 +107,39 @@ fn duffing_settings(harmonics: usize) -> ReferenceSettings {
         points_at: Vec::new(),
         seeds: Vec::new(),
         period_doubling: true,
+        stability: true,
     }
+}
+
+/// Reference: the same continuation with its multipliers. Without them
+/// (`stability: false`) the branch is the same orbits, bit for bit (the
+/// steps do not depend on the multipliers), every stability empty, and its
+/// events the two folds alone, at the same orbits (located from the
+/// tangent).
+#[test]
+fn duffing_branch_without_stability_is_the_same_curve() {
+    let sys = forced_duffing(ZETA, GAMMA, &[(1.0, 1.0)]);
+    let with = reference_frc(&sys, &duffing_settings(3), |_| true).expect("reference");
+    let curve = ReferenceSettings {
+        stability: false,
+        ..duffing_settings(3)
+    };
+    let without = reference_frc(&sys, &curve, |_| true).expect("reference");
+    assert_eq!(with.orbits.len(), without.orbits.len());
+    for (a, b) in with.orbits.iter().zip(&without.orbits) {
+        assert_eq!((a.omega, &a.linf), (b.omega, &b.linf));
+        assert!(a.stable.is_some() && b.stable.is_none() && b.max_multiplier.is_none());
+    }
+    let folds = |b: &ReferenceBranch| -> Vec<f64> {
+        b.events
+            .iter()
+            .filter(|e| e.kind == ReferenceEventKind::Fold)
+            .map(|e| e.orbit.omega)
+            .collect()
+    };
+    assert_eq!(folds(&without).len(), 2);
+    assert_eq!(without.events.len(), 2, "{:?}", without.events);
+    assert_eq!(folds(&with), folds(&without));
 }
 
 /// Reference: the closed-form one-harmonic balance (above). With `H = 1` the
@@ -483,7 +516,9 @@ fn reference_of_an_unforced_model_or_a_map_is_refused() {
 /// 8.7e-5, largest at the resonance) are the same with 9 and 13 harmonics:
 /// they are the integration's distance to its limit cycle, `delta / (1 -
 /// rho)` with the slowest contraction `rho` per period, not the reference's
-/// truncation (about 1e-5 in amplitude at 9 harmonics).
+/// truncation (about 1e-5 in amplitude at 9 harmonics). Every orbit of the
+/// branch is stable by its dominant multipliers (the subspace iteration
+/// above 200 states), as the convergence of the integrations says.
 #[test]
 fn chain_reference_agrees_with_steady_states_by_integration() {
     use ssm_engine::fom::{steady_state, DaeProblem, SteadyOptions};
@@ -504,9 +539,20 @@ fn chain_reference_agrees_with_steady_states_by_integration() {
         points_at: omegas.to_vec(),
         seeds: Vec::new(),
         period_doubling: false,
+        stability: true,
     };
     let b = reference_frc(&sys, &settings, |_| true).expect("reference");
     assert!(b.orbits.iter().all(|o| o.tail < 1e-4));
+    // multipliers by subspace iteration (405 states): every orbit stable, as
+    // the integrations from rest that converge to them say
+    assert!(
+        b.orbits.iter().all(|o| o.stable == Some(true)),
+        "{:?}",
+        b.orbits
+            .iter()
+            .map(|o| o.max_multiplier)
+            .collect::<Vec<_>>()
+    );
     let refs: Vec<&OutputMap> = outputs.iter().collect();
     for omega in omegas {
         let p = DaeProblem::new(&sys, 0.6, omega);

@@ -47,6 +47,7 @@ fn settings(lo: f64, seeds: Vec<Seed>) -> ReferenceSettings {
         points_at: Vec::new(),
         seeds,
         period_doubling: false,
+        stability: true,
     }
 }
 
@@ -300,6 +301,7 @@ fn amplitude_settings(omega: f64, range: (f64, f64)) -> AmplitudeSettings {
         max_steps: 2000,
         outputs: settings(0.9, Vec::new()).outputs,
         points_at: Vec::new(),
+        stability: true,
     }
 }
 
@@ -450,6 +452,7 @@ fn amplitude_and_frequency_continuations_meet_on_the_index_3_oscillator() {
         points_at,
         seeds: Vec::new(),
         period_doubling: false,
+        stability: true,
     };
     let f = reference_frc(&sys, &frequency(0.03, vec![omega]), |_| true).expect("frequency");
     assert_eq!(f.at.len(), 3, "three orbits at Omega = {omega}");
@@ -464,6 +467,7 @@ fn amplitude_and_frequency_continuations_meet_on_the_index_3_oscillator() {
             max_steps: 2000,
             outputs: x1.clone(),
             points_at: vec![0.03],
+            stability: true,
         },
         1,
         |_| true,

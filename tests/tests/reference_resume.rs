@@ -88,6 +88,7 @@ fn duffing_seeded() -> (System, ReferenceSettings) {
             origin: "closed form".into(),
         }],
         period_doubling: false,
+        stability: true,
     };
     (sys, settings)
 }

@@ -192,7 +192,7 @@ pub fn reference_json(r: &ReferenceFrc) -> Value {
         })
         .collect();
     json!({
-        "method": "harmonic balance (AFT) continued in Omega (and in eps at the frequencies of amplitude_at) by local parametrization; Floquet multipliers by Hill's method up to 1500 Fourier coefficients, above by the monodromy matrix (Radau IIA on the variational DAE)",
+        "method": "harmonic balance (AFT) continued in Omega (and in eps at the frequencies of amplitude_at) by local parametrization; Floquet multipliers by Hill's method up to 1500 Fourier coefficients, above by the monodromy map (Radau IIA on the variational DAE: the whole matrix up to 200 states, the multipliers above 1e-3 by subspace iteration above)",
         "harmonics": r.harmonics,
         "samples_per_period": r.samples,
         "outputs": r.outputs,

@@ -518,12 +518,26 @@ pub fn check_reference(
     // multipliers: the dense Hill eigenproblem, or the monodromy matrix (16
     // H steps, each a sparse LU of the 3N stages and N solves, then a dense
     // N x N eigenproblem; measured 0.23 s per orbit on the divider, N = 146,
-    // H = 5, which this estimate puts at 0.3 s)
+    // H = 5, which this estimate puts at 0.3 s); above 200 states the
+    // dominant multipliers by subspace iteration (the 16 H LUs kept, about
+    // three passes of a block of 16: some 64 solves per step)
     let n = sizes.states;
-    let hill = if nu <= crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64 {
+    let stage_steps = 8.0 * (k - 1.0);
+    let hill = if !*r.stability.get_ref() {
+        0.0
+    } else if nu <= crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64 {
         nu.powi(3)
     } else if n <= crate::fom::periodic::monodromy::MAX_MONODROMY_STATES as f64 {
-        8.0 * (k - 1.0) * 2.0 * n * (sizes.nnz + sizes.factors) + 10.0 * n.powi(3)
+        stage_steps * 2.0 * n * (sizes.nnz + sizes.factors) + 10.0 * n.powi(3)
+    } else {
+        stage_steps * 2.0 * 64.0 * (sizes.nnz + sizes.factors)
+    };
+    // the kept LUs of the period's steps (9 blocks of the pencil's pattern
+    // and fill each)
+    let kept_lus = if *r.stability.get_ref()
+        && nu > crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64
+    {
+        stage_steps * 9.0 * (sizes.nnz + sizes.factors) * 16.0
     } else {
         0.0
     };
@@ -532,7 +546,9 @@ pub fn check_reference(
     let steps = (*r.max_steps.get_ref() as f64).min(REFERENCE_STEPS.max(10.0 / *r.step.get_ref()));
     let cost = Cost {
         ops: branches * steps * (5.0 * factor + hill),
-        bytes: 8.0 * (sizes.nnz + sizes.factors) * k * k * 4.0 + 8.0 * nu * nu.min(1500.0),
+        bytes: 8.0 * (sizes.nnz + sizes.factors) * k * k * 4.0
+            + 8.0 * nu * nu.min(1500.0)
+            + kept_lus,
     };
     ensure(
         scene,

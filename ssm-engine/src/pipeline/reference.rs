@@ -12,9 +12,7 @@ use super::Progress;
 use crate::compare::seeds::ssm_seeds;
 use crate::compare::validation::{frc_error_at, reference_points};
 use crate::continuation::{NoLedger, Stop};
-use crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS;
 use crate::fom::periodic::frc::{ReferenceBranch, ReferenceFrc};
-use crate::fom::periodic::monodromy::MAX_MONODROMY_STATES;
 use crate::fom::periodic::{
     reference_amplitude_resumable, reference_frc_resumable, AmplitudeSettings, ReferenceOrbit,
     ReferenceSettings, Runs,
@@ -76,12 +74,6 @@ pub fn reference_stage(
         .omega_range(scene)
         .expect("the scene check requires a frequency range");
     let mut warnings = Vec::new();
-    if coefficients > MAX_HILL_COEFFICIENTS && system.n_states() > MAX_MONODROMY_STATES {
-        warnings.push(format!(
-            "[reference]: {coefficients} Fourier coefficients per orbit exceed the dense Hill limit {MAX_HILL_COEFFICIENTS}, and {} states the monodromy limit {MAX_MONODROMY_STATES}: stability and bifurcations of the reference are not computed (stable column empty); lower harmonics for them",
-            system.n_states()
-        ));
-    }
     let names: Vec<String> = outputs.iter().map(|o| o.name.clone()).collect();
     let ledger = progress.checkpoint().unwrap_or(&NoLedger);
     let mut branches = Vec::new();
@@ -108,6 +100,7 @@ pub fn reference_stage(
             points_at: Vec::new(),
             period_doubling: *sec.period_doubling.get_ref(),
             seeds,
+            stability: *sec.stability.get_ref(),
         };
         let (lo, hi) = range;
         let mut count = 0usize;
@@ -155,6 +148,7 @@ pub fn reference_stage(
             max_steps: *sec.max_steps.get_ref(),
             outputs: outputs.clone(),
             points_at: Vec::new(),
+            stability: *sec.stability.get_ref(),
         };
         let mut count = 0usize;
         let mut runs = Runs::new(ledger, |o: &ReferenceOrbit| {

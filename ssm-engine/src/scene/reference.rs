@@ -42,6 +42,10 @@ pub struct ReferenceSection {
     /// Switch to the branch of period `2T` at each period doubling.
     #[serde(default = "default_period_doubling")]
     pub period_doubling: Spanned<bool>,
+    /// Floquet multipliers of every orbit (stability, period doublings,
+    /// Neimark-Sacker, branch points); `false` traces the curves alone.
+    #[serde(default = "default_stability")]
+    pub stability: Spanned<bool>,
     /// Outputs whose amplitudes are written (default: `[outputs] coordinates`).
     #[serde(default)]
     pub outputs: Option<Spanned<Vec<String>>>,
@@ -70,6 +74,9 @@ fn default_tol() -> Spanned<f64> {
     Spanned::new(0..0, 1e-10)
 }
 fn default_period_doubling() -> Spanned<bool> {
+    Spanned::new(0..0, true)
+}
+fn default_stability() -> Spanned<bool> {
     Spanned::new(0..0, true)
 }
 fn default_max_steps() -> Spanned<usize> {

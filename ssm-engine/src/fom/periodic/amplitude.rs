@@ -48,6 +48,9 @@ pub struct AmplitudeSettings {
     /// Forcing amplitudes at which the orbits of the branch are also solved
     /// exactly (every crossing of the branch).
     pub points_at: Vec<f64>,
+    /// Floquet multipliers at each orbit: stability and the bifurcations
+    /// they locate.
+    pub stability: bool,
 }
 
 /// The reference amplitude response of `sys` at the frequency of
@@ -95,6 +98,7 @@ where
     let mut hb = HarmonicBalance::new(sys, hi, settings.harmonics, 1)?;
     hb.parameter = Parameter::Amplitude { omega };
     hb.epsilon_scale = hi - lo;
+    hb.stability = settings.stability;
     let nu = hb.n_coefficients();
     let cs = Settings {
         tol: settings.tol,

@@ -49,6 +49,7 @@ where
     let mut hb = HarmonicBalance::new(sys, settings.epsilon, 2 * h1, 2)?;
     hb.amplitude_scale = hb1.amplitude_scale;
     hb.frequency_scale = hb1.frequency_scale;
+    hb.stability = hb1.stability;
     let n = hb.n_states();
     let (k1, k2) = (2 * h1 + 1, 4 * h1 + 1);
     let nu = n * k2;

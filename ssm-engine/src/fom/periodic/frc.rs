@@ -52,6 +52,9 @@ pub struct ReferenceSettings {
     pub outputs: Vec<OutputMap>,
     /// Switch to the branch of period `2T` at each period doubling.
     pub period_doubling: bool,
+    /// Floquet multipliers at each orbit: stability and the bifurcations
+    /// they locate (folds are found from the tangent either way).
+    pub stability: bool,
     /// Frequencies at which the orbits of the branch are also solved exactly
     /// (every crossing of the branch), e.g. those of steady states to
     /// compare with.
@@ -204,6 +207,7 @@ where
     check_flow(sys, settings.harmonics)?;
     let mut hb = HarmonicBalance::new(sys, settings.epsilon, settings.harmonics, 1)?;
     hb.frequency_scale = hi - lo;
+    hb.stability = settings.stability;
     let nu = hb.n_coefficients();
     let cs = Settings {
         tol: settings.tol,

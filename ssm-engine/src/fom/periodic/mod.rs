@@ -146,6 +146,10 @@ pub struct HarmonicBalance<'a> {
     /// A branch of period `2T` ends where the norm of its odd harmonics
     /// (scaled) falls below this: it has rejoined the period-`T` branch.
     pub odd_floor: Option<f64>,
+    /// Floquet multipliers at each orbit (stability, folds as multipliers,
+    /// period doublings, Neimark-Sacker); without them a branch has its
+    /// folds in the parameter only and an empty stability column.
+    pub stability: bool,
 }
 
 impl<'a> HarmonicBalance<'a> {
@@ -314,6 +318,7 @@ impl<'a> HarmonicBalance<'a> {
             hill_structure: None,
             gauges,
             odd_floor: None,
+            stability: true,
         })
     }
 

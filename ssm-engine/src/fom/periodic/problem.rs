@@ -109,6 +109,12 @@ impl Problem for HarmonicBalance<'_> {
     }
 
     fn monitor(&mut self, u: &[f64], _t: &[f64]) -> Result<Monitor<OrbitInfo>, ProblemFailure> {
+        if !self.stability {
+            return Ok(Monitor {
+                tests: Vec::new(),
+                info: OrbitInfo { floquet: None },
+            });
+        }
         let (c, omega) = self.load(u);
         let mut structure = self.hill_structure;
         let fl = floquet::floquet_with(self, &c, omega, &mut structure).ok();

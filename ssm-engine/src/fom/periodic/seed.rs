@@ -153,6 +153,7 @@ where
     let mut hb = HarmonicBalance::new(sys, settings.epsilon, m * template.harmonics(), m)?;
     hb.amplitude_scale = template.amplitude_scale;
     hb.frequency_scale = template.frequency_scale;
+    hb.stability = template.stability;
     let (lo, hi) = (cs.range.0, cs.range.1);
     let w = seed.omega / hb.frequency_scale;
     // a seed outside the range has no branch to start inside it
