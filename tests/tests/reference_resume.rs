@@ -222,6 +222,14 @@ fn checkpoints_from_elsewhere_are_refused() {
     let e = refused(&path, "pump", "text");
     assert!(matches!(e, CheckpointError::Damaged { line: 2, .. }), "{e}");
 
+    // a readable step whose tangent is shorter than its point
+    let mut short = lines.clone();
+    let cut = lines[3].replacen("\"tangent\":[", "\"tangent\":[0.5,", 1);
+    short[3] = &cut;
+    write(&path, &short);
+    let e = refused(&path, "pump", "text");
+    assert!(matches!(e, CheckpointError::Damaged { line: 4, .. }), "{e}");
+
     write(&path, &lines);
     let link: PathBuf = dir.join("link.jsonl");
     std::os::unix::fs::symlink(&path, &link).expect("link");

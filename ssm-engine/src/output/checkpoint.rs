@@ -408,6 +408,25 @@ fn parse(
                 h,
                 steps,
             } => {
+                // what a continuation would index or step with: the same
+                // number of unknowns in every point and tangent of a run, a
+                // positive step
+                let size = kept
+                    .back()
+                    .filter(|_| run == open)
+                    .map_or(point.u.len(), |(t, _)| t.points[0].u.len());
+                let points = std::iter::once(&point).chain(events.iter().map(|e| &e.at));
+                if point.u.is_empty()
+                    || !(h.is_finite() && h > 0.0)
+                    || points
+                        .clone()
+                        .any(|p| p.u.len() != size || p.tangent.len() != size)
+                {
+                    return Err(damaged(
+                        number,
+                        format!("a step of run {run} whose sizes or step size do not fit its run"),
+                    ));
+                }
                 if run == open + 1 && steps == 0 && events.is_empty() {
                     kept.push_back((
                         Trace {
@@ -426,7 +445,7 @@ fn parse(
                         format!("a step of run {run} where run {open} is open"),
                     ));
                 };
-                if steps <= trace.steps || point.u.len() != trace.points[0].u.len() {
+                if steps <= trace.steps {
                     return Err(damaged(
                         number,
                         format!(
