@@ -9,7 +9,7 @@
 //!
 //! Run with `cargo build --release --workspace && cargo bench -p ssm-benches --bench reference`
 //! (the chain alone: `... --bench reference -- chain`, about 10 minutes; the
-//! divider: `... -- divider`, about 30 minutes).
+//! divider: `... -- divider`, about 25 minutes).
 
 use std::hint::black_box;
 

@@ -254,11 +254,13 @@ step = {step}
             continue;
         }
         // quadratic interpolation through three consecutive orbits of the
-        // wide branch, the first two around the frequency
+        // wide branch, two of them around the frequency (the last two for
+        // an orbit in the branch's last interval)
+        let around = |a: f64, b: f64| (a - o.omega) * (b - o.omega) <= 0.0;
         let amps: Vec<f64> = wide
             .orbits
             .windows(3)
-            .filter(|w| (w[0].omega - o.omega) * (w[1].omega - o.omega) <= 0.0)
+            .filter(|w| around(w[0].omega, w[1].omega) || around(w[1].omega, w[2].omega))
             .map(|w| {
                 let (x, y): (Vec<f64>, Vec<f64>) = w.iter().map(|p| (p.omega, p.linf[0])).unzip();
                 (0..3)

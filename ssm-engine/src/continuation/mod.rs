@@ -87,6 +87,8 @@ pub trait Problem {
     /// Solves with the last factorization, in place (`n + 1` values).
     fn solve(&mut self, rhs: &mut [f64]) -> Result<(), ProblemFailure>;
     /// Test functions and data at a corrected point with unit tangent `t`.
+    /// It must leave the factorization made for the tangent in place: the
+    /// next step's corrector starts with it.
     fn monitor(&mut self, u: &[f64], t: &[f64]) -> Result<Monitor<Self::Info>, ProblemFailure>;
     /// True where the branch must stop although the parameter is in range
     /// (the problem's own bound), on the step from the accepted point
@@ -246,19 +248,21 @@ pub fn local_parameter(t: &[f64]) -> usize {
 }
 
 /// Newton on `[F(u); u_k - anchor_k] = 0` from `u`, as a chord iteration:
-/// the Jacobian is factored at the first iterate and again only where an
-/// update shrank by less than a factor 4 (one sparse LU is the cost of a
-/// step on large problems; a corrector from a good predictor contracts fast
-/// with the first factorization). Returns the point and the number of
-/// iterations.
+/// the Jacobian is factored at the first iterate (unless `factored`: the
+/// problem already holds a factorization with local parameter `k` near `u`,
+/// the last accepted point's) and again only where an update shrank by less
+/// than a factor 4 (one sparse LU is the cost of a step on large problems; a
+/// corrector from a good predictor contracts fast with the first
+/// factorization). Returns the point and the number of iterations.
 pub fn correct<P: Problem>(
     p: &mut P,
     mut u: Vec<f64>,
     anchor: &[f64],
     k: usize,
     s: &Settings,
+    factored: bool,
 ) -> Result<(Vec<f64>, usize), ProblemFailure> {
-    let mut refactor = true;
+    let mut refactor = !factored;
     let mut last = f64::INFINITY;
     for it in 1..=s.max_newton {
         let mut rhs = p.residual(&u)?;
@@ -330,7 +334,7 @@ pub fn solve_at_parameter<P: Problem>(
 ) -> Result<Vec<f64>, ContinuationError> {
     let anchor = guess.clone();
     let k = guess.len() - 1;
-    correct(p, guess, &anchor, k, s)
+    correct(p, guess, &anchor, k, s, false)
         .map(|(u, _)| u)
         .map_err(|e| ContinuationError::Start {
             parameter: anchor[anchor.len() - 1],
@@ -375,7 +379,7 @@ fn locate<P: Problem>(
             .zip(&chord)
             .map(|(a, b)| a + sigma * b)
             .collect();
-        let (u, _) = correct(p, pred.clone(), &pred, k_chord, s).ok()?;
+        let (u, _) = correct(p, pred.clone(), &pred, k_chord, s, false).ok()?;
         let tangent = tangent(p, &u, &from.tangent).ok()?;
         let monitor = if needs_monitor {
             p.monitor(&u, &tangent).ok()?
@@ -560,6 +564,9 @@ where
             stop,
         };
     }
+    // the local parameter of the factorization the problem holds at the
+    // last accepted point, if it holds one
+    let mut held: Option<usize> = None;
     let stop = loop {
         if steps >= s.max_steps {
             break Stop::MaxSteps;
@@ -573,9 +580,15 @@ where
             .map(|(a, b)| a + h * b)
             .collect();
         let k_local = local_parameter(&last.tangent);
+        // the corrector's chord is the Jacobian at the last point: the
+        // tangent's factorization when it was made with the same local
+        // parameter and nothing factored since (a resumed run factors it
+        // here, so that it computes the same bits); half the LUs of a step
+        let factored = held == Some(k_local) || p.factor(&last.u, k_local).is_ok();
+        held = None;
         // correct, then the tangent; the problem's monitor only where the
         // tangent turned little enough for the step to be kept
-        let step = correct(p, pred.clone(), &pred, k_local, s)
+        let step = correct(p, pred.clone(), &pred, k_local, s, factored)
             .and_then(|(u, it)| tangent(p, &u, &last.tangent).map(|t| (u, t, it)))
             .and_then(|(u, t, it)| {
                 let turn = dot(&t, &last.tangent).clamp(-1.0, 1.0).acos();
@@ -622,6 +635,11 @@ where
             if a.differs(*b) {
                 found.push(EventKind::Test(i));
             }
+        }
+        // the tangent at `next` was factored with `k_local`; locating an
+        // event factors elsewhere
+        if found.is_empty() {
+            held = Some(k_local);
         }
         let after = points.len() - 1;
         let new_events: Vec<Event<P::Info>> = found

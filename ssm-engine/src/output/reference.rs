@@ -210,6 +210,16 @@ fn branch_json(r: &ReferenceFrc, b: &ReferenceBranch) -> Value {
         "coefficients": b.coefficients,
         "largest_tail": b.orbits.iter().map(|o| o.tail).fold(0.0, f64::max),
         "stability_computed": b.orbits.iter().all(|o| o.stable.is_some()),
+        "multiplier_check": b.multiplier_check.as_ref().map(|c| match c {
+            Ok(c) => json!({
+                "omega": c.omega,
+                "epsilon": c.epsilon,
+                "steps": c.steps,
+                "difference": c.difference,
+                "uncertain_orbits": c.uncertain_orbits,
+            }),
+            Err(e) => json!({ "error": e.to_string() }),
+        }),
         "bifurcations": b.events.iter().map(|e| {
             let mut v = json!({
                 "kind": e.kind.label(),

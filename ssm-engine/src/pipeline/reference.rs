@@ -12,6 +12,7 @@ use super::Progress;
 use crate::compare::seeds::ssm_seeds;
 use crate::compare::validation::{frc_error_at, reference_points};
 use crate::continuation::{NoLedger, Stop};
+use crate::fom::periodic::floquet::CHECK_WARNING;
 use crate::fom::periodic::frc::{ReferenceBranch, ReferenceFrc};
 use crate::fom::periodic::{
     reference_amplitude_resumable, reference_frc_resumable, AmplitudeSettings, ReferenceOrbit,
@@ -127,12 +128,18 @@ pub fn reference_stage(
         }));
         let mut doubled = std::mem::take(&mut branch.doubled);
         let seeded = std::mem::take(&mut branch.seeded);
+        let first = branches.len();
         branches.push(branch);
         branches.append(&mut doubled);
         for mut b in seeded {
             let mut doubled = std::mem::take(&mut b.doubled);
             branches.push(b);
             branches.append(&mut doubled);
+        }
+        for b in &branches[first..] {
+            let number = b.orbits.first().map_or(0, |o| o.branch);
+            let at = format!("[reference] eps = {eps}, branch {number}");
+            warnings.extend(multiplier_warning(b, &at));
         }
     }
     let mut amplitude = Vec::new();
@@ -170,6 +177,7 @@ pub fn reference_stage(
             tolerance,
         ));
         warnings.extend(branch.notes.iter().map(|n| format!("{at}: {n}")));
+        warnings.extend(multiplier_warning(&branch, &at));
         amplitude.push(branch);
     }
     Ok((
@@ -183,6 +191,22 @@ pub fn reference_stage(
         },
         warnings,
     ))
+}
+
+/// The warning of a branch whose multipliers' check differs by more than
+/// [`CHECK_WARNING`] or failed, led by `at`; every traced branch (main,
+/// doubled, seeded, amplitude) gets it.
+fn multiplier_warning(branch: &ReferenceBranch, at: &str) -> Option<String> {
+    match branch.multiplier_check.as_ref()? {
+        Ok(c) if c.difference > CHECK_WARNING => Some(format!(
+            "{at}: the Floquet multipliers of the orbit at Omega = {:.6}, eps = {:e} differ by {:.2e} from a check by the monodromy map with {} steps: stability and bifurcations are uncertain to that much ({} orbits of the branch have their largest multiplier within it of the unit circle); raise harmonics",
+            c.omega, c.epsilon, c.difference, c.steps, c.uncertain_orbits
+        )),
+        Ok(_) => None,
+        Err(e) => Some(format!(
+            "{at}: the check of the Floquet multipliers failed ({e}); the stable column is unchecked"
+        )),
+    }
 }
 
 /// What a user must know of a traced branch, each warning led by `at`: a
@@ -250,4 +274,51 @@ pub fn reference_errors(f: &ForcedResponse, r: &ReferenceFrc) -> Vec<MeasuredErr
         }
     }
     list
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fom::periodic::floquet::{FloquetError, MultiplierCheck};
+
+    fn branch(check: Option<Result<MultiplierCheck, FloquetError>>) -> ReferenceBranch {
+        ReferenceBranch {
+            orbits: Vec::new(),
+            events: Vec::new(),
+            stop: Stop::Range,
+            factorizations: 0,
+            coefficients: 0,
+            samples: 0,
+            at: Vec::new(),
+            doubled: Vec::new(),
+            seeded: Vec::new(),
+            notes: Vec::new(),
+            multiplier_check: check,
+        }
+    }
+
+    /// A check differing by 1e-4 is no warning, one differing by 2e-3
+    /// (above [`CHECK_WARNING`]) is a warning naming the orbit, the figure
+    /// and the uncertain orbits; a failed check is a warning too.
+    #[test]
+    fn a_multiplier_check_above_its_tolerance_is_a_warning() {
+        let check = |difference: f64| MultiplierCheck {
+            omega: 1.95,
+            epsilon: 0.02,
+            steps: 288,
+            difference,
+            uncertain_orbits: 3,
+        };
+        let warn = |b: &ReferenceBranch| multiplier_warning(b, "[reference]");
+        assert_eq!(warn(&branch(Some(Ok(check(1e-4))))), None);
+        assert_eq!(warn(&branch(None)), None);
+        let w = warn(&branch(Some(Ok(check(2e-3))))).expect("warning");
+        assert!(
+            w.contains("Omega = 1.950000") && w.contains("2.00e-3") && w.contains("3 orbits"),
+            "{w}"
+        );
+        let failed = Some(Err(FloquetError::Spectrum("did not converge".into())));
+        let w = warn(&branch(failed)).expect("warning");
+        assert!(w.contains("did not converge"), "{w}");
+    }
 }

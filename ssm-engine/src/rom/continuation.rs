@@ -379,7 +379,7 @@ impl RotatingFrame {
             tol: 1e-13,
             ..core::Settings::new((f64::NEG_INFINITY, f64::INFINITY), 1.0)
         };
-        let (w, _) = correct(&mut p, u.clone(), &u, local_parameter(&t), &cs).ok()?;
+        let (w, _) = correct(&mut p, u.clone(), &u, local_parameter(&t), &cs, false).ok()?;
         let stable = self.tests(&w, &t).3;
         Some(self.point(&w, stable))
     }
@@ -434,6 +434,7 @@ impl RotatingFrame {
                 &start,
                 local_parameter(&dir),
                 &cs,
+                false,
             ) {
                 let branch = self.continue_branch(u1, dir, s);
                 let closed = branch.closed;

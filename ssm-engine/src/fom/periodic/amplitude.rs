@@ -150,6 +150,6 @@ where
         .collect();
     Ok(ReferenceBranch {
         notes,
-        ..ReferenceBranch::traced(&hb, orbits, events, branch.stop, at)
+        ..ReferenceBranch::traced(&mut hb, &branch.points, orbits, events, branch.stop, at)
     })
 }

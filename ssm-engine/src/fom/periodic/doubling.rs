@@ -88,8 +88,15 @@ where
     // a step along v onto the new branch, its largest component held
     let delta = 0.1 * cs.h_max;
     let start: Vec<f64> = u.iter().zip(&v).map(|(a, b)| a + delta * b).collect();
-    let (u0, _) = correct(&mut hb, start.clone(), &start, local_parameter(&v), cs)
-        .map_err(|e| fail(&u, &hb, e.0))?;
+    let (u0, _) = correct(
+        &mut hb,
+        start.clone(),
+        &start,
+        local_parameter(&v),
+        cs,
+        false,
+    )
+    .map_err(|e| fail(&u, &hb, e.0))?;
     let odd_norm = |w: &[f64]| -> f64 {
         (0..nu)
             .filter(|p| odd(p % k2))
@@ -113,7 +120,7 @@ where
     let (orbits, events, _) = classify(&branch, &reader, number);
     let path = Path::of(2, &branch.points);
     Ok((
-        ReferenceBranch::traced(&hb, orbits, events, branch.stop, at),
+        ReferenceBranch::traced(&mut hb, &branch.points, orbits, events, branch.stop, at),
         path,
     ))
 }

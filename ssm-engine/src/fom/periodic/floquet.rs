@@ -129,6 +129,59 @@ impl Floquet {
     }
 }
 
+/// Multipliers above this modulus enter [`Floquet::distance`]: their
+/// partners in another computation are above the monodromy's
+/// [`super::monodromy::DOMINANT_FLOOR`] unless the two differ by more than
+/// `1e-2`, which the distance then shows.
+pub const CHECK_FLOOR: f64 = 1e-2;
+
+impl Floquet {
+    /// The largest distance from a multiplier above [`CHECK_FLOOR`] of either
+    /// set to the nearest multiplier of the other: the disagreement of two
+    /// computations of the same orbit's multipliers (0 when neither has one
+    /// above the floor).
+    pub fn distance(&self, other: &Floquet) -> f64 {
+        let one_way = |a: &[C64], b: &[C64]| {
+            a.iter()
+                .filter(|x| x.norm() > CHECK_FLOOR)
+                .map(|x| {
+                    b.iter()
+                        .map(|y| (x - y).norm())
+                        .fold(f64::INFINITY, f64::min)
+                })
+                .fold(0.0, f64::max)
+        };
+        one_way(&self.multipliers, &other.multipliers)
+            .max(one_way(&other.multipliers, &self.multipliers))
+    }
+}
+
+/// A branch's multipliers computed again at its orbit whose largest
+/// multiplier is nearest the unit circle, by the monodromy map with twice
+/// its default steps: independent of Hill's method where that gave them
+/// (the difference is then Hill's truncation error), and their Richardson
+/// partner where the monodromy map gave them (the error falls as `h^5`, so
+/// the difference is the default steps' error to 3 %).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MultiplierCheck {
+    /// The checked orbit's frequency.
+    pub omega: f64,
+    /// Its forcing amplitude.
+    pub epsilon: f64,
+    /// Steps per period of the check.
+    pub steps: usize,
+    /// [`Floquet::distance`] of the branch's multipliers from the check's.
+    pub difference: f64,
+    /// Orbits of the branch whose largest multiplier is within `difference`
+    /// of the unit circle: their stable flag is not vouched for.
+    pub uncertain_orbits: usize,
+}
+
+/// A [`MultiplierCheck::difference`] above this is a warning: the
+/// multipliers are uncertain to more than the tolerance on located
+/// bifurcations (1e-3), and stability near the unit circle with them.
+pub const CHECK_WARNING: f64 = 1e-3;
+
 /// Real up to the accuracy of the exponents: Hill's method returns the
 /// exponent of a real negative multiplier on the strip's edge with an
 /// imaginary part off by about 1e-9 relative (measured on the spatial

@@ -28,6 +28,8 @@ use crate::continuation::{
 use crate::model::system::{OutputMap, System};
 use crate::C64;
 
+use super::floquet::{FloquetError, MultiplierCheck};
+use super::monodromy::check_multipliers;
 use super::runs::Runs;
 use super::seed::{seeded_branch, Path, Seed, Seeded};
 use super::{HarmonicBalance, HarmonicBalanceError, OrbitInfo, Parameter};
@@ -150,6 +152,9 @@ pub struct ReferenceBranch {
     pub seeded: Vec<ReferenceBranch>,
     /// What became of the seeds that started no branch.
     pub notes: Vec<String>,
+    /// The branch's multipliers checked at its most critical orbit (`None`
+    /// without multipliers).
+    pub multiplier_check: Option<Result<MultiplierCheck, FloquetError>>,
 }
 
 /// Why no reference was computed.
@@ -272,7 +277,7 @@ where
         doubled,
         seeded,
         notes,
-        ..ReferenceBranch::traced(&hb, orbits, events, branch.stop, at)
+        ..ReferenceBranch::traced(&mut hb, &branch.points, orbits, events, branch.stop, at)
     })
 }
 
@@ -294,15 +299,18 @@ pub(super) fn check_flow(sys: &System, harmonics: usize) -> Result<(), Reference
 }
 
 impl ReferenceBranch {
-    /// A branch traced with `hb`: its orbits, events, stop and orbits at
-    /// given parameter values, the costs of `hb`, and no further branches.
+    /// A branch traced with `hb` through `points`: its orbits (one per
+    /// point), events, stop and orbits at given parameter values, the costs
+    /// of `hb`, the check of its multipliers, and no further branches.
     pub(super) fn traced(
-        hb: &HarmonicBalance<'_>,
+        hb: &mut HarmonicBalance<'_>,
+        points: &[Point<OrbitInfo>],
         orbits: Vec<ReferenceOrbit>,
         events: Vec<ReferenceEvent>,
         stop: Stop,
         at: Vec<(ReferenceOrbit, Vec<f64>)>,
     ) -> Self {
+        let multiplier_check = check_branch(hb, points, &orbits);
         ReferenceBranch {
             orbits,
             events,
@@ -314,8 +322,42 @@ impl ReferenceBranch {
             doubled: Vec::new(),
             seeded: Vec::new(),
             notes: Vec::new(),
+            multiplier_check,
         }
     }
+}
+
+/// The [`MultiplierCheck`] of the branch `points` (with their `orbits`) at
+/// the point whose largest multiplier is nearest the unit circle; `None`
+/// where no point has multipliers.
+fn check_branch(
+    hb: &mut HarmonicBalance<'_>,
+    points: &[Point<OrbitInfo>],
+    orbits: &[ReferenceOrbit],
+) -> Option<Result<MultiplierCheck, FloquetError>> {
+    let (i, floquet) = points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| p.monitor.info.floquet.as_ref().map(|f| (i, f)))
+        .min_by(|a, b| {
+            (a.1.max_modulus() - 1.0)
+                .abs()
+                .total_cmp(&(b.1.max_modulus() - 1.0).abs())
+        })?;
+    let (c, omega) = hb.load(&points[i].u);
+    Some(
+        check_multipliers(hb, &c, omega, floquet).map(|(steps, difference)| MultiplierCheck {
+            omega: orbits[i].omega,
+            epsilon: orbits[i].epsilon,
+            steps,
+            difference,
+            uncertain_orbits: points
+                .iter()
+                .filter_map(|p| p.monitor.info.floquet.as_ref())
+                .filter(|f| (f.max_modulus() - 1.0).abs() < difference)
+                .count(),
+        }),
+    )
 }
 
 /// The branches of period `2T` at the period doublings `pds` of a

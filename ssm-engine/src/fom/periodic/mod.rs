@@ -383,13 +383,17 @@ impl<'a> HarmonicBalance<'a> {
     /// The orbit's state at angle `psi = Omega t / m`.
     pub fn state_at(&self, c: &[f64], psi: f64) -> Vec<f64> {
         let kk = self.kk();
+        let trig: Vec<(f64, f64)> = (1..=self.harmonics)
+            .map(|k| (k as f64 * psi).sin_cos())
+            .collect();
         (0..self.n)
             .map(|i| {
                 let ci = &c[i * kk..(i + 1) * kk];
-                (1..=self.harmonics).fold(ci[0], |v, k| {
-                    let (s, co) = (k as f64 * psi).sin_cos();
-                    v + ci[2 * k - 1] * co + ci[2 * k] * s
-                })
+                (1..=self.harmonics)
+                    .zip(&trig)
+                    .fold(ci[0], |v, (k, &(s, co))| {
+                        v + ci[2 * k - 1] * co + ci[2 * k] * s
+                    })
             })
             .collect()
     }
@@ -424,16 +428,20 @@ impl<'a> HarmonicBalance<'a> {
         let w = omega / self.multiple as f64;
         r.iter_mut().for_each(|v| *v *= w);
         self.project_into(c, -1.0, &mut r, |t, z, f| self.prob.rhs(t, z, f));
-        let mut z = vec![0.0; n];
-        let inv = 1.0 / m as f64;
-        for g in &self.gauges {
-            r[g.aux * kk] = (0..m)
-                .map(|s| {
-                    self.z_at(c, s, &mut z);
-                    g.defect(&z)
-                })
-                .sum::<f64>()
-                * inv;
+        if !self.gauges.is_empty() {
+            // one synthesis of the state per sample for all gauges
+            let mut z = vec![0.0; n];
+            let mut sums = vec![0.0; self.gauges.len()];
+            for s in 0..m {
+                self.z_at(c, s, &mut z);
+                for (g, sum) in self.gauges.iter().zip(&mut sums) {
+                    *sum += g.defect(&z);
+                }
+            }
+            let inv = 1.0 / m as f64;
+            for (g, sum) in self.gauges.iter().zip(&sums) {
+                r[g.aux * kk] = sum * inv;
+            }
         }
         r
     }
@@ -585,14 +593,21 @@ impl<'a> HarmonicBalance<'a> {
         let kk = self.kk();
         let m = self.samples;
         let inv = 1.0 / m as f64;
+        if self.gauges.is_empty() {
+            return;
+        }
         let mut z = vec![0.0; self.n];
         for g in &self.gauges {
             for &p in &g.row_positions {
                 vals[p] = 0.0;
             }
-            for s in 0..m {
-                self.z_at(c, s, &mut z);
-                let (co, si) = (&self.cos[s * kk..], &self.sin[s * kk..]);
+        }
+        // one synthesis of the state per sample for all gauges (each writes
+        // its own row)
+        for s in 0..m {
+            self.z_at(c, s, &mut z);
+            let (co, si) = (&self.cos[s * kk..], &self.sin[s * kk..]);
+            for g in &self.gauges {
                 for ((_, d), (_, pos)) in g.gradient(&z).into_iter().zip(&g.columns) {
                     let d = d * inv * self.amplitude_scale;
                     vals[pos[0]] += d;

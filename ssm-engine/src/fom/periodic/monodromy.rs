@@ -110,10 +110,20 @@ impl<'h, 'a> PeriodSteps<'h, 'a> {
             }
         }
         let pattern = SymbolicSparseColMat::new_checked(3 * n, 3 * n, col_ptr, None, row_idx);
-        let symbolic =
-            factorize_symbolic_lu(pattern.as_ref(), Default::default()).map_err(|e| {
-                FloquetError::Spectrum(format!("symbolic LU of the Radau stages: {e:?}"))
-            })?;
+        // supernodal even where faer's flop ratio would pick the simplicial
+        // LU: the LUs are kept and solved with blocks of columns again and
+        // again, which the supernodes turn into dense block solves (the
+        // chain of pendulums' branch: 92 s -> 82 s, multipliers equal to
+        // 1e-10)
+        let symbolic = factorize_symbolic_lu(
+            pattern.as_ref(),
+            faer::sparse::linalg::lu::LuSymbolicParams {
+                supernodal_flop_ratio_threshold:
+                    faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
+                ..Default::default()
+            },
+        )
+        .map_err(|e| FloquetError::Spectrum(format!("symbolic LU of the Radau stages: {e:?}")))?;
         let b = hb.prob.b_values();
         // the steps are independent: factored on the pool's threads, each
         // with its own scratch (the same arithmetic, so the same bits, on
@@ -302,6 +312,21 @@ pub fn floquet_by_monodromy(
         multipliers,
         unstable,
     })
+}
+
+/// The multipliers of the orbit `c` at `omega` again by the monodromy map
+/// with twice [`default_steps`], and their [`Floquet::distance`] from
+/// `floquet` (the orbit's multipliers as the branch has them): returns the
+/// steps and the distance.
+pub fn check_multipliers(
+    hb: &HarmonicBalance<'_>,
+    c: &[f64],
+    omega: f64,
+    floquet: &Floquet,
+) -> Result<(usize, f64), FloquetError> {
+    let steps = 2 * default_steps(hb);
+    let again = floquet_by_monodromy(hb, c, omega, Some(steps))?;
+    Ok((steps, floquet.distance(&again)))
 }
 
 /// Columns of the first block of [`dominant_multipliers`].

@@ -29,7 +29,7 @@ pub enum Parameter {
 impl HarmonicBalance<'_> {
     /// Physical coefficients and frequency of the scaled unknowns `u`, with
     /// the forcing amplitude set from `u` when it is the parameter.
-    fn load(&mut self, u: &[f64]) -> (Vec<f64>, f64) {
+    pub(super) fn load(&mut self, u: &[f64]) -> (Vec<f64>, f64) {
         if let Parameter::Amplitude { .. } = self.parameter {
             self.set_epsilon(u[self.n_coefficients()] * self.epsilon_scale);
         }

@@ -233,7 +233,9 @@ where
     }
     let at = orbits_at(&mut hb, &points, &settings.points_at, cs, &reader, number);
     Ok(Seeded::Branch(
-        Box::new(ReferenceBranch::traced(&hb, orbits, events, stop, at)),
+        Box::new(ReferenceBranch::traced(
+            &mut hb, &points, orbits, events, stop, at,
+        )),
         Path::of(m, &points),
         if m == 1 { doublings } else { Vec::new() },
     ))
