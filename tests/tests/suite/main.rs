@@ -1,0 +1,36 @@
+//! The workspace's integration tests, one module per subject, linked into one
+//! test binary (one link of the engine instead of one per file).
+//!
+//! Run one subject with `cargo test --release -p ssm-tests --test suite fuzz::`.
+
+mod accuracy;
+mod continuation;
+mod crank_drive;
+mod divider;
+mod docs;
+mod frc;
+mod fuzz;
+mod hht;
+mod limits;
+mod model_files;
+mod monodromy;
+mod nar;
+mod nar_models;
+mod outputs;
+mod pendulum;
+mod periodic;
+mod plugin_boundary;
+mod pod;
+mod pod_chain;
+mod pod_report;
+mod recast;
+mod reducers;
+mod reference_branches;
+mod reference_resume;
+mod robustness;
+mod scenes;
+mod shaw_pierre;
+mod simulate;
+mod spectrum;
+mod ssm_autonomous;
+mod validation;
