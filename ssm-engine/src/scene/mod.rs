@@ -3,7 +3,7 @@
 //! are rejected; every error names the file, the line and the key.
 //!
 //! The format, annotated ([`FORMAT`]: the one source of this text, also shown
-//! by `ssm-engine --help` and in the README; a test keeps them equal):
+//! by `ssm-engine --help` and in `docs/scenes.md`; a test keeps them equal):
 #![doc = concat!("```toml\n", include_str!("format.toml"), "```")]
 
 use std::ops::Range;
@@ -29,7 +29,7 @@ pub use simulate::{SimulateRun, SimulateSection, MAX_SAMPLES};
 pub use validate::{ReportSection, SteadyStart, SteadyStateSection, ValidateSection};
 
 /// The annotated scene format, every section and key with its default: the
-/// one source of the format's documentation (module docs, `--help`, README).
+/// one source of the format's documentation (module docs, `--help`, `docs/scenes.md`).
 pub const FORMAT: &str = include_str!("format.toml");
 
 /// A number or a list of numbers in a scene.
