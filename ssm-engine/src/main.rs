@@ -421,6 +421,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 }
 
 fn main() -> ExitCode {
+    // A write beyond the file-size limit (`ulimit -f`, a quota) fails with
+    // EFBIG, reported as a typed output error, instead of killing the
+    // process with SIGXFSZ half-way through a result set.
+    // SAFETY: setting a signal's disposition to SIG_IGN at start-up, before
+    // any thread exists, has no handler that could race.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,

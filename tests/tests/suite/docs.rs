@@ -284,3 +284,23 @@ fn the_figure_check_sees_figures_and_citations() {
     assert!(resolve("docs::units").is_err());
     assert!(resolve("docs::no_such_test").is_err());
 }
+
+/// `.ci/run` runs the README's test command, as written there.
+#[test]
+fn ci_runs_the_readme_test_command() {
+    let readme = std::fs::read_to_string(repo_root().join("README.md")).expect("README.md");
+    let after = readme
+        .split_once("Run the tests")
+        .expect("README says how to run the tests")
+        .1;
+    let block = after
+        .split_once("```sh\n")
+        .and_then(|(_, b)| b.split_once("\n```"))
+        .expect("a sh block with the test command")
+        .0;
+    let ci = std::fs::read_to_string(repo_root().join(".ci/run")).expect(".ci/run");
+    assert!(
+        ci.lines().any(|l| l.trim() == block.trim()),
+        ".ci/run does not run the README's test command `{block}`"
+    );
+}

@@ -3,7 +3,9 @@
 //! plugins. Every case runs in a forked process with a time limit, so a panic,
 //! an abort (out of memory, stack overflow) or a hang fails the property, not
 //! the test binary. The property: the run ends in `Ok` or a typed error, and
-//! an `Ok` run writes no NaN or infinity into a CSV file.
+//! an `Ok` run writes no NaN or infinity into a CSV file. The other input
+//! surfaces (reference, checkpoints, POD, data files, model folders, plugin
+//! parameters, output directories) are in `fuzz_inputs.rs`.
 //!
 //! The number of cases is proptest's `PROPTEST_CASES` (default below), the
 //! seed fixed unless `PROPTEST_RNG_SEED` is set (so CI is reproducible and a
@@ -11,8 +13,9 @@
 //! further); the
 //! estimated work of a run is capped at a few seconds through
 //! `SSM_TIME_LIMIT_MINUTES`, so CI time stays bounded. Failing inputs that
-//! proptest shrinks are kept by it under `proptest-regressions/`; the cases of
-//! the issue are asserted one by one in `robustness.rs` and `limits.rs`.
+//! proptest shrinks are not persisted (`failure_persistence: None`: CI runs a
+//! clean clone); each failure found is kept as a named regression test in
+//! `robustness.rs` or `limits.rs`.
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -30,13 +33,18 @@ const CASES: u32 = 256;
 /// Milliseconds a single case may take (forked) before it counts as a hang.
 const CASE_TIMEOUT_MS: u32 = 15_000;
 /// The work budget of one run in minutes (the engine refuses larger requests).
-const WORK_MINUTES: &str = "0.05";
+pub(crate) const WORK_MINUTES: &str = "0.05";
 
 fn config() -> Config {
+    config_with(CASES)
+}
+
+/// The shared configuration with `cases` cases unless `PROPTEST_CASES` is set.
+pub(crate) fn config_with(cases: u32) -> Config {
     let cases = std::env::var("PROPTEST_CASES")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(CASES);
+        .unwrap_or(cases);
     // a fixed seed keeps CI reproducible; PROPTEST_RNG_SEED explores others
     let rng_seed = if std::env::var_os("PROPTEST_RNG_SEED").is_some() {
         Config::default().rng_seed
@@ -54,7 +62,7 @@ fn config() -> Config {
 }
 
 /// Numbers a hostile user types.
-const HOSTILE_NUMBERS: [&str; 16] = [
+pub(crate) const HOSTILE_NUMBERS: [&str; 16] = [
     "nan",
     "inf",
     "-inf",
@@ -86,11 +94,12 @@ const HOSTILE_LISTS: [&str; 8] = [
 ];
 
 /// Anything else.
-const HOSTILE_OTHER: [&str; 6] = ["\"\"", "\"dense\"", "{}", "true", "\"x\"", "{ scale = -1 }"];
+pub(crate) const HOSTILE_OTHER: [&str; 6] =
+    ["\"\"", "\"dense\"", "{}", "true", "\"x\"", "{ scale = -1 }"];
 
 /// A hostile value of the same kind as `old` three times in four, else of
 /// any kind.
-fn hostile_value(old: &str, pick: usize) -> &'static str {
+pub(crate) fn hostile_value(old: &str, pick: usize) -> &'static str {
     let old = old.trim();
     let same: &[&str] = if old.starts_with('[') {
         &HOSTILE_LISTS
@@ -132,7 +141,7 @@ const BASE_SCENES: [&str; 5] = [
 ];
 
 /// Every `[table] key` the scene format knows, read from its one source.
-fn format_keys() -> Vec<(String, String)> {
+pub(crate) fn format_keys() -> Vec<(String, String)> {
     let text = std::fs::read_to_string(repo_root().join("ssm-engine/src/scene/format.toml"))
         .expect("format.toml");
     let mut table = String::new();
@@ -151,7 +160,7 @@ fn format_keys() -> Vec<(String, String)> {
 
 /// One edit of a scene's text; the numbers pick lines, keys and values.
 #[derive(Debug, Clone)]
-enum SceneEdit {
+pub(crate) enum SceneEdit {
     /// Replace the value of the `line`-th `key = value` line.
     Value { line: usize, value: usize },
     /// Delete a line.
@@ -164,7 +173,7 @@ enum SceneEdit {
     Truncate { at: usize },
 }
 
-fn scene_edit() -> impl Strategy<Value = SceneEdit> {
+pub(crate) fn scene_edit() -> impl Strategy<Value = SceneEdit> {
     prop_oneof![
         4 => (any::<usize>(), any::<usize>()).prop_map(|(line, value)| SceneEdit::Value { line, value }),
         1 => any::<usize>().prop_map(|line| SceneEdit::Delete { line }),
@@ -174,7 +183,7 @@ fn scene_edit() -> impl Strategy<Value = SceneEdit> {
     ]
 }
 
-fn apply_scene_edit(text: &str, edit: &SceneEdit, keys: &[(String, String)]) -> String {
+pub(crate) fn apply_scene_edit(text: &str, edit: &SceneEdit, keys: &[(String, String)]) -> String {
     let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
     let n = lines.len().max(1);
     match *edit {
@@ -238,7 +247,7 @@ fn apply_scene_edit(text: &str, edit: &SceneEdit, keys: &[(String, String)]) -> 
 }
 
 /// A run that succeeded wrote finite numbers only.
-fn assert_finite_outputs(result: &ssm_engine::pipeline::JobResult) {
+pub(crate) fn assert_finite_outputs(result: &ssm_engine::pipeline::JobResult) {
     for (name, bytes) in &result.outputs.files {
         if !name.ends_with(".csv") {
             continue;
@@ -412,7 +421,11 @@ fn base_model(i: usize) -> Model {
 }
 
 /// Up to the SSM at order 3: validation, spectrum (both paths), master modes.
+/// What each stage returns must be finite: a corrupted model that gets
+/// through validation gets a finite spectrum, finite master modes and a
+/// finite expansion, or a typed error.
 fn analyse(model: Model) {
+    let finite = |z: &num_complex::Complex64| z.re.is_finite() && z.im.is_finite();
     let Ok(sys) = System::from_model("fuzz", model) else {
         return;
     };
@@ -421,15 +434,32 @@ fn analyse(model: Model) {
         let Ok(sp) = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &opts) else {
             continue;
         };
+        assert!(
+            sp.eigenvalues.iter().all(finite),
+            "{method:?}: {:?}",
+            sp.eigenvalues
+        );
         let Ok(masters) = spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit) else {
             continue;
         };
+        for m in &masters {
+            assert!(finite(&m.lambda) && m.right.iter().all(finite) && m.left.iter().all(finite));
+        }
         let others = ssm_mod::non_master(&sp.eigenvalues, &masters);
         let options = ssm_mod::SsmOptions {
             order: 3,
             resonance_tol: 1e-6,
         };
-        let _ = ssm_mod::compute(&sys, &masters, &others, &options);
+        if let Ok(e) = ssm_mod::compute(&sys, &masters, &others, &options) {
+            assert!(
+                e.w.iter().flatten().all(finite),
+                "{method:?}: a W coefficient is not finite"
+            );
+            assert!(
+                e.r.iter().all(|t| finite(&t.coeff)),
+                "{method:?}: an R term is not finite"
+            );
+        }
     }
 }
 
@@ -437,7 +467,8 @@ proptest! {
     #![proptest_config(config())]
 
     /// Plugin model data with up to four corrupted fields is refused with a
-    /// typed error or analysed; nothing panics, aborts or hangs.
+    /// typed error or analysed to finite results; nothing panics, aborts or
+    /// hangs.
     #[test]
     fn corrupted_model_data_is_refused_or_analysed(
         base in 0usize..4,

@@ -10,6 +10,7 @@ mod divider;
 mod docs;
 mod frc;
 mod fuzz;
+mod fuzz_inputs;
 mod hht;
 mod limits;
 mod model_files;
