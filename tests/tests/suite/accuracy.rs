@@ -102,8 +102,9 @@ fn transient_estimates_match_the_full_system_error() {
 /// target, records the orders tried, and its backbone then lies within 1 %
 /// of the exact frequency of the conservative pendulum (elliptic integral;
 /// the damping moves it by about 1e-7) at every point. Asked for rho = 1.2
-/// (2.1 rad, at the edge of convergence), no order up to 15 meets 1 %, the
-/// run says so, and it names the amplitude up to which the target is met.
+/// (2.1 rad, at the edge of convergence), no order meets 1 % (the raising
+/// stops once the estimates no longer improve), the run says so, and it
+/// names the amplitude up to which the target is met.
 #[test]
 fn the_order_is_chosen_from_the_tolerance() {
     let scene = |rho: f64| {

@@ -305,7 +305,12 @@ fn fig6_residual_of_the_leading_order_periodic_ssm() {
 
 /// Steady-state amplitude `max |x|` of the Duffing oscillator
 /// `x'' + 2 zeta x' + x + x^3 = eps cos(Omega t)` (unit frequency and cubic
-/// coefficient) from rest, by RK4 over `4 / zeta` damping times.
+/// coefficient) from rest, by RK4 at 400 steps per period over `16 / zeta`
+/// (the start's transient decays like `exp(-zeta t)`, to 1.1e-7). The maximum
+/// over the last two periods is refined by the parabola through the largest
+/// sample and its neighbours (sampling alone would be up to
+/// `1 - cos(pi / 400) = 3e-5` low; the parabola leaves `O((pi / 400)^4)`).
+/// Its own error is thus about 1e-6 relative.
 fn duffing_steady_state(zeta: f64, eps: f64, omega: f64) -> f64 {
     let f = |t: f64, x: f64, v: f64| -> (f64, f64) {
         (v, eps * (omega * t).cos() - 2.0 * zeta * v - x - x * x * x)
@@ -313,9 +318,9 @@ fn duffing_steady_state(zeta: f64, eps: f64, omega: f64) -> f64 {
     let period = 2.0 * std::f64::consts::PI / omega;
     let steps_per_period = 400;
     let h = period / steps_per_period as f64;
-    let periods = (8.0 / zeta / period).ceil() as usize;
+    let periods = (16.0 / zeta / period).ceil() as usize;
     let (mut t, mut x, mut v) = (0.0, 0.0, 0.0);
-    let mut amp: f64 = 0.0;
+    let mut last = Vec::with_capacity(2 * steps_per_period);
     for p in 0..periods {
         for _ in 0..steps_per_period {
             let (k1x, k1v) = f(t, x, v);
@@ -325,12 +330,16 @@ fn duffing_steady_state(zeta: f64, eps: f64, omega: f64) -> f64 {
             x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
             v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
             t += h;
-            if p + 1 == periods {
-                amp = amp.max(x.abs());
+            if p + 2 >= periods {
+                last.push(x.abs());
             }
         }
     }
-    amp
+    let k = (1..last.len() - 1)
+        .max_by(|&i, &j| last[i].total_cmp(&last[j]))
+        .expect("two periods sampled");
+    let (a, b, c) = (last[k - 1], last[k], last[k + 1]);
+    b + (a - c) * (a - c) / (8.0 * (2.0 * b - a - c))
 }
 
 /// Reference: direct simulation of the Duffing oscillator to steady state
@@ -338,10 +347,10 @@ fn duffing_steady_state(zeta: f64, eps: f64, omega: f64) -> f64 {
 /// 0.2 below the folds, where the O(eps |p|) terms the leading order neglects
 /// matter), the FRC amplitude at frequencies below the bistable region, where
 /// the simulation from rest reaches the same branch, agrees with the
-/// simulation at least twice as well, and within 1e-3, once the
-/// non-autonomous terms up to order 6 are included (measured: 1.9e-3 -> 6.6e-4
-/// at Omega = 0.93, 4.4e-3 -> 3.1e-4 at 0.95, 8.3e-3 -> 7.6e-5 at 0.98; the
-/// simulated maximum is sampled at 400 steps per period, 1e-4 relative).
+/// simulation at least five times as well, and within 5e-4, once the
+/// non-autonomous terms up to order 6 are included (measured: 2.1e-3 ->
+/// 3.5e-4 at Omega = 0.93, 4.3e-3 -> 1.2e-4 at 0.95, 8.2e-3 -> 1.9e-5 at
+/// 0.98; the simulation's own error is about 1e-6).
 #[test]
 fn higher_order_nonautonomous_terms_improve_the_frc() {
     use ssm_engine::rom::frc::ForcedCoefficients;
@@ -400,6 +409,6 @@ fn higher_order_nonautonomous_terms_improve_the_frc() {
         let e0 = ((amp_at(&lead, w) - reference) / reference).abs();
         let e6 = ((amp_at(&high, w) - reference) / reference).abs();
         eprintln!("Omega {w}: simulation {reference:.6}, relative error leading {e0:.2e}, with O(eps p^6) {e6:.2e}");
-        assert!(e6 < e0 / 2.0 && e6 < 1e-3, "Omega {w}: {e6:e} vs {e0:e}");
+        assert!(e6 < e0 / 5.0 && e6 < 5e-4, "Omega {w}: {e6:e} vs {e0:e}");
     }
 }

@@ -482,8 +482,9 @@ fn slider_steady_state(eps: f64, omega: f64) -> (f64, f64, f64) {
 /// resonance ratios are chosen from the frequency range as (1, 3), the
 /// continuation produces one curve per order with folds, and `frc.csv` has a
 /// column per pair amplitude. At Omega = 1.84, below the resonance where the
-/// response is nonlinear (8-9 % below the linear one) but single-valued, the
-/// O(7) curve's stable x1 and phi2 agree to 1 % with the steady state of
+/// response is nonlinear (more than 7 % below the linear one; measured 8.5 %
+/// and 9.6 %) but single-valued, the O(7) curve's stable x1 and phi2 agree
+/// to 0.5 % (measured 0.24 % and 0.06 %) with the steady state of
 /// eq. (44) integrated here (`slider_steady_state`).
 #[test]
 fn zoo_fig11_scene_continues_the_internally_resonant_frc() {
@@ -533,7 +534,7 @@ fn zoo_fig11_scene_continues_the_internally_resonant_frc() {
     let det = a11 * a22 - a12 * a12;
     let (x1_lin, phi2_lin) = ((eps * a22 / det).norm(), (eps * a12 / det).norm());
     assert!(
-        (x1_lin - x1_ref).abs() > 0.05 * x1_ref && (phi2_lin - phi2_ref).abs() > 0.05 * phi2_ref,
+        (x1_lin - x1_ref).abs() > 0.07 * x1_ref && (phi2_lin - phi2_ref).abs() > 0.07 * phi2_ref,
         "eq. (44) at {omega}: {x1_ref}, {phi2_ref}; linear {x1_lin}, {phi2_lin}"
     );
     // the O(7) curve there: stable same-branch segments crossing 1.84
@@ -575,11 +576,11 @@ fn zoo_fig11_scene_continues_the_internally_resonant_frc() {
     // rest is left for the O(7) truncation, which the paper reports converged
     // at O(7) (Sect. 5.2.2, text before eq. (44)).
     assert!(
-        (x1 - x1_ref).abs() < 0.01 * x1_ref,
+        (x1 - x1_ref).abs() < 0.005 * x1_ref,
         "x1: O(7) {x1} vs eq. (44) {x1_ref}"
     );
     assert!(
-        (phi2 - phi2_ref).abs() < 0.01 * phi2_ref,
+        (phi2 - phi2_ref).abs() < 0.005 * phi2_ref,
         "phi2: O(7) {phi2} vs eq. (44) {phi2_ref}"
     );
     let svg = std::fs::read_to_string(out.join("frc.svg")).unwrap();

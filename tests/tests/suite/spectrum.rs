@@ -266,6 +266,7 @@ fn spectrum_and_backbone_do_not_depend_on_units() {
     for w in [3e7, 3e-8, 1e-7] {
         for method in [Method::Dense, Method::Sparse] {
             let p = scaled_polar(w, method);
+            assert_eq!(p.len(), unit.len(), "omega = {w:e}, {method:?}");
             for (k, (a, b)) in p.iter().zip(&unit).enumerate() {
                 assert!(
                     (a - b).norm() <= 1e-8 * unit[0].norm(),

@@ -65,6 +65,7 @@ fn oscillator_polar_form_reproduces_eqs_28_to_30() {
         // reproduced without any fit
         let sp_scaled = ssm_of(&sys, &sp, &[1], 13, Normalization::Scale(s2.sqrt()));
         let ps = polar(&sp_scaled).unwrap();
+        assert_eq!(ps.rho_dot().len(), ra.len());
         for (j, (scaled, unit)) in ps.rho_dot().iter().zip(&ra).enumerate().skip(1) {
             assert!((scaled - unit * s2.powi(j as i32)).abs() < 1e-9 * unit.abs());
         }
