@@ -87,10 +87,11 @@ fn reduce(model: &str, t_end: f64) -> (System, HhtSolution, PodReduction, System
 /// was not trained on (1.5 times the torque plus a fluctuation at
 /// Omega = 30 rad/s, 1.5 s). The acceptance asks for 1 %. The subspace is
 /// exact here (the kinematics keep every coordinate in it), so two HHT runs
-/// on the same steps differ only by their Newton tolerance: below 1e-8 of
-/// the peak (measured 1e-12); where one run halves a step whose Newton
-/// iteration failed, by the HHT discretization error, below 1e-4 (measured
-/// 6.3e-6 on the V8's unseen load).
+/// on the same steps differ only by their Newton tolerance: below 1e-10 of
+/// the peak (measured 3.6e-14 to 1.5e-11); where one run halves a step
+/// whose Newton iteration failed, by the HHT discretization error, below
+/// 1e-4 (no run halves a step at present; at least four of the ten
+/// comparisons must be on equal steps).
 #[test]
 fn crank_drive_pod_finds_the_planes_and_reduces_the_constraints() {
     let mut exact = 0;
@@ -133,9 +134,13 @@ fn crank_drive_pod_finds_the_planes_and_reduces_the_constraints() {
         let other_red = hht(&rsys, 1.5, 30.0, 1.5);
         let e_test = pod_coordinate_error(&other_full, &other_red, red.u.as_ref());
         for (e, a, b) in [(e_train, &train, &same), (e_test, &other_full, &other_red)] {
+            eprintln!(
+                "{label}: coordinate error {e:.2e} (rejected steps {} / {})",
+                a.stats.rejected, b.stats.rejected
+            );
             assert!(e < 1e-4, "{label}: {e:e}");
             if a.stats.rejected == 0 && b.stats.rejected == 0 {
-                assert!(e < 1e-8, "{label}: {e:e} on equal steps");
+                assert!(e < 1e-10, "{label}: {e:e} on equal steps");
                 exact += 1;
             }
         }
@@ -145,11 +150,12 @@ fn crank_drive_pod_finds_the_planes_and_reduces_the_constraints() {
 
 /// The constraint-force caveat of the paper (Sect. 3.5), quantified on the
 /// four-cylinder engine: the reduced reactions `C_q^T L mu_l` agree with
-/// the full ones `C_q^T mu` inside the POD subspace (`U^T` of both to 1e-6
-/// of the peak reaction), while in the full space they miss the reactions
-/// of the removed constraints, the pistons' side thrust against the
-/// cylinder walls, which reaches a fixed fraction of the rod force (about
-/// `r / l`, here measured above 10 % of the peak reaction).
+/// the full ones `C_q^T mu` inside the POD subspace (`U^T` of both to 1e-8
+/// of the peak reaction; measured 2e-10), while in the full space they miss
+/// the reactions of the removed constraints, the pistons' side thrust
+/// against the cylinder walls, which reaches a fixed fraction of the rod
+/// force (about `r / l`): more than 20 % of the peak reaction (measured
+/// 21.8 %).
 #[test]
 fn crank_drive_reduced_reactions_miss_the_side_thrust() {
     let (full, train, red, rsys) = reduce("cylinders = 4", 1.0);
@@ -168,8 +174,13 @@ fn crank_drive_reduced_reactions_miss_the_side_thrust() {
         full_space = full_space.max(diff.norm_max());
         in_subspace = in_subspace.max((red.u.transpose() * &diff).norm_max());
     }
-    assert!(in_subspace < 1e-6 * peak, "{in_subspace:e} of {peak:e}");
-    assert!(full_space > 0.1 * peak, "{full_space:e} of {peak:e}");
+    eprintln!(
+        "reactions: in the subspace {:.2e}, full space {:.3} of the peak",
+        in_subspace / peak,
+        full_space / peak
+    );
+    assert!(in_subspace < 1e-8 * peak, "{in_subspace:e} of {peak:e}");
+    assert!(full_space > 0.2 * peak, "{full_space:e} of {peak:e}");
 }
 
 /// A run in which nothing moves has no POD basis; bad settings and a model

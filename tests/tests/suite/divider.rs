@@ -21,9 +21,13 @@ fn divider_spectrum(params: &str, modes: usize) -> Vec<num_complex::Complex64> {
 }
 
 /// Eqs. (50)-(51): `lambda_{1,2} = -0.04 +- 22.66i`, `lambda_{3,4} = -0.15 +-
-/// 45.34i`, compared to the printed digits (half a unit of the last digit).
+/// 45.34i`, compared to the printed digits (half a unit of the last digit),
+/// for the paper's mesh (N1 = 10, N2 = 14): 146 states (three per free node
+/// of each beam, 72 displacements, their velocities and the joint's two
+/// multipliers).
 #[test]
 fn spectrum_matches_eqs_50_51() {
+    assert_eq!(system("divider", "", "").n_states(), 2 * 3 * (10 + 14) + 2);
     let l = divider_spectrum("", 8);
     let printed = [(-0.04, 22.66), (-0.15, 45.34)];
     for (got, (re, im)) in l.iter().zip(printed) {
@@ -157,36 +161,26 @@ fn frc_branch_points_secondary_branch_and_full_system_steady_states() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-/// Fig. 22 (upper panel), IC1 of eq. (116) on the first mode at radius 50:
-/// the reduced O(7) transient against the 146-state DAE integrated from the
-/// same point of the SSM (Radau IIA). Reference: the full system; tolerance
-/// the scene's accuracy target, 1 % of each output's largest value. The
-/// energy transfer of the paper is checked on the full system itself:
-/// `w_hori_mid` (second mode) starts near zero and grows to a maximum after
-/// the first second before it decays. The run's error estimate bounds the
-/// measured error within a factor 10.
-#[test]
-fn fig22_transient_from_ic1_matches_the_full_system() {
-    let (s, out) = run_zoo_in("divider_fig22_ic1.toml");
+/// A Fig. 22 transient scene run against the 146-state DAE: the summary,
+/// the output folder, and the columns `t` and `w_hori_mid_full` of
+/// `validation.csv`. Every output's relative error
+/// must be at most `tol`, and the time-averaged error lies between the
+/// peak over the samples and the peak's share of the mean square.
+fn fig22_against_the_full_system(
+    scene: &str,
+    tol: f64,
+) -> (serde_json::Value, std::path::PathBuf, [Vec<f64>; 2]) {
+    let (s, out) = run_zoo_in(scene);
     let v = &s["validation"]["transient"];
-    for o in v["outputs"].as_array().unwrap() {
+    let outputs = v["outputs"].as_array().unwrap();
+    assert_eq!(outputs.len(), 2, "{scene}: w_hori_mid and w_vert_mid");
+    for o in outputs {
         let e = o["relative_error"].as_f64().unwrap();
-        eprintln!("Fig. 22 IC1: {} relative error {e:.2e}", o["name"]);
-        assert!(e <= 0.01, "{}: {e}", o["name"]);
+        eprintln!("{scene}: {} relative error {e:.2e}", o["name"]);
+        assert!(e <= tol, "{scene} {}: {e}", o["name"]);
     }
-    // the error estimate of a transient of two pairs (the smaller of the
-    // modal defect and the change from O(5) to O(7); measured 6.2 times the
-    // error, the modal defect alone was 46 times) against the measured
-    // error: an upper estimate, at most ten times the error
-    // the time-averaged error lies between the peak over the samples and
-    // the peak's share of the mean square
     let samples = v["samples"].as_f64().unwrap();
-    for o in v["outputs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .chain(v["multipliers"].as_array().unwrap())
-    {
+    for o in outputs.iter().chain(v["multipliers"].as_array().unwrap()) {
         let (peak, rms) = (
             o["relative_error"].as_f64().unwrap(),
             o["rms_relative_error"].as_f64().unwrap(),
@@ -197,7 +191,48 @@ fn fig22_transient_from_ic1_matches_the_full_system() {
             o["name"]
         );
     }
-    let measured = v["max_relative_error"].as_f64().unwrap();
+    let csv = std::fs::read_to_string(out.join("validation.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let cols: Vec<usize> = ["t", "w_hori_mid_full"]
+        .iter()
+        .map(|c| header.iter().position(|h| h == c).unwrap())
+        .collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), samples as usize);
+    let col = |k: usize| -> Vec<f64> { rows.iter().map(|r| r[cols[k]]).collect() };
+    (s, out, [col(0), col(1)])
+}
+
+/// The largest absolute value of `w` and its index.
+fn peak(w: &[f64]) -> (usize, f64) {
+    w.iter()
+        .enumerate()
+        .map(|(i, x)| (i, x.abs()))
+        .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a })
+}
+
+/// Fig. 22 (upper panel), IC1 of eq. (116) on the first mode at radius 50:
+/// the reduced O(7) transient against the 146-state DAE integrated from the
+/// same point of the SSM (Radau IIA). Reference: the full system; each
+/// output's error at most 0.5 % of its largest value (half the scene's 1 %
+/// accuracy target). The energy transfer of the paper is checked on the
+/// full system itself: `w_hori_mid` (second mode) starts near zero, grows
+/// to its maximum between 2.5 and 3.1 s and has decayed to below half of it
+/// over the last second. The run's error estimate bounds the measured
+/// error within a factor 10.
+#[test]
+fn fig22_transient_from_ic1_matches_the_full_system() {
+    let (s, out, [t, w]) = fig22_against_the_full_system("divider_fig22_ic1.toml", 5e-3);
+    // the error estimate of a transient of two pairs (the smaller of the
+    // modal defect and the change from O(5) to O(7); measured 6.2 times the
+    // error, the modal defect alone was 46 times) against the measured
+    // error: an upper estimate, at most ten times the error
+    let measured = s["validation"]["transient"]["max_relative_error"]
+        .as_f64()
+        .unwrap();
     let estimate = s["accuracy"]["answers"]
         .as_array()
         .unwrap()
@@ -210,30 +245,32 @@ fn fig22_transient_from_ic1_matches_the_full_system() {
         (1.0..=10.0).contains(&(estimate / measured)),
         "estimate {estimate:.3e} against the full system's {measured:.3e}"
     );
-    let csv = std::fs::read_to_string(out.join("validation.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = header.iter().position(|h| *h == "w_hori_mid_full").unwrap();
-    let w: Vec<f64> = lines
-        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
-        .collect();
-    // samples every 0.01 s: starts near zero, peaks after the first second,
-    // has decayed over the last second
-    let (at, top) = w
-        .iter()
-        .enumerate()
-        .map(|(i, x)| (i, x.abs()))
-        .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    let (at, top) = peak(&w);
     let last = w[w.len() - 100..]
         .iter()
         .map(|x| x.abs())
         .fold(0.0, f64::max);
+    eprintln!("Fig. 22 IC1: w_hori_mid peaks at t = {}", t[at]);
     assert!(
-        w[0].abs() < 0.05 * top && at > 100 && last < 0.5 * top,
-        "no energy transfer: start {}, max {top} at sample {at}, last second {last}",
-        w[0]
+        w[0].abs() < 0.05 * top && (2.5..=3.1).contains(&t[at]) && last < 0.5 * top,
+        "no energy transfer: start {}, max {top} at t = {}, last second {last}",
+        w[0],
+        t[at]
     );
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The plugin refuses more than 4,000 elements per beam with the reason (the
+/// pencil's condition grows as the fourth power of the elements per beam,
+/// beyond which the eigenvalues lose their digits in double precision).
+#[test]
+fn more_than_4000_elements_per_beam_are_refused() {
+    let plugin = ssm_engine::model::plugin::Plugin::load(&ssm_tests::plugin_path("divider"))
+        .expect("divider plugin");
+    for params in ["n1 = 4001", "n2 = 4001"] {
+        let e = plugin.build_model("", params).unwrap_err().to_string();
+        assert!(e.contains("between 1 and 4000"), "{params}: {e}");
+    }
 }
 
 /// The first two frequencies converge under mesh refinement (N1, N2) = k (10,
@@ -290,7 +327,7 @@ fn dense_path_failure_on_the_stiff_pencil_points_to_the_sparse_path() {
 /// its first three bending frequencies `|lambda_k|` against the
 /// Euler-Bernoulli closed form `omega_k = (beta_k L)^2 / L^2 sqrt(E h^2 /
 /// (12 rho))`, `beta_k L = 4.7300407, 7.8532046, 10.9956078` (clamped-clamped
-/// roots of `cos x cosh x = 1`), to 2e-5, 1e-4 and 4e-4 with 16 elements
+/// roots of `cos x cosh x = 1`), to 1e-5, 6e-5 and 2.5e-4 with 16 elements
 /// (measured 5.3e-6, 4.0e-5, 1.5e-4); each error falls at
 /// least eightfold from 8 to 16 elements (cubic Hermite elements converge at
 /// least as h^3 in frequency).
@@ -323,8 +360,13 @@ fn beam_frequencies_match_euler_bernoulli() {
             .collect()
     };
     let (coarse, fine) = (errors(8), errors(16));
+    eprintln!("beam: relative errors {coarse:?} (8 elements), {fine:?} (16)");
     for k in 0..3 {
-        assert!(fine[k] < [2e-5, 1e-4, 4e-4][k], "mode {}: {fine:?}", k + 1);
+        assert!(
+            fine[k] < [1e-5, 6e-5, 2.5e-4][k],
+            "mode {}: {fine:?}",
+            k + 1
+        );
         assert!(
             coarse[k] > 8.0 * fine[k],
             "mode {}: {coarse:?} -> {fine:?}",

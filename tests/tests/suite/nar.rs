@@ -102,8 +102,8 @@ fn model_backbone(order: usize, rho_max: f64) -> (Vec<(f64, f64)>, Option<f64>) 
 /// `zeta_1 = c / (2 sqrt(k0))`, `zeta_2 = sqrt(3) c / (2 sqrt(k0))`.
 /// Noise-free data, 2 nu = 4, order 9 (truncated SVD at 1e-14), residuals
 /// weighted by `1/|xi|^2` (delay vectors below 1e-5 of the largest left out):
-/// frequencies to 1e-9 relative (measured 4e-11, 6e-11), damping ratios to
-/// 1e-6 (measured 9e-9, 3.3e-7). A damping ratio of 1.5e-3 turns a multiplier
+/// frequencies to 1e-10 relative (measured 4.0e-11, 6.2e-11), damping ratios
+/// to 5e-7 (measured 9.0e-9, 3.3e-7). A damping ratio of 1.5e-3 turns a multiplier
 /// error `d` into `d / (zeta omega T) ~ 800 d` of itself, so the damping
 /// needs the linear part 1000 times better than the frequency does. What
 /// limits it is the map's truncation at the data's largest amplitude
@@ -134,8 +134,9 @@ fn shaw_pierre_linear_figures_from_noise_free_data() {
         format!("nu = 2\norder = 9\nweighting = \"relative\"\nweight_power = {power}\nfloor = 1e-5\nrcond = 1e-14")
     };
     let (ew, ez, q) = errors(&settings(2), 9);
-    assert!(ew.iter().all(|e| *e < 1e-9), "frequencies: {ew:?}");
-    assert!(ez.iter().all(|e| *e < 1e-6), "damping ratios: {ez:?}");
+    eprintln!("frequencies {ew:?}, damping ratios {ez:?}");
+    assert!(ew.iter().all(|e| *e < 1e-10), "frequencies: {ew:?}");
+    assert!(ez.iter().all(|e| *e < 5e-7), "damping ratios: {ez:?}");
     // eq. (5.10): sigma(E_1) = Int[3 zeta_2 omega_2... ] = 3, sigma(E_2) = 0
     assert_eq!(q, vec![3.0, 0.0]);
     let (_, ez1, _) = errors(&settings(1), 9);
@@ -207,7 +208,8 @@ fn map_backbone_error_estimate_tracks_the_truncation_error() {
 /// Reference: the engine's model-based SSM backbone of (9.1) (pair 1, O(7),
 /// amplitude of x1'), over the amplitudes where its own error estimate meets
 /// 1 %: the backbone of the identified map (2 nu = 4, order 5 and 7) agrees
-/// within 1 % of the frequency, and the order-7 fit is closer than the
+/// within 1 % of the frequency at order 5 (measured 3.8e-3) and 3e-3 at
+/// order 7 (measured 2.0e-3), and the order-7 fit is closer than the
 /// order-5 one. At small amplitude both follow the closed form of Sect. 9a,
 /// `omega = omega_d + 3 kappa A^2 / 16` (A the amplitude of x1, which equals
 /// that of x1' to leading order), at A <= 0.1 (the shift measured from the
@@ -227,19 +229,25 @@ fn shaw_pierre_backbone_from_data_matches_the_model_based_one() {
         .fold(0.0, f64::max);
     assert!(amp_max > 0.5, "model-based backbone trusted to {amp_max}");
     let mut worst_by_order = Vec::new();
-    for (order, closed_tol) in [(5usize, 0.05), (7, 0.01)] {
+    for (order, closed_tol, gap_tol) in [(5usize, 0.05, 1e-2), (7, 0.01, 3e-3)] {
         let params = format!("nu = 2\norder = {order}\nweighting = \"relative\"\nfloor = 1e-8");
         let (_, csv) = identify(files, &params, order, 0.8);
         let id = curve(&csv, order);
         let mut worst = 0.0f64;
+        let mut compared = 0;
         for &(amp, w) in id.iter().filter(|p| p.0 > 0.0 && p.0 <= amp_max) {
             let wm = omega_at(&model, amp).unwrap();
             worst = worst.max(((w - wm) / wm).abs());
+            compared += 1;
         }
-        assert!(worst < 0.01, "order {order}: worst relative gap {worst}");
+        eprintln!("order {order}: worst relative gap {worst:.2e} over {compared} points");
+        assert!(compared >= 5, "order {order}: {compared} points compared");
+        assert!(worst < gap_tol, "order {order}: worst relative gap {worst}");
         // the small-amplitude closed form, from the identified linear frequency
         let w_d = id[0].1;
         assert!((w_d - (1.0 - C * C / 4.0).sqrt()).abs() < 1e-4, "{w_d}");
+        let small = id.iter().filter(|p| p.0 > 0.0 && p.0 <= 0.1).count();
+        assert!(small >= 3, "order {order}: {small} points at A <= 0.1");
         for &(amp, w) in id.iter().filter(|p| p.0 > 0.0 && p.0 <= 0.1) {
             let shift = w - w_d;
             let closed = 3.0 * KAPPA * amp * amp / 16.0;
@@ -291,10 +299,13 @@ fn shaw_pierre_backbone_degrades_smoothly_with_noise() {
         );
         let id = curve(&csv, 5);
         let mut worst = 0.0f64;
+        let mut compared = 0;
         for &(amp, w) in id.iter().filter(|p| p.0 > 0.0 && p.0 <= 0.4) {
             let wm = omega_at(&model, amp).unwrap();
             worst = worst.max(((w - wm) / wm).abs());
+            compared += 1;
         }
+        assert!(compared >= 5, "noise {level}: {compared} points compared");
         assert!(worst.is_finite());
         eprintln!(
             "noise {level}: backbone gap {worst:.3e}, residual {:?}",
@@ -524,8 +535,8 @@ fn zoo_scenes_identify_the_first_pair() {
 /// Fig. 4's independent backbones: the zero-crossing and Hilbert backbones
 /// read off the first decaying signal (`data_backbone.csv`, drawn into
 /// `backbone.svg`) agree with the engine's model-based O(7) SSM backbone of
-/// (9.1) within 1 % of the frequency at amplitudes 0.05 to 0.3 of x1'
-/// (measured 5e-3; above, the second mode's decaying remainder in a signal
+/// (9.1) within 7e-3 of the frequency at amplitudes 0.05 to 0.3 of x1'
+/// (measured 4.7e-3; above, the second mode's decaying remainder in a signal
 /// started in the linear modal subspace makes them oscillate by up to 2 %).
 /// The second signal's points near omega_2 are left out of the overlay.
 #[test]
@@ -535,16 +546,19 @@ fn data_backbones_match_the_model_based_one() {
     let r = identify_run(files, "nu = 2\norder = 5", 5, 0.5, 1);
     let csv = String::from_utf8(r.outputs.get("data_backbone.csv").unwrap().to_vec()).unwrap();
     let mut checked = [0usize; 2];
+    let mut worst = 0.0f64;
     for line in csv.lines().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
         let (amp, w): (f64, f64) = (f[2].parse().unwrap(), f[3].parse().unwrap());
         assert!((w - 1.0).abs() < 0.25, "{line}: a point far from omega_1");
         if f[1].ends_with("simulation_1.csv") && (0.05..=0.3).contains(&amp) {
             let wm = omega_at(&model, amp).unwrap();
-            assert!(((w - wm) / wm).abs() < 0.01, "{line}: model {wm}");
+            worst = worst.max(((w - wm) / wm).abs());
+            assert!(((w - wm) / wm).abs() < 7e-3, "{line}: model {wm}");
             checked[usize::from(f[0] == "hilbert")] += 1;
         }
     }
+    eprintln!("data backbones: worst relative gap {worst:.2e}");
     assert!(checked[0] > 100 && checked[1] > 100, "{checked:?}");
     let svg = String::from_utf8(r.outputs.get("backbone.svg").unwrap().to_vec()).unwrap();
     assert!(svg.contains("zero crossings of simulation_1.csv") && svg.contains("hilbert of"));

@@ -4,12 +4,15 @@
 //! scene on the V8 crank drive (zoo/crank_drive_v8_pod.toml).
 //!
 //! The comparison report is checked for internal consistency: every error
-//! it prints is recomputed from the trajectories it wrote, and the full
-//! model's trajectories it wrote are checked against independent HHT runs.
+//! it prints is recomputed from the trajectories it wrote; the full model's
+//! trajectories it wrote are checked for determinism (a separate call of the
+//! same HHT integrator with the same steps) and against an independent
+//! reference (Radau IIA at a tight tolerance).
 
 use std::path::Path;
 
-use ssm_engine::model::system::OutputMap;
+use ssm_engine::fom::{DaeProblem, Radau, RadauOptions};
+use ssm_engine::model::system::{OutputMap, System};
 use ssm_tests::{hht_from_rest, model_and_system, run_zoo_in, scene_error};
 
 /// A CSV file: its header and its rows of fields.
@@ -37,12 +40,60 @@ fn same(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-300)
 }
 
+/// The outputs `outputs` of `sys` forced with `eps`, `omega` from rest, at
+/// the times `times`: Radau IIA (rtol 1e-7, atol 1e-9) with its dense
+/// output, an integrator independent of HHT (its error is orders below the
+/// HHT error compared with).
+fn radau_outputs(
+    sys: &System,
+    eps: f64,
+    omega: f64,
+    times: &[f64],
+    outputs: &[&OutputMap],
+) -> Vec<Vec<f64>> {
+    let p = DaeProblem::new(sys, eps, omega);
+    let z0 = vec![0.0; sys.states.len()];
+    let t_end = times.last().copied().expect("a run has samples");
+    let opts = RadauOptions {
+        rtol: 1e-7,
+        atol: 1e-9,
+        ..RadauOptions::default()
+    };
+    let mut radau = Radau::new(&p, 0.0, &z0, t_end, opts).expect("Radau starts");
+    let mut z = vec![0.0; z0.len()];
+    let mut rows = Vec::with_capacity(times.len());
+    let output = |z: &[f64]| -> Vec<f64> {
+        outputs
+            .iter()
+            .map(|o| o.weights.iter().map(|&(s, w)| w * z[s]).sum())
+            .collect()
+    };
+    for &t in times {
+        if t <= 0.0 {
+            rows.push(output(&z0));
+            continue;
+        }
+        while radau.t() < t {
+            radau.step(t_end).expect("Radau step");
+        }
+        radau.dense(t, &mut z);
+        rows.push(output(&z));
+    }
+    rows
+}
+
 /// Reference: the report's own trajectories (`pod_case_<k>.csv`, 17
-/// digits) and independent HHT runs of the full chain (alpha = -0.1,
-/// h = 0.01, from rest: `ssm_tests::hht_from_rest`).
+/// digits); a determinism check against a separate HHT run of the full
+/// chain (`ssm_tests::hht_from_rest`: the same integrator, alpha = -0.1,
+/// h = 0.01, from rest); and an independent reference, Radau IIA of the
+/// full chain at rtol 1e-7.
 ///
 /// - The full model's outputs written for the two forced loads equal the
-///   independent runs to 1e-12 of their peaks (same integrator, same steps).
+///   separate HHT runs to 1e-12 of their peaks (determinism: same
+///   integrator, same steps), and Radau's outputs to the HHT step's
+///   second-order discretization error, 3e-3 of their peaks (the HHT error
+///   on this chain is 6e-4 of the peak at h = 0.01 over 10 s, tests/hht.rs;
+///   these runs are 30 s long and forced at resonance; measured 2.0e-3).
 /// - Every model's error series `e(t) = max_o |y_o - y_o,full| / max_t
 ///   |y_o,full|`, its maximum and its maximum over the second half, are
 ///   recomputed from the written outputs and agree with `error@<id>` and
@@ -53,8 +104,8 @@ fn same(a: f64, b: f64, tol: f64) -> bool {
 ///   more accurate than the smaller on every load, within 1 % on the
 ///   forced loads (trained and unseen; measured 0.53 % and 0.56 %); the
 ///   4-D SSM is more accurate than the 2-D one over the second half of the
-///   forced runs (measured 1.2 % against 4.1 % at Omega = 2), and both SSM
-///   models run more than 10 times faster than the full model.
+///   forced runs (measured 1.2 % against 4.1 % at Omega = 2). Speed is the
+///   bench's (`cargo bench -p ssm-benches --bench pod`), never a test's.
 #[test]
 fn chain_comparison_report_is_consistent_with_the_full_runs() {
     let (summary, out) = run_zoo_in("pendulum_chain_pod.toml");
@@ -98,6 +149,16 @@ fn chain_comparison_report_is_consistent_with_the_full_runs() {
                     assert!(d <= 1e-12 * peaks[o], "case {case} row {j}: {d:e}");
                 }
             }
+            let radau = radau_outputs(&full, 0.6, omega, &t, &outputs);
+            let mut worst = [0.0f64; 2];
+            for (j, y) in radau.iter().enumerate() {
+                for o in 0..2 {
+                    let d = (y[o] - data[j][full_cols[o]]).abs() / peaks[o];
+                    worst[o] = worst[o].max(d);
+                }
+            }
+            eprintln!("case {case}: full HHT outputs against Radau {worst:?} of the peaks");
+            assert!(worst.iter().all(|&d| d <= 3e-3), "case {case}: {worst:?}");
         }
         let half = t.last().copied().unwrap() * 0.5;
         for (m, id) in ids.iter().enumerate() {
@@ -155,9 +216,6 @@ fn chain_comparison_report_is_consistent_with_the_full_runs() {
             figure(case, 3, "late_error") < figure(case, 2, "late_error"),
             "case {case}: the 4-D SSM must beat the 2-D one"
         );
-        for id in [2, 3] {
-            assert!(figure(case, id, "speedup") > 10.0, "case {case} model {id}");
-        }
     }
     // the POV decay and the constraints removed are reported
     let pods = &summary["pod"]["pod_models"];
@@ -172,10 +230,11 @@ fn chain_comparison_report_is_consistent_with_the_full_runs() {
 /// its kinematics (tests/crank_drive.rs): the motion is planar, 6 POMs
 /// (crank direction pair and the piston directions), the 26 constraints
 /// reduce to 5 plus one per piston direction, and the reduced model takes
-/// the same steps as the full one, so its strokes agree to 1e-8 of their
-/// peaks on the training and the unseen load; the reactions inside the POD
-/// subspace agree to 1e-6 while the full-space gap (the pistons' side
-/// thrust) exceeds 10 %.
+/// the same steps as the full one, so its strokes agree to 1e-10 of their
+/// peaks on the training and the unseen load (measured 2.1e-13, 3.6e-12);
+/// the reactions inside the POD subspace agree to 1e-8 (measured 3.4e-10)
+/// while the full-space gap (the pistons' side thrust, about `r / l` of the
+/// rod force) exceeds 20 % (measured 21 %).
 #[test]
 fn crank_drive_scene_runs_pod_alone() {
     let (summary, out) = run_zoo_in("crank_drive_v8_pod.toml");
@@ -189,12 +248,12 @@ fn crank_drive_scene_runs_pod_alone() {
     assert_eq!(total - removed, 5, "|u| = 1 and the piston directions");
     for case in pod["cases"].as_array().unwrap() {
         let run = &case["runs"][0];
-        assert!(run["max_error"].as_f64().unwrap() < 1e-8, "{run}");
+        assert!(run["max_error"].as_f64().unwrap() < 1e-10, "{run}");
         assert!(
-            run["reaction_gap_subspace"].as_f64().unwrap() < 1e-6,
+            run["reaction_gap_subspace"].as_f64().unwrap() < 1e-8,
             "{run}"
         );
-        assert!(run["reaction_gap"].as_f64().unwrap() > 0.1, "{run}");
+        assert!(run["reaction_gap"].as_f64().unwrap() > 0.2, "{run}");
     }
     assert!(!out.join("spectrum.csv").exists());
     let _ = std::fs::remove_dir_all(&out);
@@ -277,7 +336,7 @@ const ENGINE_POD: &str =
 /// (405 states, same sparse spectrum settings). A Galerkin projection on a
 /// subspace that holds the mode to within `d` moves its eigenvalue by
 /// `O(d^2)`; the trained subspace holds the resonant motion to 0.5 %
-/// (tests above), so the eigenvalue must agree to 1e-4 relative (measured
+/// (tests above), so the eigenvalue must agree to 1e-5 relative (measured
 /// 1.1e-6).
 #[test]
 fn engine_pod_reducer_feeds_the_ssm_stages() {
@@ -286,7 +345,7 @@ fn engine_pod_reducer_feeds_the_ssm_stages() {
     assert_eq!(pod.system.n_states(), 109);
     let (lf, lp) = (full.masters[0].lambda, pod.masters[0].lambda);
     eprintln!("full {lf}, POD {lp}: {:.2e}", (lf - lp).norm() / lf.norm());
-    assert!((lf - lp).norm() < 1e-4 * lf.norm(), "{lf} vs {lp}");
+    assert!((lf - lp).norm() < 1e-5 * lf.norm(), "{lf} vs {lp}");
     assert!(pod.ssm.as_ref().is_some_and(|s| s.order == 5));
     let bad = [
         (
