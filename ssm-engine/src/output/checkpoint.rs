@@ -21,16 +21,24 @@
 use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
 use std::fs::{File, OpenOptions};
-use std::io::{Read, Seek, SeekFrom, Write};
+use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
+
+use ssm_model_files::input::{InputError, InputFile, Limit};
 
 use crate::continuation::{Event, Ledger, Point, Step, Stop, Trace};
 use crate::fom::periodic::OrbitInfo;
 
 /// Version of the file's layout.
 const FORMAT: u32 = 1;
+
+/// The largest checkpoint read (it is read whole): 1 GiB.
+pub const LIMIT: Limit = Limit {
+    bytes: 1 << 30,
+    what: "a reference checkpoint",
+};
 
 /// Why a checkpoint cannot be resumed from.
 #[derive(Debug, thiserror::Error)]
@@ -57,12 +65,10 @@ pub enum CheckpointError {
         /// The file.
         path: PathBuf,
     },
-    /// The path is a link or not a file.
-    #[error("checkpoint {path} is not a regular file (a link or a directory): refusing to resume from it")]
-    NotAFile {
-        /// The path.
-        path: PathBuf,
-    },
+    /// The path is not a regular file of its own (a symbolic or hard link,
+    /// a FIFO, a directory), or it is too large ([`LIMIT`]).
+    #[error("cannot resume from the checkpoint: {0}")]
+    Input(InputError),
     /// A line does not read, or records are out of order.
     #[error("checkpoint {path}, line {line}: {cause} (the file is damaged: run without --resume)")]
     Damaged {
@@ -183,26 +189,17 @@ impl Checkpoint {
             path: path.to_owned(),
             source,
         };
-        let meta = match std::fs::symlink_metadata(path) {
-            Ok(m) => m,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+        // a file of its own: never written through a link to another name
+        let mut input = match InputFile::open_own(path, LIMIT) {
+            Ok(f) => f,
+            Err(InputError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
                 return Err(CheckpointError::Missing {
                     path: path.to_owned(),
                 })
             }
-            Err(e) => return Err(io(e)),
+            Err(e) => return Err(CheckpointError::Input(e)),
         };
-        if !meta.file_type().is_file() {
-            return Err(CheckpointError::NotAFile {
-                path: path.to_owned(),
-            });
-        }
-        let mut file = OpenOptions::new()
-            .read(true)
-            .write(true)
-            .open(path)
-            .map_err(io)?;
-        match file.try_lock() {
+        match input.file().try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
                 return Err(CheckpointError::Busy {
@@ -211,13 +208,15 @@ impl Checkpoint {
             }
             Err(std::fs::TryLockError::Error(e)) => return Err(io(e)),
         }
-        let mut text = String::new();
-        file.read_to_string(&mut text).map_err(io)?;
+        let text = input.read_text().map_err(CheckpointError::Input)?;
+        let mut file = input.into_file();
+        // a byte-order mark the reading skipped stays in front
+        let skipped = file.metadata().map_err(io)?.len() - text.len() as u64;
         let expected = header(scene_name, scene_text);
         let (kept, complete) = parse(path, &text, &expected)?;
         // a line cut short by the stop is dropped; the new records follow
         // the last whole one
-        file.set_len(complete as u64).map_err(io)?;
+        file.set_len(skipped + complete as u64).map_err(io)?;
         file.seek(SeekFrom::End(0)).map_err(io)?;
         if complete == 0 {
             // stopped before its header was whole: nothing kept

@@ -11,6 +11,7 @@ mod docs;
 mod frc;
 mod fuzz;
 mod hht;
+mod inputs;
 mod limits;
 mod model_files;
 mod monodromy;

@@ -9,6 +9,7 @@ use ssm_engine::fom::periodic::{
 };
 use ssm_engine::model::system::{OutputMap, System};
 use ssm_engine::output::checkpoint::{Checkpoint, CheckpointError};
+use ssm_model_files::input::InputError;
 use ssm_tests::{duffing_orbits, forced_duffing, parametric_pump};
 
 /// The branch with its cost counters zeroed (a resumed run factors less).
@@ -234,7 +235,10 @@ fn checkpoints_from_elsewhere_are_refused() {
     let link: PathBuf = dir.join("link.jsonl");
     std::os::unix::fs::symlink(&path, &link).expect("link");
     let e = refused(&link, "pump", "text");
-    assert!(matches!(e, CheckpointError::NotAFile { .. }), "{e}");
+    assert!(
+        matches!(e, CheckpointError::Input(InputError::NotAFile { .. })),
+        "{e}"
+    );
 
     let holder = Checkpoint::resume(&path, "pump", "text").expect("first resume");
     let e = refused(&path, "pump", "text");
