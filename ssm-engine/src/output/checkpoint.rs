@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use ssm_model_files::input::{InputError, InputFile, Limit};
 
-use crate::continuation::{Event, Ledger, Point, Step, Stop, Trace};
+use crate::continuation::{crossed, Event, Ledger, Point, Step, Stop, Trace};
 use crate::fom::periodic::OrbitInfo;
 
 /// Version of the file's layout.
@@ -357,6 +357,36 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
+/// `Ok` when `events` are what a continuation locates on the step from the
+/// end of `trace` to `point`: each a change on that step ([`crossed`]), once,
+/// after the trace's last point.
+fn check_events(
+    trace: &Trace<OrbitInfo>,
+    point: &Point<OrbitInfo>,
+    events: &[Event<OrbitInfo>],
+) -> Result<(), String> {
+    let Some(last) = trace.points.last() else {
+        return Err("a step of a run without a start".into());
+    };
+    let found = crossed(last, point);
+    let after = trace.points.len() - 1;
+    for (j, e) in events.iter().enumerate() {
+        if !found.contains(&e.kind) {
+            return Err(format!(
+                "event {:?}, which is not a change on this step (its changes: {found:?})",
+                e.kind
+            ));
+        }
+        if events[..j].iter().any(|f| f.kind == e.kind) || e.after != after {
+            return Err(format!(
+                "event {:?} repeated, or not after point {after}",
+                e.kind
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The runs kept in `text` and the length of its whole lines; the header
 /// must be `expected`.
 fn parse(
@@ -426,6 +456,13 @@ fn parse(
                         format!("a step of run {run} whose sizes or step size do not fit its run"),
                     ));
                 }
+                // what is cheap to recompute is recomputed: the unstable
+                // count and test functions from the multipliers
+                for p in points {
+                    if let Some(why) = p.monitor.info.restored_inconsistency(&p.monitor.tests) {
+                        return Err(damaged(number, format!("a point of run {run}: {why}")));
+                    }
+                }
                 if run == open + 1 && steps == 0 && events.is_empty() {
                     kept.push_back((
                         Trace {
@@ -453,6 +490,8 @@ fn parse(
                         ),
                     ));
                 }
+                check_events(trace, &point, &events)
+                    .map_err(|why| damaged(number, format!("step {steps} of run {run}: {why}")))?;
                 trace.points.push(point);
                 trace.events.extend(events);
                 trace.h = h;

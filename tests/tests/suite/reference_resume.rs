@@ -264,6 +264,82 @@ fn checkpoints_from_elsewhere_are_refused() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Restored records are checked against what is cheap to recompute, and
+/// each edit is refused with the line it is on (before: each resumed and
+/// exited 0): an unstable count of 3 where the stored multipliers have none
+/// outside the unit circle (before: every restored orbit unstable); a fold
+/// recorded as an event kind no test function has (`Test(7)`, before: two
+/// branch points) or as a test function that does not change on its step.
+/// A checkpoint with a second (hard) link is refused like a symbolic one,
+/// and neither name's contents change (before: truncated and appended
+/// through the link).
+#[test]
+fn restored_records_are_checked_and_hard_links_refused() {
+    let dir = ssm_tests::tmp_dir("resume-checked");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let out = dir.join("out");
+    let path = Checkpoint::default_path(&out);
+    let (sys, settings) = duffing_seeded();
+    let ck = Checkpoint::fresh(&out, "duffing", "text");
+    run(&sys, &settings, &ck).expect("reference");
+    drop(ck);
+    let text = std::fs::read_to_string(&path).expect("checkpoint");
+    let lines: Vec<&str> = text.split_inclusive('\n').collect();
+    let refused_at = |edited: &[String]| {
+        std::fs::write(&path, edited.concat()).expect("write");
+        match Checkpoint::resume(&path, "duffing", "text") {
+            Err(CheckpointError::Damaged { line, cause, .. }) => (line, cause),
+            Err(e) => panic!("expected a damaged line, got {e}"),
+            Ok(_) => panic!("the edited checkpoint resumed"),
+        }
+    };
+    let owned: Vec<String> = lines.iter().map(|l| (*l).to_owned()).collect();
+    let stable = lines
+        .iter()
+        .position(|l| l.contains("\"unstable\":0"))
+        .expect("a stable orbit");
+    let mut edited = owned.clone();
+    edited[stable] = edited[stable].replacen("\"unstable\":0", "\"unstable\":3", 1);
+    let (line, cause) = refused_at(&edited);
+    assert_eq!(line, stable + 1, "{cause}");
+    assert!(cause.contains("3 unstable multipliers stated"), "{cause}");
+
+    let fold = lines
+        .iter()
+        .position(|l| l.contains("\"kind\":\"Fold\""))
+        .expect("a fold");
+    for kind in ["{\"Test\":7}", "{\"Test\":1}"] {
+        let mut edited = owned.clone();
+        edited[fold] = edited[fold].replacen("\"Fold\"", kind, 1);
+        let (line, cause) = refused_at(&edited);
+        assert_eq!(line, fold + 1, "{kind}: {cause}");
+        assert!(
+            cause.contains("not a change on this step"),
+            "{kind}: {cause}"
+        );
+    }
+
+    std::fs::write(&path, &text).expect("restore");
+    let other = dir.join("other.jsonl");
+    std::fs::hard_link(&path, &other).expect("hard link");
+    for p in [&path, &other] {
+        let e = Checkpoint::resume(p, "duffing", "text")
+            .err()
+            .expect("refused");
+        assert!(
+            matches!(
+                e,
+                CheckpointError::Input(InputError::HardLinked { links: 2, .. })
+            ),
+            "{e}"
+        );
+    }
+    assert_eq!(std::fs::read_to_string(&other).expect("other"), text);
+    std::fs::remove_file(&other).expect("unlink");
+    Checkpoint::resume(&path, "duffing", "text").expect("one name again");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Runs the engine on `scene` into `out` with `extra` arguments.
 fn engine(scene: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     std::process::Command::new(ssm_tests::engine_binary())
