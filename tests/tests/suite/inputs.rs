@@ -4,7 +4,7 @@
 //! byte-order mark skipped, right line numbers, short escaped excerpts; and a
 //! run never writes its results over one of its own inputs.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -14,7 +14,7 @@ use ssm_engine::reduce::{read_signals, SignalsError};
 use ssm_engine::scene::{SceneError, SceneFile};
 use ssm_model_files::input::{InputError, EXCERPT_CHARS};
 use ssm_model_files::{FileError, ModelFiles};
-use ssm_tests::{engine_binary, tmp_dir};
+use ssm_tests::{engine_binary, repo_root, tmp_dir};
 
 /// A hang guard, not a timing assertion: what a regression would block on
 /// forever fails the test after this long instead.
@@ -298,5 +298,99 @@ fn messages_quote_short_escaped_excerpts() {
         !msg.contains('\0') && msg.contains("line 3") && msg.len() < 400,
         "{msg}"
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The engine at `scene` into `out`; stderr and whether it succeeded.
+fn run_into(scene: &Path, out: &Path) -> (bool, String) {
+    let o = engine_guarded(&[scene.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// The files of `dir`, sorted, with their contents.
+fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut all: Vec<_> = std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| {
+            let p = e.expect("entry").path();
+            let c = std::fs::read(&p).unwrap_or_default();
+            (p, c)
+        })
+        .collect();
+    all.sort();
+    all
+}
+
+/// A matrix-model scene whose model folder `mm` was written by `export`
+/// (so it carries the result-set marker), run with `--out mm`, and the NAR
+/// scene run with `--out` at the `[simulate]` result set whose
+/// `simulation_*.csv` it reads, are refused before anything is computed,
+/// with an error naming the input, and leave the folders as they were
+/// (before: `M.mtx`, `K.mtx`, the CSV files were deleted). So is an
+/// `--out` that holds the scene file, and an export into the folder it
+/// reads.
+#[test]
+fn an_output_directory_holding_an_input_is_refused() {
+    let dir = tmp_dir("inputs-out");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let mm = dir.join("mm");
+    let o = Command::new(engine_binary())
+        .arg("export")
+        .arg(repo_root().join("zoo/spatial_oscillator_cubic.toml"))
+        .arg(&mm)
+        .output()
+        .expect("export");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(mm.join(".ssm-engine-output").exists() && mm.join("M.mtx").exists());
+    let scene = dir.join("mm.toml");
+    std::fs::write(
+        &scene,
+        "[model]\nplugin = \"matrix-model\"\n[model.params]\ndir = \"mm\"\n[ssm]\nmaster_pairs = [1]\norder = 3\n",
+    )
+    .expect("scene");
+    let before = snapshot(&mm);
+    let (ok, err) = run_into(&scene, &mm);
+    assert!(
+        !ok && err.contains("an input of this run") && err.contains("mm"),
+        "{err}"
+    );
+    assert_eq!(snapshot(&mm), before, "the model folder changed");
+    // the same folder by another spelling
+    let (ok, err) = run_into(&scene, &dir.join("mm/../mm/."));
+    assert!(!ok && err.contains("an input of this run"), "{err}");
+    assert_eq!(snapshot(&mm), before);
+    // an output directory holding the scene (and the model folder)
+    let (ok, err) = run_into(&scene, &dir);
+    assert!(!ok && err.contains("an input of this run"), "{err}");
+    // export into the folder its scene reads
+    let o = Command::new(engine_binary())
+        .arg("export")
+        .arg(&scene)
+        .arg(&mm)
+        .output()
+        .expect("export");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("an input of this run"),
+        "{err}"
+    );
+    assert_eq!(snapshot(&mm), before);
+
+    // a [simulate] result set read as [data]
+    let data = dir.join("data");
+    let mut set = ssm_engine::output::OutputSet::default();
+    set.add("summary.json", "{}");
+    set.add("simulation_1.csv", samples(300));
+    set.write(&data).expect("data set");
+    let nar = dir.join("nar.toml");
+    std::fs::write(&nar, nar_scene(&[&data.join("simulation_1.csv")])).expect("scene");
+    let before = snapshot(&data);
+    let (ok, err) = run_into(&nar, &data);
+    assert!(!ok && err.contains("simulation_1.csv"), "{err}");
+    assert!(err.contains("an input of this run"), "{err}");
+    assert_eq!(snapshot(&data), before, "the data folder changed");
     let _ = std::fs::remove_dir_all(&dir);
 }
