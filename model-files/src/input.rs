@@ -360,9 +360,15 @@ fn special_kind(meta: &Metadata) -> &'static str {
 /// escape sequences, line ends) escaped and `...` where it was cut: user text
 /// safe to quote in a message.
 pub fn excerpt(text: &str) -> String {
+    escaped(text, EXCERPT_CHARS)
+}
+
+/// At most `max_chars` characters of `text`, escaped as by [`excerpt`] (for
+/// a parser's message that quotes the file).
+pub fn escaped(text: &str, max_chars: usize) -> String {
     let mut out = String::new();
     for (i, c) in text.chars().enumerate() {
-        if i == EXCERPT_CHARS {
+        if i == max_chars {
             out.push_str("...");
             break;
         }

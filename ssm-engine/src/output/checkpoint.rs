@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use ssm_model_files::input::{InputError, InputFile, Limit};
+use ssm_model_files::input::{escaped, excerpt, InputError, InputFile, Limit};
 
 use crate::continuation::{crossed, Event, Ledger, Point, Step, Stop, Trace};
 use crate::fom::periodic::OrbitInfo;
@@ -211,7 +211,7 @@ impl Checkpoint {
         let text = input.read_text().map_err(CheckpointError::Input)?;
         let mut file = input.into_file();
         // a byte-order mark the reading skipped stays in front
-        let skipped = file.metadata().map_err(io)?.len() - text.len() as u64;
+        let skipped = (file.metadata().map_err(io)?.len()).saturating_sub(text.len() as u64);
         let expected = header(scene_name, scene_text);
         let (kept, complete) = parse(path, &text, &expected)?;
         // a line cut short by the stop is dropped; the new records follow
@@ -338,6 +338,11 @@ pub fn create_first(
     Err(last)
 }
 
+/// The JSON reader's message, which may quote the file, escaped and cut.
+fn quoted(e: &serde_json::Error) -> String {
+    escaped(&e.to_string(), 200)
+}
+
 /// The header of a scene's checkpoint.
 fn header(scene_name: &str, scene_text: &str) -> Header {
     Header {
@@ -406,17 +411,24 @@ fn parse(
         return Ok((VecDeque::new(), complete));
     };
     let found: Header = serde_json::from_str(first)
-        .map_err(|e| damaged(1, format!("not a checkpoint header: {e}")))?;
+        .map_err(|e| damaged(1, format!("not a checkpoint header: {}", quoted(&e))))?;
     if found != *expected {
         let what = if found.checkpoint != expected.checkpoint || found.engine != expected.engine {
             format!(
                 "by engine {} (layout {}), this is {} (layout {})",
-                found.engine, found.checkpoint, expected.engine, expected.checkpoint
+                excerpt(&found.engine),
+                found.checkpoint,
+                expected.engine,
+                expected.checkpoint
             )
         } else if found.scene != expected.scene {
-            format!("for scene '{}', not '{}'", found.scene, expected.scene)
+            format!(
+                "for scene '{}', not '{}'",
+                excerpt(&found.scene),
+                expected.scene
+            )
         } else {
-            format!("for scene '{}' before it was edited", found.scene)
+            format!("for scene '{}' before it was edited", excerpt(&found.scene))
         };
         return Err(CheckpointError::Foreign {
             path: path.to_owned(),
@@ -427,7 +439,7 @@ fn parse(
     for (i, line) in lines {
         let number = i + 1;
         let record: RecordIn =
-            serde_json::from_str(line).map_err(|e| damaged(number, e.to_string()))?;
+            serde_json::from_str(line).map_err(|e| damaged(number, quoted(&e)))?;
         let open = kept.len();
         match record {
             RecordIn::Step {

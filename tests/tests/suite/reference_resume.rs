@@ -272,7 +272,8 @@ fn checkpoints_from_elsewhere_are_refused() {
 /// branch points) or as a test function that does not change on its step.
 /// A checkpoint with a second (hard) link is refused like a symbolic one,
 /// and neither name's contents change (before: truncated and appended
-/// through the link).
+/// through the link). A record kind the reader does not know is quoted
+/// with its control characters escaped.
 #[test]
 fn restored_records_are_checked_and_hard_links_refused() {
     let dir = ssm_tests::tmp_dir("resume-checked");
@@ -318,6 +319,16 @@ fn restored_records_are_checked_and_hard_links_refused() {
             "{kind}: {cause}"
         );
     }
+
+    // a record kind the reader does not know, quoted escaped
+    let mut edited = owned.clone();
+    edited[2] = "{\"Hopf\\u0000\\u001b[2J\":1}\n".to_owned();
+    let (line, cause) = refused_at(&edited);
+    assert_eq!(line, 3, "{cause}");
+    assert!(
+        !cause.contains(['\0', '\x1b']) && cause.contains("Hopf\\u{0}\\u{1b}[2J"),
+        "{cause:?}"
+    );
 
     std::fs::write(&path, &text).expect("restore");
     let other = dir.join("other.jsonl");
