@@ -9,6 +9,7 @@ use std::path::Path;
 use ssm_api::PolyVector;
 
 use crate::error::FileError;
+use crate::input::excerpt;
 use crate::lines::{index, value, LineReader, Progress};
 
 /// Adds the terms of the degree-`degree` tensor in `path` to `poly` (rows `i`
@@ -50,9 +51,10 @@ fn term(
     if toks.len() != degree + 2 {
         let names = ["i", "j", "k", "l", "m"];
         return Err(format!(
-            "expected '{} value' ({} fields), found '{line}'",
+            "expected '{} value' ({} fields), found '{}'",
             names[..degree + 1].join(" "),
-            degree + 2
+            degree + 2,
+            excerpt(line)
         ));
     }
     let eq = index(toks[0], n_eq, "equation index i")?;

@@ -33,6 +33,10 @@ pub enum FileError {
         /// What is wrong.
         message: String,
     },
+    /// The file is not a regular file, too large, or not text
+    /// ([`crate::input`]).
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
     /// A required file is missing.
     #[error("{}: required file missing ({what})", file.display())]
     Missing {

@@ -25,6 +25,7 @@
 mod convert;
 mod coo;
 mod error;
+pub mod input;
 mod lines;
 mod mtx;
 mod outputs;
@@ -107,7 +108,7 @@ impl ModelFiles {
         let path = |name: &str| dir.join(name);
         let required = |name: &str, what: &'static str| {
             let p = path(name);
-            if p.is_file() {
+            if p.exists() {
                 Ok(p)
             } else {
                 Err(FileError::Missing { file: p, what })

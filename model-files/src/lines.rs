@@ -2,11 +2,10 @@
 //! every parse error names its file and line; the files are streamed, never
 //! held whole in memory.
 
-use std::fs::File;
-use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use crate::error::FileError;
+use crate::input::{excerpt, InputFile, InputReader, MODEL};
 
 /// The longest line read (1 MiB): a file without line ends is an error, not
 /// a buffer the size of the file.
@@ -18,7 +17,7 @@ pub type Progress<'a> = dyn FnMut(u64) + 'a;
 /// A text file read one line at a time.
 pub(crate) struct LineReader<'p> {
     file: PathBuf,
-    reader: BufReader<File>,
+    reader: InputReader,
     bytes: Vec<u8>,
     buf: String,
     line: usize,
@@ -26,15 +25,12 @@ pub(crate) struct LineReader<'p> {
 }
 
 impl<'p> LineReader<'p> {
-    /// Opens `path`.
+    /// Opens `path` (a regular file within [`MODEL`], see [`crate::input`]).
     pub(crate) fn open(path: &Path, progress: &'p mut Progress<'_>) -> Result<Self, FileError> {
-        let file = File::open(path).map_err(|source| FileError::Io {
-            file: path.to_owned(),
-            source,
-        })?;
+        let reader = InputFile::open(path, MODEL)?.into_reader()?;
         Ok(Self {
             file: path.to_owned(),
-            reader: BufReader::with_capacity(1 << 16, file),
+            reader,
             bytes: Vec::new(),
             buf: String::new(),
             line: 0,
@@ -48,13 +44,9 @@ impl<'p> LineReader<'p> {
     /// as is a line longer than [`MAX_LINE`] bytes.
     pub(crate) fn next_line(&mut self) -> Result<Option<&str>, FileError> {
         self.bytes.clear();
-        let n = (&mut self.reader)
-            .take(MAX_LINE as u64 + 1)
-            .read_until(b'\n', &mut self.bytes)
-            .map_err(|source| FileError::Io {
-                file: self.file.clone(),
-                source,
-            })?;
+        let n = self
+            .reader
+            .read_line(&mut self.bytes, MAX_LINE as u64 + 1)?;
         if n == 0 {
             return Ok(None);
         }
@@ -117,7 +109,7 @@ impl<'p> LineReader<'p> {
 pub(crate) fn index(tok: &str, max: usize, what: &str) -> Result<usize, String> {
     let i: usize = tok
         .parse()
-        .map_err(|_| format!("{what} '{tok}' is not a positive integer"))?;
+        .map_err(|_| format!("{what} '{}' is not a positive integer", excerpt(tok)))?;
     if i == 0 || i > max {
         return Err(format!(
             "{what} {i} is outside 1..={max} (indices are 1-based)"
@@ -130,9 +122,9 @@ pub(crate) fn index(tok: &str, max: usize, what: &str) -> Result<usize, String> 
 pub(crate) fn value(tok: &str) -> Result<f64, String> {
     let x: f64 = tok
         .parse()
-        .map_err(|_| format!("value '{tok}' is not a number"))?;
+        .map_err(|_| format!("value '{}' is not a number", excerpt(tok)))?;
     if !x.is_finite() {
-        return Err(format!("value '{tok}' is not finite"));
+        return Err(format!("value '{}' is not finite", excerpt(tok)));
     }
     Ok(x)
 }

@@ -15,6 +15,7 @@ use std::path::Path;
 use ssm_api::SparseMatrix;
 
 use crate::error::FileError;
+use crate::input::excerpt;
 use crate::lines::{index, value, LineReader, Progress};
 
 /// Storage of a Matrix Market file.
@@ -61,7 +62,8 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
     let want = if format == Format::Coordinate { 3 } else { 2 };
     if dims.len() != want {
         return Err(r.error(format!(
-            "size line '{size}': expected {} integers",
+            "size line '{}': expected {} integers",
+            excerpt(&size),
             if want == 3 {
                 "'rows cols entries'"
             } else {
@@ -73,7 +75,12 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
         tok.parse::<usize>()
             .ok()
             .filter(|&k| k < u32::MAX as usize)
-            .ok_or_else(|| r.error(format!("size '{tok}' is not an integer below 2^32 - 1")))
+            .ok_or_else(|| {
+                r.error(format!(
+                    "size '{}' is not an integer below 2^32 - 1",
+                    excerpt(tok)
+                ))
+            })
     };
     let (rows, cols) = (count(dims[0])?, count(dims[1])?);
     if half && rows != cols {
@@ -133,8 +140,10 @@ pub fn read_matrix(path: &Path, progress: &mut Progress<'_>) -> Result<SparseMat
                 };
                 let toks: Vec<&str> = line.split_ascii_whitespace().collect();
                 if toks.len() != 1 {
-                    let msg =
-                        format!("expected one value per line in an array file, found '{line}'");
+                    let msg = format!(
+                        "expected one value per line in an array file, found '{}'",
+                        excerpt(line)
+                    );
                     return Err(r.error(msg));
                 }
                 let v = value(toks[0]).map_err(|msg| r.error(msg))?;
@@ -170,13 +179,19 @@ fn header(r: &mut LineReader<'_>) -> Result<(Format, Symmetry), FileError> {
     let format = match toks[2] {
         "coordinate" => Format::Coordinate,
         "array" => Format::Array,
-        other => return Err(r.error(format!("format '{other}': expected coordinate or array"))),
+        other => {
+            return Err(r.error(format!(
+                "format '{}': expected coordinate or array",
+                excerpt(other)
+            )))
+        }
     };
     match toks[3] {
         "real" | "integer" | "double" => {}
         other => {
             return Err(r.error(format!(
-                "field '{other}': only real (or integer) matrices are models"
+                "field '{}': only real (or integer) matrices are models",
+                excerpt(other)
             )))
         }
     }
@@ -186,7 +201,8 @@ fn header(r: &mut LineReader<'_>) -> Result<(Format, Symmetry), FileError> {
         "skew-symmetric" => Symmetry::Skew,
         other => {
             return Err(r.error(format!(
-                "symmetry '{other}': expected general, symmetric or skew-symmetric"
+                "symmetry '{}': expected general, symmetric or skew-symmetric",
+                excerpt(other)
             )))
         }
     };
@@ -201,7 +217,10 @@ fn coordinate_entry(
 ) -> Result<(usize, usize, f64), String> {
     let toks: Vec<&str> = line.split_ascii_whitespace().collect();
     if toks.len() != 3 {
-        return Err(format!("expected 'row col value', found '{line}'"));
+        return Err(format!(
+            "expected 'row col value', found '{}'",
+            excerpt(line)
+        ));
     }
     let i = index(toks[0], rows, "row")?;
     let j = index(toks[1], cols, "column")?;

@@ -8,6 +8,7 @@ use std::io::Write;
 use std::path::Path;
 
 use crate::error::FileError;
+use crate::input::excerpt;
 use crate::lines::{index, value, LineReader, Progress};
 
 /// A named output: `(name, [(0-based dof, weight)])`.
@@ -59,7 +60,8 @@ fn row(fields: &[&str], n_dof: usize) -> Result<(String, usize, f64), String> {
     let name = fields[0];
     if !valid_name(name) {
         return Err(format!(
-            "output name '{name}' must be non-empty letters, digits, '_', '.' or '-'"
+            "output name '{}' must be non-empty letters, digits, '_', '.' or '-'",
+            excerpt(name)
         ));
     }
     let dof = index(fields[1], n_dof, "dof")?;

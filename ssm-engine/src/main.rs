@@ -12,7 +12,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ssm_engine::continuation::Ledger;
 use ssm_engine::fom::periodic::{OrbitInfo, ReferenceOrbit};
 use ssm_engine::model::plugin::Registry;
+use ssm_engine::model::source::scene_inputs;
 use ssm_engine::output;
+use ssm_engine::output::check_not_input;
 use ssm_engine::output::checkpoint::{create_first, Checkpoint};
 use ssm_engine::pipeline::{self, export, Progress};
 use ssm_engine::scene::{ReportSection, SceneFile};
@@ -30,7 +32,9 @@ While a [reference] runs, <out>.reference-partial.csv (its orbits) and
 --resume goes on from the checkpoint to the outputs of an uninterrupted run.
 The new result set replaces the old one as a whole (a fresh private directory swapped in
 with one rename): never a mix, never stale files; a failed run changes nothing. A non-empty
-directory that is not a result set is never replaced.
+directory that is not a result set is never replaced, a model export (export DIR) and a
+run's result set never replace each other, and an output directory that is or holds an
+input of the run (the scene, [data] files, a model folder, a plugin, a checkpoint) is refused.
 
 PLUGINS are found from --plugin PATH, from SSM_PLUGIN_PATH (':'-separated files or
 directories), and from the directory of this binary."
@@ -307,6 +311,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Report { scene, out }) => (scene, out, true),
         Some(Command::Export { scene, dir }) => {
             let scene = SceneFile::load(&scene)?;
+            check_not_input(&dir, &scene_inputs(&scene, &mut registry))?;
             let (files, notes) = export::export(&scene, &mut registry)?;
             files.write(&dir)?;
             for note in notes {
@@ -327,6 +332,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         scene.scene.report = Some(ReportSection { orders: None });
     }
     let out = out.unwrap_or_else(|| pipeline::default_out_dir(&scene));
+    // before anything is computed or written: the results must not replace
+    // an input of the run
+    let mut inputs = scene_inputs(&scene, &mut registry);
+    inputs.extend(resume.clone().flatten());
+    check_not_input(&out, &inputs)?;
     let name = scene.name();
     let checkpoint = match &resume {
         None => {

@@ -621,21 +621,7 @@ where
             }
         };
         let last = last.clone();
-        let mut found = Vec::new();
-        if (next.tangent[k] > 0.0) != (last.tangent[k] > 0.0) {
-            found.push(EventKind::Fold);
-        }
-        for (i, (a, b)) in last
-            .monitor
-            .tests
-            .iter()
-            .zip(&next.monitor.tests)
-            .enumerate()
-        {
-            if a.differs(*b) {
-                found.push(EventKind::Test(i));
-            }
-        }
+        let found = crossed(&last, &next);
         // the tangent at `next` was factored with `k_local`; locating an
         // event factors elsewhere
         if found.is_empty() {
@@ -669,6 +655,29 @@ where
         events,
         stop,
     }
+}
+
+/// What changes on the step from `last` to `next` (points of one branch):
+/// a fold where the parameter's tangent component changes sign, each test
+/// function that changes.
+pub(crate) fn crossed<I>(last: &Point<I>, next: &Point<I>) -> Vec<EventKind> {
+    let k = next.u.len() - 1;
+    let mut found = Vec::new();
+    if (next.tangent[k] > 0.0) != (last.tangent[k] > 0.0) {
+        found.push(EventKind::Fold);
+    }
+    for (i, (a, b)) in last
+        .monitor
+        .tests
+        .iter()
+        .zip(&next.monitor.tests)
+        .enumerate()
+    {
+        if a.differs(*b) {
+            found.push(EventKind::Test(i));
+        }
+    }
+    found
 }
 
 /// Whether the branch ends with its last step: the parameter left its

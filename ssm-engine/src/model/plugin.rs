@@ -16,6 +16,7 @@ use abi_stable::library::{lib_header_from_path, LibraryError};
 use ssm_api::{
     Model, ModelInfo, PluginError, Reduced, ReducerInfo, ReducerInput, SsmPluginRef, API_VERSION,
 };
+use ssm_model_files::input::{InputError, InputFile, Limit};
 
 /// What went wrong while loading or calling a plugin.
 #[derive(Debug, thiserror::Error)]
@@ -26,6 +27,10 @@ pub enum PluginLoadError {
         /// The path given.
         path: PathBuf,
     },
+    /// The path is not a regular file (a FIFO, a device, a directory) or is
+    /// larger than [`LIBRARY`].
+    #[error("plugin library: {0}")]
+    Input(#[from] InputError),
     /// The library was built against an incompatible `ssm-api`.
     #[error("plugin {path} was built against ssm-api {found}, but this engine uses ssm-api {expected}: rebuild the plugin against ssm-api {expected}")]
     VersionMismatch {
@@ -99,6 +104,12 @@ enum RootModule {
     V1_0(ssm_api::v1_0::SsmPluginRef),
 }
 
+/// The largest plugin library loaded: 1 GiB.
+pub const LIBRARY: Limit = Limit {
+    bytes: 1 << 30,
+    what: "a plugin library",
+};
+
 /// A loaded plugin.
 #[derive(Clone, Copy)]
 pub struct Plugin {
@@ -119,6 +130,8 @@ impl Plugin {
                 path: path.to_owned(),
             });
         }
+        // a FIFO or a device would block or feed dlopen: regular files only
+        InputFile::open(path, LIBRARY)?;
         // dlopen searches the library path for a name without a slash: always
         // hand it the file itself
         let file = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());

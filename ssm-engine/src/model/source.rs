@@ -2,7 +2,7 @@
 //! table passed as TOML, and the plugin's errors mapped back to the scene's
 //! lines.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use toml::Spanned;
 
@@ -33,6 +33,53 @@ pub fn build_model(
         .build_model(name, &params)
         .map_err(|e| plugin_error(scene, e, "model.params"))?;
     Ok((plugin.name().to_owned(), model))
+}
+
+/// The files and folders a run of `scene` reads, as far as they can be
+/// named before it runs: the scene itself, its `[data]` files, the path
+/// parameters of its `[model]` (a model folder, read from the scene's
+/// folder) and every plugin library loaded. A plugin that cannot be had
+/// adds nothing here (the run reports it).
+pub fn scene_inputs(scene: &SceneFile, registry: &mut Registry) -> Vec<PathBuf> {
+    let sc = &scene.scene;
+    let mut inputs = vec![scene.path.clone()];
+    if let Some(data) = &sc.data {
+        inputs.extend(data.files.get_ref().iter().map(|f| scene.relative(f)));
+    }
+    if let Some(m) = &sc.model {
+        if let Ok(plugin) = resolve(scene, registry, &m.plugin, "model.plugin") {
+            let name = m.name.as_ref().map_or("", |n| n.get_ref().as_str());
+            if let Ok(keys) = path_keys(&plugin, name) {
+                inputs.extend(keys.iter().filter_map(|k| match m.params.get_ref().get(k) {
+                    Some(toml::Value::String(s)) if !s.is_empty() => Some(scene.relative(s)),
+                    _ => None,
+                }));
+            }
+        }
+    }
+    if let Some(p) = sc.reduce.as_ref().and_then(|r| r.plugin.as_ref()) {
+        let _ = resolve(scene, registry, p, "reduce.plugin");
+    }
+    inputs.extend(registry.plugins.iter().map(|(p, _)| p.clone()));
+    inputs
+}
+
+/// The parameters of the model `name` of `plugin` (its first when empty)
+/// that are paths ([`ssm_api::PATH_KIND`]).
+fn path_keys(plugin: &Plugin, name: &str) -> Result<Vec<String>, SourceError> {
+    let models = plugin.models()?;
+    let listed = if name.is_empty() {
+        models.first()
+    } else {
+        models.iter().find(|m| m.name.as_str() == name)
+    };
+    Ok(listed.map_or_else(Vec::new, |m| {
+        m.params
+            .iter()
+            .filter(|p| p.kind.as_str() == ssm_api::PATH_KIND)
+            .map(|p| p.name.to_string())
+            .collect()
+    }))
 }
 
 /// The plugin a scene key names: a plugin name, or a library path, which when
@@ -75,22 +122,10 @@ fn model_params_toml(
     name: &str,
     table: &Spanned<toml::Table>,
 ) -> Result<String, SourceError> {
-    let models = plugin.models()?;
-    let listed = if name.is_empty() {
-        models.first()
-    } else {
-        models.iter().find(|m| m.name.as_str() == name)
-    };
-    let paths: Vec<&str> = listed.map_or_else(Vec::new, |m| {
-        m.params
-            .iter()
-            .filter(|p| p.kind.as_str() == ssm_api::PATH_KIND)
-            .map(|p| p.name.as_str())
-            .collect()
-    });
+    let paths = path_keys(plugin, name)?;
     let dir = scene.path.parent().unwrap_or(Path::new(""));
     let mut resolved = table.clone();
-    for key in paths {
+    for key in &paths {
         if let Some(toml::Value::String(s)) = resolved.get_mut().get_mut(key) {
             if !s.is_empty() && Path::new(s.as_str()).is_relative() {
                 *s = dir.join(s.as_str()).to_string_lossy().into_owned();

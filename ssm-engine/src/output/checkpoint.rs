@@ -21,16 +21,24 @@
 use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
 use std::fs::{File, OpenOptions};
-use std::io::{Read, Seek, SeekFrom, Write};
+use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::continuation::{Event, Ledger, Point, Step, Stop, Trace};
+use ssm_model_files::input::{escaped, excerpt, InputError, InputFile, Limit};
+
+use crate::continuation::{crossed, Event, Ledger, Point, Step, Stop, Trace};
 use crate::fom::periodic::OrbitInfo;
 
 /// Version of the file's layout.
 const FORMAT: u32 = 1;
+
+/// The largest checkpoint read (it is read whole): 1 GiB.
+pub const LIMIT: Limit = Limit {
+    bytes: 1 << 30,
+    what: "a reference checkpoint",
+};
 
 /// Why a checkpoint cannot be resumed from.
 #[derive(Debug, thiserror::Error)]
@@ -57,12 +65,10 @@ pub enum CheckpointError {
         /// The file.
         path: PathBuf,
     },
-    /// The path is a link or not a file.
-    #[error("checkpoint {path} is not a regular file (a link or a directory): refusing to resume from it")]
-    NotAFile {
-        /// The path.
-        path: PathBuf,
-    },
+    /// The path is not a regular file of its own (a symbolic or hard link,
+    /// a FIFO, a directory), or it is too large ([`LIMIT`]).
+    #[error("cannot resume from the checkpoint: {0}")]
+    Input(InputError),
     /// A line does not read, or records are out of order.
     #[error("checkpoint {path}, line {line}: {cause} (the file is damaged: run without --resume)")]
     Damaged {
@@ -183,26 +189,17 @@ impl Checkpoint {
             path: path.to_owned(),
             source,
         };
-        let meta = match std::fs::symlink_metadata(path) {
-            Ok(m) => m,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+        // a file of its own: never written through a link to another name
+        let mut input = match InputFile::open_own(path, LIMIT) {
+            Ok(f) => f,
+            Err(InputError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
                 return Err(CheckpointError::Missing {
                     path: path.to_owned(),
                 })
             }
-            Err(e) => return Err(io(e)),
+            Err(e) => return Err(CheckpointError::Input(e)),
         };
-        if !meta.file_type().is_file() {
-            return Err(CheckpointError::NotAFile {
-                path: path.to_owned(),
-            });
-        }
-        let mut file = OpenOptions::new()
-            .read(true)
-            .write(true)
-            .open(path)
-            .map_err(io)?;
-        match file.try_lock() {
+        match input.file().try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
                 return Err(CheckpointError::Busy {
@@ -211,13 +208,15 @@ impl Checkpoint {
             }
             Err(std::fs::TryLockError::Error(e)) => return Err(io(e)),
         }
-        let mut text = String::new();
-        file.read_to_string(&mut text).map_err(io)?;
+        let text = input.read_text().map_err(CheckpointError::Input)?;
+        let mut file = input.into_file();
+        // a byte-order mark the reading skipped stays in front
+        let skipped = (file.metadata().map_err(io)?.len()).saturating_sub(text.len() as u64);
         let expected = header(scene_name, scene_text);
         let (kept, complete) = parse(path, &text, &expected)?;
         // a line cut short by the stop is dropped; the new records follow
         // the last whole one
-        file.set_len(complete as u64).map_err(io)?;
+        file.set_len(skipped + complete as u64).map_err(io)?;
         file.seek(SeekFrom::End(0)).map_err(io)?;
         if complete == 0 {
             // stopped before its header was whole: nothing kept
@@ -339,6 +338,11 @@ pub fn create_first(
     Err(last)
 }
 
+/// The JSON reader's message, which may quote the file, escaped and cut.
+fn quoted(e: &serde_json::Error) -> String {
+    escaped(&e.to_string(), 200)
+}
+
 /// The header of a scene's checkpoint.
 fn header(scene_name: &str, scene_text: &str) -> Header {
     Header {
@@ -356,6 +360,36 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
     })
+}
+
+/// `Ok` when `events` are what a continuation locates on the step from the
+/// end of `trace` to `point`: each a change on that step ([`crossed`]), once,
+/// after the trace's last point.
+fn check_events(
+    trace: &Trace<OrbitInfo>,
+    point: &Point<OrbitInfo>,
+    events: &[Event<OrbitInfo>],
+) -> Result<(), String> {
+    let Some(last) = trace.points.last() else {
+        return Err("a step of a run without a start".into());
+    };
+    let found = crossed(last, point);
+    let after = trace.points.len() - 1;
+    for (j, e) in events.iter().enumerate() {
+        if !found.contains(&e.kind) {
+            return Err(format!(
+                "event {:?}, which is not a change on this step (its changes: {found:?})",
+                e.kind
+            ));
+        }
+        if events[..j].iter().any(|f| f.kind == e.kind) || e.after != after {
+            return Err(format!(
+                "event {:?} repeated, or not after point {after}",
+                e.kind
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The runs kept in `text` and the length of its whole lines; the header
@@ -377,17 +411,24 @@ fn parse(
         return Ok((VecDeque::new(), complete));
     };
     let found: Header = serde_json::from_str(first)
-        .map_err(|e| damaged(1, format!("not a checkpoint header: {e}")))?;
+        .map_err(|e| damaged(1, format!("not a checkpoint header: {}", quoted(&e))))?;
     if found != *expected {
         let what = if found.checkpoint != expected.checkpoint || found.engine != expected.engine {
             format!(
                 "by engine {} (layout {}), this is {} (layout {})",
-                found.engine, found.checkpoint, expected.engine, expected.checkpoint
+                excerpt(&found.engine),
+                found.checkpoint,
+                expected.engine,
+                expected.checkpoint
             )
         } else if found.scene != expected.scene {
-            format!("for scene '{}', not '{}'", found.scene, expected.scene)
+            format!(
+                "for scene '{}', not '{}'",
+                excerpt(&found.scene),
+                expected.scene
+            )
         } else {
-            format!("for scene '{}' before it was edited", found.scene)
+            format!("for scene '{}' before it was edited", excerpt(&found.scene))
         };
         return Err(CheckpointError::Foreign {
             path: path.to_owned(),
@@ -398,7 +439,7 @@ fn parse(
     for (i, line) in lines {
         let number = i + 1;
         let record: RecordIn =
-            serde_json::from_str(line).map_err(|e| damaged(number, e.to_string()))?;
+            serde_json::from_str(line).map_err(|e| damaged(number, quoted(&e)))?;
         let open = kept.len();
         match record {
             RecordIn::Step {
@@ -427,6 +468,13 @@ fn parse(
                         format!("a step of run {run} whose sizes or step size do not fit its run"),
                     ));
                 }
+                // what is cheap to recompute is recomputed: the unstable
+                // count and test functions from the multipliers
+                for p in points {
+                    if let Some(why) = p.monitor.info.restored_inconsistency(&p.monitor.tests) {
+                        return Err(damaged(number, format!("a point of run {run}: {why}")));
+                    }
+                }
                 if run == open + 1 && steps == 0 && events.is_empty() {
                     kept.push_back((
                         Trace {
@@ -454,6 +502,8 @@ fn parse(
                         ),
                     ));
                 }
+                check_events(trace, &point, &events)
+                    .map_err(|why| damaged(number, format!("step {steps} of run {run}: {why}")))?;
                 trace.points.push(point);
                 trace.events.extend(events);
                 trace.h = h;

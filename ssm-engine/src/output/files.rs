@@ -7,8 +7,10 @@
 //! stale file of an earlier scene; files are created with `O_EXCL` in a
 //! directory only this run knows, so a link planted anywhere is never
 //! followed; nothing is written outside `--out` and its temporary sibling.
-//! A directory that is not an earlier result set (not empty, no
-//! [`MARKER`], no `summary.json`) is never replaced.
+//! A directory that is not an earlier set of the same kind (not empty, no
+//! [`MARKER`], no `summary.json`; a run's result set, which has a
+//! `summary.json`, against a model export, which has not) is never replaced,
+//! and [`check_not_input`] keeps a run from writing over its own inputs.
 
 use std::fs::{self, OpenOptions};
 use std::io::Write;
@@ -17,6 +19,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 /// File that marks a directory as an `ssm-engine` result set.
 pub const MARKER: &str = ".ssm-engine-output";
+
+/// The file a run's result set has and a model export has not.
+const SUMMARY: &str = "summary.json";
 
 /// Failure to write outputs.
 #[derive(Debug, thiserror::Error)]
@@ -37,6 +42,64 @@ fn error(path: &Path, source: std::io::Error) -> OutputError {
 
 fn refuse(path: &Path, why: &str) -> OutputError {
     error(path, std::io::Error::other(why.to_owned()))
+}
+
+/// An output directory that is, or holds, an input of the run.
+#[derive(Debug, thiserror::Error)]
+#[error("the output directory {} is or holds {}, an input of this run, which writing the results there would delete: choose another output directory (--out, or the DIR of export)", out.display(), input.display())]
+pub struct InputInOutput {
+    /// The output directory.
+    pub out: PathBuf,
+    /// The input it is or holds.
+    pub input: PathBuf,
+}
+
+/// `Ok` when the output directory `out` is none of `inputs` and holds none
+/// of them, comparing canonical paths (links resolved; a part of `out` that
+/// does not exist yet is taken as written). Inputs that do not exist are
+/// skipped: nothing of theirs can be deleted.
+pub fn check_not_input(out: &Path, inputs: &[PathBuf]) -> Result<(), InputInOutput> {
+    let out_canon = canonical_to_be(out);
+    for input in inputs {
+        if let Ok(c) = fs::canonicalize(input) {
+            if c.starts_with(&out_canon) {
+                return Err(InputInOutput {
+                    out: out.to_owned(),
+                    input: input.clone(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The canonical form of `path`, which may not exist yet: its longest
+/// existing ancestor canonicalized, the rest appended (`..` and `.` in it
+/// resolved as written).
+fn canonical_to_be(path: &Path) -> PathBuf {
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+    let mut rest = Vec::new();
+    let mut base = absolute.as_path();
+    let mut canon = loop {
+        if let Ok(c) = fs::canonicalize(base) {
+            break c;
+        }
+        match (base.parent(), base.file_name()) {
+            (Some(parent), Some(name)) => {
+                rest.push(name.to_owned());
+                base = parent;
+            }
+            _ => break base.to_owned(),
+        }
+    };
+    for part in rest.iter().rev() {
+        if part == ".." {
+            canon.pop();
+        } else if part != "." {
+            canon.push(part);
+        }
+    }
+    canon
 }
 
 /// The files of one run, written together by [`OutputSet::write`].
@@ -78,14 +141,20 @@ impl OutputSet {
             _ => PathBuf::from("."),
         };
         fs::create_dir_all(&parent).map_err(|e| error(&parent, e))?;
-        check_replaceable(dir)?;
+        check_replaceable(dir, self.is_result_set())?;
         let staging = parent.join(format!(".{dir_name}.tmp-{}", unique()));
         create_private_dir(&staging).map_err(|e| error(&staging, e))?;
         let filled = self.fill(&staging);
-        let swapped = filled.and_then(|()| swap_into_place(&staging, dir));
+        let swapped = filled.and_then(|()| swap_into_place(&staging, dir, self.is_result_set()));
         // the staging directory now holds the old set, or the failed new one
         let _ = fs::remove_dir_all(&staging);
         swapped
+    }
+
+    /// Whether this is a run's result set (it has a `summary.json`), not a
+    /// model export.
+    fn is_result_set(&self) -> bool {
+        self.get(SUMMARY).is_some()
     }
 
     /// Writes every file and the marker into the fresh directory `staging`.
@@ -145,8 +214,9 @@ fn set_public(_path: &Path) -> std::io::Result<()> {
 }
 
 /// `Ok` when `dir` does not exist, or is a real directory that is empty or an
-/// earlier result set.
-fn check_replaceable(dir: &Path) -> Result<(), OutputError> {
+/// earlier set of the same kind: a run's result set (`result_set`, it has a
+/// `summary.json`) or a model export (the [`MARKER`] without a summary).
+fn check_replaceable(dir: &Path, result_set: bool) -> Result<(), OutputError> {
     let meta = match fs::symlink_metadata(dir) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
         Err(e) => return Err(error(dir, e)),
@@ -165,9 +235,25 @@ fn check_replaceable(dir: &Path) -> Result<(), OutputError> {
         ));
     }
     let mut entries = fs::read_dir(dir).map_err(|e| error(dir, e))?;
-    let is_result_set =
+    let has =
         |name: &str| fs::symlink_metadata(dir.join(name)).is_ok_and(|m| m.file_type().is_file());
-    if entries.next().is_none() || is_result_set(MARKER) || is_result_set("summary.json") {
+    if entries.next().is_none() {
+        return Ok(());
+    }
+    let (summary, marker) = (has(SUMMARY), has(MARKER));
+    if summary && !result_set {
+        return Err(refuse(
+            dir,
+            "holds a run's result set (summary.json), not a model export; it is not replaced by an export: choose another DIR",
+        ));
+    }
+    if marker && !summary && result_set {
+        return Err(refuse(
+            dir,
+            "holds a model export (no summary.json), not a run's result set; it is not replaced by a run: choose another output directory",
+        ));
+    }
+    if summary || marker {
         return Ok(());
     }
     Err(refuse(
@@ -176,9 +262,10 @@ fn check_replaceable(dir: &Path) -> Result<(), OutputError> {
     ))
 }
 
-/// Puts the complete set in `staging` at `dir`; afterwards `staging` holds the
+/// Puts the complete set in `staging` (a run's result set when `result_set`)
+/// at `dir`; afterwards `staging` holds the
 /// old set (or nothing).
-fn swap_into_place(staging: &Path, dir: &Path) -> Result<(), OutputError> {
+fn swap_into_place(staging: &Path, dir: &Path, result_set: bool) -> Result<(), OutputError> {
     // a concurrent run may create or replace `dir` between our steps; each
     // attempt either completes a whole swap or changes nothing
     for _ in 0..8 {
@@ -187,7 +274,7 @@ fn swap_into_place(staging: &Path, dir: &Path) -> Result<(), OutputError> {
             Err(e) if !dir_exists(dir) => return Err(error(dir, e)),
             Err(_) => {}
         }
-        check_replaceable(dir)?;
+        check_replaceable(dir, result_set)?;
         match exchange(staging, dir) {
             Ok(()) => return Ok(()),
             Err(e) if e.raw_os_error() == Some(libc::ENOENT) => continue,

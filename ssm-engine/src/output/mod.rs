@@ -19,7 +19,7 @@ pub mod validation;
 use crate::compare::instantaneous::DataBackbone;
 use crate::rom::autonomous::{BackboneCurve, LiftedTransient};
 use crate::spectrum::ModalFigures;
-pub use files::{OutputError, OutputSet, MARKER};
+pub use files::{check_not_input, InputInOutput, OutputError, OutputSet, MARKER};
 use plot::PlotError;
 use summary::{pod_only_summary_json, summary_json, Summary, Timing};
 

@@ -11,6 +11,7 @@ pub mod scene;
 use std::path::{Path, PathBuf};
 
 use ssm_api::{Diagnostic, Lift, Model, Output, Signals, Trajectory, Weight};
+use ssm_model_files::input::{self, excerpt, InputError, InputFile};
 
 /// Relative tolerance on the sampling period: every step `t_{k+1} - t_k` must
 /// equal the mean step to this fraction.
@@ -19,14 +20,10 @@ const UNIFORM_TOL: f64 = 1e-6;
 /// A `[data]` file that cannot be used; each names the file (and line).
 #[derive(Debug, thiserror::Error)]
 pub enum SignalsError {
-    /// The file cannot be read.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
-    },
+    /// The file cannot be read (not a regular file, too large, not text:
+    /// [`ssm_model_files::input`]).
+    #[error(transparent)]
+    Read(#[from] InputError),
     /// The header is missing or does not start with `t`.
     #[error("{path}, line 1: {message}")]
     Header {
@@ -67,18 +64,17 @@ pub enum SignalsError {
     },
 }
 
-/// One parsed file: observable names, times, rows of values.
+/// One parsed file: observable names, times, rows of values and the
+/// 1-based line of each row.
 struct Table {
     names: Vec<String>,
     t: Vec<f64>,
     rows: Vec<Vec<f64>>,
+    lines: Vec<usize>,
 }
 
 fn read_table(path: &Path) -> Result<Table, SignalsError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SignalsError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let text = InputFile::open(path, input::DATA)?.read_text()?;
     let mut lines = text
         .lines()
         .enumerate()
@@ -93,11 +89,13 @@ fn read_table(path: &Path) -> Result<Table, SignalsError> {
     let cols: Vec<String> = head.split(',').map(|c| c.trim().to_owned()).collect();
     if cols.first().map(String::as_str) != Some("t") || cols.len() < 2 {
         return Err(header(format!(
-            "the header must be 't,<observable>,...', found '{head}'"
+            "the header must be 't,<observable>,...', found '{}'",
+            excerpt(head)
         )));
     }
     let mut t = Vec::new();
     let mut rows = Vec::new();
+    let mut numbers = Vec::new();
     for (i, line) in lines {
         let row_err = |message: String| SignalsError::Row {
             path: path.to_owned(),
@@ -114,16 +112,24 @@ fn read_table(path: &Path) -> Result<Table, SignalsError> {
         }
         let mut vals = Vec::with_capacity(fields.len());
         for (c, f) in fields.iter().enumerate() {
-            let v: f64 = f
-                .parse()
-                .map_err(|_| row_err(format!("column '{}': '{f}' is not a number", cols[c])))?;
+            let v: f64 = f.parse().map_err(|_| {
+                row_err(format!(
+                    "column '{}': '{}' is not a number",
+                    excerpt(&cols[c]),
+                    excerpt(f)
+                ))
+            })?;
             if !v.is_finite() {
-                return Err(row_err(format!("column '{}': {v} is not finite", cols[c])));
+                return Err(row_err(format!(
+                    "column '{}': {v} is not finite",
+                    excerpt(&cols[c])
+                )));
             }
             vals.push(v);
         }
         t.push(vals[0]);
         rows.push(vals[1..].to_vec());
+        numbers.push(i + 1);
     }
     if t.len() < 2 {
         return Err(SignalsError::Row {
@@ -136,7 +142,42 @@ fn read_table(path: &Path) -> Result<Table, SignalsError> {
         names: cols[1..].to_vec(),
         t,
         rows,
+        lines: numbers,
     })
+}
+
+/// The sampling period of `table` (its mean step), when every step equals
+/// the typical (median) one to [`UNIFORM_TOL`]; else the first step that
+/// does not, at its line.
+fn period_of(path: &Path, table: &Table) -> Result<f64, SignalsError> {
+    let steps: Vec<f64> = table.t.windows(2).map(|w| w[1] - w[0]).collect();
+    let mut sorted = steps.clone();
+    sorted.sort_by(f64::total_cmp);
+    let typical = sorted[sorted.len() / 2];
+    let at = |k: usize, message: String| SignalsError::NonUniform {
+        path: path.to_owned(),
+        line: table.lines[k + 1],
+        message,
+    };
+    // the values are finite (checked above): no step is NaN
+    if typical <= 0.0 {
+        let k = steps.iter().position(|s| *s <= 0.0).unwrap_or(0);
+        return Err(at(k, "time does not increase".into()));
+    }
+    if let Some(k) = steps
+        .iter()
+        .position(|s| (s - typical).abs() > UNIFORM_TOL * typical)
+    {
+        return Err(at(
+            k,
+            format!(
+                "step {:e} from the sample at line {}, where the typical step is {typical:e}",
+                steps[k], table.lines[k]
+            ),
+        ));
+    }
+    let n = table.t.len();
+    Ok((table.t[n - 1] - table.t[0]) / (n - 1) as f64)
 }
 
 /// Reads the `[data]` files into [`Signals`]: uniformly sampled, the same
@@ -150,30 +191,12 @@ pub fn read_signals(
     let mut trajectories = Vec::with_capacity(files.len());
     for path in files {
         let table = read_table(path)?;
-        let n = table.t.len();
-        let dt = (table.t[n - 1] - table.t[0]) / (n - 1) as f64;
-        if dt.is_nan() || dt <= 0.0 {
-            return Err(SignalsError::NonUniform {
-                path: path.clone(),
-                line: 2,
-                message: "time does not increase".into(),
-            });
-        }
-        for k in 0..n - 1 {
-            let step = table.t[k + 1] - table.t[k];
-            if (step - dt).abs() > UNIFORM_TOL * dt {
-                return Err(SignalsError::NonUniform {
-                    path: path.clone(),
-                    line: k + 3,
-                    message: format!("step {step:e} where the mean step is {dt:e}"),
-                });
-            }
-        }
+        let dt = period_of(path, &table)?;
         match &period {
             Some((p, first)) if (dt - p).abs() > UNIFORM_TOL * p => {
                 return Err(SignalsError::NonUniform {
                     path: path.clone(),
-                    line: 2,
+                    line: table.lines[1],
                     message: format!("sampling period {dt:e}, but {} has {p:e}", first.display()),
                 })
             }
@@ -190,7 +213,11 @@ pub fn read_signals(
                     .position(|c| c == w)
                     .ok_or_else(|| SignalsError::Columns {
                         path: path.clone(),
-                        message: format!("no column '{w}' (it has: {})", table.names.join(", ")),
+                        message: format!(
+                            "no column '{}' (it has: {})",
+                            excerpt(w),
+                            excerpt(&table.names.join(", "))
+                        ),
                     })?;
             idx.push(k);
         }
@@ -200,8 +227,8 @@ pub fn read_signals(
                     path: path.clone(),
                     message: format!(
                         "columns {} differ from the first file's {}",
-                        wanted.join(", "),
-                        first.join(", ")
+                        excerpt(&wanted.join(", ")),
+                        excerpt(&first.join(", "))
                     ),
                 })
             }

@@ -10,6 +10,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
+use ssm_model_files::input::{self, InputError, InputFile};
 use toml::Spanned;
 
 mod pod;
@@ -104,14 +105,10 @@ fn number_or_single<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Spanned<f6
 /// A scene that cannot be used, with the place and the problem.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// The file could not be read.
-    #[error("cannot read scene {path}: {source}")]
-    Io {
-        /// The scene file.
-        path: PathBuf,
-        /// The I/O error.
-        source: std::io::Error,
-    },
+    /// The file could not be read (not a regular file, too large, not
+    /// text: [`ssm_model_files::input`]).
+    #[error("cannot read the scene: {0}")]
+    Read(#[from] InputError),
     /// TOML syntax, an unknown key, a missing key or a value of the wrong type.
     #[error("{path}:{line}: {message}")]
     Parse {
@@ -438,10 +435,7 @@ pub struct SceneFile {
 impl SceneFile {
     /// Reads and parses a scene file.
     pub fn load(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = InputFile::open(path, input::SCENE)?.read_text()?;
         Self::parse(path, text)
     }
 

@@ -12,6 +12,7 @@ mod frc;
 mod fuzz;
 mod fuzz_inputs;
 mod hht;
+mod inputs;
 mod limits;
 mod model_files;
 mod monodromy;

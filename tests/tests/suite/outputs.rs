@@ -108,6 +108,32 @@ fn a_directory_that_is_not_a_result_set_is_not_replaced() {
     assert_eq!(leftovers(&root, &["thesis"]), Vec::<String>::new());
 }
 
+/// A model export (the marker, no `summary.json`) is not replaced by a
+/// run's result set, nor a result set by an export: each only by its own
+/// kind (before: an export folder, which may be a model folder another scene
+/// reads, was replaced by any run).
+#[test]
+fn an_export_and_a_result_set_do_not_replace_each_other() {
+    let root = tmp_dir("outputs-kinds");
+    let (export, results) = (root.join("export"), root.join("results"));
+    set("E", &["M.mtx", "K.mtx"]).write(&export).unwrap();
+    set("R", &["summary.json", "frc.csv"])
+        .write(&results)
+        .unwrap();
+    let e = set("R", &["summary.json"]).write(&export).unwrap_err();
+    assert!(e.to_string().contains("holds a model export"), "{e}");
+    let e = set("E", &["M.mtx"]).write(&results).unwrap_err();
+    assert!(e.to_string().contains("holds a run's result set"), "{e}");
+    assert_eq!(contents(&export)["K.mtx"], "E:K.mtx");
+    assert_eq!(contents(&results)["frc.csv"], "R:frc.csv");
+    // each by its own kind
+    set("E2", &["M.mtx"]).write(&export).unwrap();
+    set("R2", &["summary.json"]).write(&results).unwrap();
+    assert_eq!(contents(&export)["M.mtx"], "E2:M.mtx");
+    assert_eq!(contents(&results)["summary.json"], "R2:summary.json");
+    let _ = fs::remove_dir_all(&root);
+}
+
 #[test]
 fn a_failure_while_writing_keeps_the_old_set() {
     let root = tmp_dir("outputs-failure");

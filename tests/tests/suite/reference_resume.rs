@@ -9,6 +9,7 @@ use ssm_engine::fom::periodic::{
 };
 use ssm_engine::model::system::{OutputMap, System};
 use ssm_engine::output::checkpoint::{Checkpoint, CheckpointError};
+use ssm_model_files::input::InputError;
 use ssm_tests::{duffing_orbits, forced_duffing, parametric_pump};
 
 /// The branch with its cost counters zeroed (a resumed run factors less).
@@ -234,7 +235,10 @@ fn checkpoints_from_elsewhere_are_refused() {
     let link: PathBuf = dir.join("link.jsonl");
     std::os::unix::fs::symlink(&path, &link).expect("link");
     let e = refused(&link, "pump", "text");
-    assert!(matches!(e, CheckpointError::NotAFile { .. }), "{e}");
+    assert!(
+        matches!(e, CheckpointError::Input(InputError::NotAFile { .. })),
+        "{e}"
+    );
 
     let holder = Checkpoint::resume(&path, "pump", "text").expect("first resume");
     let e = refused(&path, "pump", "text");
@@ -257,6 +261,93 @@ fn checkpoints_from_elsewhere_are_refused() {
     drop(ck);
     assert!(b.orbits.len() > 10);
     assert_eq!(std::fs::read_to_string(&path).expect("rewritten"), text);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Restored records are checked against what is cheap to recompute, and
+/// each edit is refused with the line it is on (before: each resumed and
+/// exited 0): an unstable count of 3 where the stored multipliers have none
+/// outside the unit circle (before: every restored orbit unstable); a fold
+/// recorded as an event kind no test function has (`Test(7)`, before: two
+/// branch points) or as a test function that does not change on its step.
+/// A checkpoint with a second (hard) link is refused like a symbolic one,
+/// and neither name's contents change (before: truncated and appended
+/// through the link). A record kind the reader does not know is quoted
+/// with its control characters escaped.
+#[test]
+fn restored_records_are_checked_and_hard_links_refused() {
+    let dir = ssm_tests::tmp_dir("resume-checked");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let out = dir.join("out");
+    let path = Checkpoint::default_path(&out);
+    let (sys, settings) = duffing_seeded();
+    let ck = Checkpoint::fresh(&out, "duffing", "text");
+    run(&sys, &settings, &ck).expect("reference");
+    drop(ck);
+    let text = std::fs::read_to_string(&path).expect("checkpoint");
+    let lines: Vec<&str> = text.split_inclusive('\n').collect();
+    let refused_at = |edited: &[String]| {
+        std::fs::write(&path, edited.concat()).expect("write");
+        match Checkpoint::resume(&path, "duffing", "text") {
+            Err(CheckpointError::Damaged { line, cause, .. }) => (line, cause),
+            Err(e) => panic!("expected a damaged line, got {e}"),
+            Ok(_) => panic!("the edited checkpoint resumed"),
+        }
+    };
+    let owned: Vec<String> = lines.iter().map(|l| (*l).to_owned()).collect();
+    let stable = lines
+        .iter()
+        .position(|l| l.contains("\"unstable\":0"))
+        .expect("a stable orbit");
+    let mut edited = owned.clone();
+    edited[stable] = edited[stable].replacen("\"unstable\":0", "\"unstable\":3", 1);
+    let (line, cause) = refused_at(&edited);
+    assert_eq!(line, stable + 1, "{cause}");
+    assert!(cause.contains("3 unstable multipliers stated"), "{cause}");
+
+    let fold = lines
+        .iter()
+        .position(|l| l.contains("\"kind\":\"Fold\""))
+        .expect("a fold");
+    for kind in ["{\"Test\":7}", "{\"Test\":1}"] {
+        let mut edited = owned.clone();
+        edited[fold] = edited[fold].replacen("\"Fold\"", kind, 1);
+        let (line, cause) = refused_at(&edited);
+        assert_eq!(line, fold + 1, "{kind}: {cause}");
+        assert!(
+            cause.contains("not a change on this step"),
+            "{kind}: {cause}"
+        );
+    }
+
+    // a record kind the reader does not know, quoted escaped
+    let mut edited = owned.clone();
+    edited[2] = "{\"Hopf\\u0000\\u001b[2J\":1}\n".to_owned();
+    let (line, cause) = refused_at(&edited);
+    assert_eq!(line, 3, "{cause}");
+    assert!(
+        !cause.contains(['\0', '\x1b']) && cause.contains("Hopf\\u{0}\\u{1b}[2J"),
+        "{cause:?}"
+    );
+
+    std::fs::write(&path, &text).expect("restore");
+    let other = dir.join("other.jsonl");
+    std::fs::hard_link(&path, &other).expect("hard link");
+    for p in [&path, &other] {
+        let e = Checkpoint::resume(p, "duffing", "text")
+            .err()
+            .expect("refused");
+        assert!(
+            matches!(
+                e,
+                CheckpointError::Input(InputError::HardLinked { links: 2, .. })
+            ),
+            "{e}"
+        );
+    }
+    assert_eq!(std::fs::read_to_string(&other).expect("other"), text);
+    std::fs::remove_file(&other).expect("unlink");
+    Checkpoint::resume(&path, "duffing", "text").expect("one name again");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

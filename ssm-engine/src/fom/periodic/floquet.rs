@@ -118,6 +118,38 @@ impl Floquet {
             .count()
     }
 
+    /// Why these data cannot be one analysis (as read back from a file):
+    /// multipliers that are not finite, exponents not one per multiplier, or
+    /// an unstable count other than the multipliers outside the circle.
+    pub fn inconsistency(&self) -> Option<String> {
+        if self.exponents.len() != self.multipliers.len() {
+            return Some(format!(
+                "{} exponents for {} multipliers",
+                self.exponents.len(),
+                self.multipliers.len()
+            ));
+        }
+        if self
+            .multipliers
+            .iter()
+            .chain(&self.exponents)
+            .any(|r| !(r.re.is_finite() && r.im.is_finite()))
+        {
+            return Some("a multiplier or exponent is not finite".into());
+        }
+        let outside = self
+            .multipliers
+            .iter()
+            .filter(|r| r.norm() > 1.0 + UNIT_CIRCLE_TOL)
+            .count();
+        (outside != self.unstable).then(|| {
+            format!(
+                "{} unstable multipliers stated, {outside} of its multipliers are outside the unit circle",
+                self.unstable
+            )
+        })
+    }
+
     /// The real (`real = true`) or complex multiplier nearest the unit
     /// circle.
     pub fn critical(&self, real: bool) -> Option<C64> {

@@ -119,16 +119,37 @@ impl Problem for HarmonicBalance<'_> {
         let mut structure = self.hill_structure;
         let fl = floquet::floquet_with(self, &c, omega, &mut structure).ok();
         self.hill_structure = structure;
-        let tests = match &fl {
-            Some(f) => vec![
-                Test::Sign(f.real_crossing_test()),
-                Test::Count(f.complex_unstable()),
-            ],
-            None => Vec::new(),
-        };
+        let tests = tests_of(fl.as_ref());
         Ok(Monitor {
             tests,
             info: OrbitInfo { floquet: fl },
         })
+    }
+}
+
+/// The test functions of an orbit with Floquet analysis `fl` (none without
+/// one): the real multipliers' crossing ([`floquet::Floquet::real_crossing_test`])
+/// and the count of complex ones outside the circle.
+pub(crate) fn tests_of(fl: Option<&floquet::Floquet>) -> Vec<Test> {
+    match fl {
+        Some(f) => vec![
+            Test::Sign(f.real_crossing_test()),
+            Test::Count(f.complex_unstable()),
+        ],
+        None => Vec::new(),
+    }
+}
+
+impl OrbitInfo {
+    /// Why an orbit's data and test functions `tests`, as read back from a
+    /// checkpoint, are not what [`Problem::monitor`] computes: its Floquet
+    /// data disagree with themselves ([`floquet::Floquet::inconsistency`]),
+    /// or the tests are not those of its multipliers.
+    pub(crate) fn restored_inconsistency(&self, tests: &[Test]) -> Option<String> {
+        if let Some(why) = self.floquet.as_ref().and_then(|f| f.inconsistency()) {
+            return Some(why);
+        }
+        (tests != tests_of(self.floquet.as_ref()).as_slice())
+            .then(|| "its test functions are not those of its multipliers".to_owned())
     }
 }
