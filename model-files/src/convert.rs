@@ -12,7 +12,7 @@
 
 use ssm_api::{
     Constraints, Harmonic, MechanicalInfo, MechanicalSystem, Model, PolyTerm, PolyVector,
-    SparseMatrix, TimeKind,
+    SparseMatrix, TimeKind, SYMMETRY_TOLERANCE,
 };
 
 use crate::error::ExportError;
@@ -20,17 +20,12 @@ use crate::mtx::summed;
 use crate::outputs::{valid_name, NamedOutput};
 use crate::ModelFiles;
 
-/// Largest difference between `M(i, j)` and `M(j, i)` accepted, relative to
-/// the largest entry of `M`: rounding of a matrix assembled in double
-/// precision (some 1e-16 per operation, times the terms summed into an
-/// entry) stays far below it, a modelling error far above.
-const SYMMETRY_TOLERANCE: f64 = 1e-10;
-
 /// What makes `M` singular or not a mass matrix, checked on its entries: a
 /// degree of freedom whose row or column is empty (no inertia), a diagonal
 /// entry that is not positive, or an entry pair `M(i, j) != M(j, i)` (beyond
 /// [`SYMMETRY_TOLERANCE`] of the largest entry: the kinetic energy
-/// `x'^T M x' / 2` has a symmetric `M`). Positive definiteness is not
+/// `x'^T M x' / 2` has a symmetric `M`; the builder checks the same, here
+/// the message names the file). Positive definiteness is not
 /// checked beyond the diagonal (a constrained model's `M` may be singular).
 /// `None` when no such defect shows.
 pub fn mass_defect(m: &SparseMatrix, constrained: bool) -> Option<String> {
@@ -82,31 +77,21 @@ pub fn mass_defect(m: &SparseMatrix, constrained: bool) -> Option<String> {
     asymmetry(m)
 }
 
-/// The first entry pair of `m` (in column order) with `|m(i, j) - m(j, i)|`
-/// above [`SYMMETRY_TOLERANCE`] of the largest entry, as the message naming
-/// it.
+/// The message naming the first entry pair of `m` that is not symmetric
+/// ([`SparseMatrix::asymmetry`] at [`SYMMETRY_TOLERANCE`]).
 fn asymmetry(m: &SparseMatrix) -> Option<String> {
-    let entries = summed(m);
-    let largest = entries.iter().fold(0.0_f64, |a, e| a.max(e.2.abs()));
-    let at: std::collections::HashMap<(usize, usize), f64> =
-        entries.iter().map(|&(i, j, v)| ((i, j), v)).collect();
-    entries.iter().find_map(|&(i, j, v)| {
-        let w = at.get(&(j, i)).copied().unwrap_or(0.0);
-        ((v - w).abs() > SYMMETRY_TOLERANCE * largest).then(|| {
-            format!(
-                "M({}, {}) = {v} but M({}, {}) = {w}: a mass matrix must be symmetric (the \
-                 kinetic energy x'^T M x' / 2 holds only its symmetric part); the entries \
-                 differ by {:.3e}, above {SYMMETRY_TOLERANCE:e} of the largest entry \
-                 {largest:e}; write both entries equal (or declare the file symmetric and \
-                 give the lower triangle)",
-                i + 1,
-                j + 1,
-                j + 1,
-                i + 1,
-                (v - w).abs()
-            )
-        })
-    })
+    let (i, j, v, w) = m.asymmetry(SYMMETRY_TOLERANCE)?;
+    Some(format!(
+        "M({}, {}) = {v} but M({}, {}) = {w}: a mass matrix must be symmetric (the \
+         kinetic energy x'^T M x' / 2 holds only its symmetric part); the entries \
+         differ by {:.3e}, above {SYMMETRY_TOLERANCE:e} of the largest entry; write both \
+         entries equal (or declare the file symmetric and give the lower triangle)",
+        i + 1,
+        j + 1,
+        j + 1,
+        i + 1,
+        (v - w).abs()
+    ))
 }
 
 impl ModelFiles {
