@@ -438,7 +438,7 @@ fn default_rho_max(
         let mut rho = top * 1e-17_f64.max(f64::MIN_POSITIVE / top);
         while rho <= top {
             let diverged = accuracy::backbone_error(ssm, &modal, master.lambda, rho, order)
-                .is_some_and(|e| !(e <= CONVERGENCE_LIMIT));
+                .is_some_and(|e| e.is_nan() || e > CONVERGENCE_LIMIT);
             let reached = pb.reaches(rho, range);
             if diverged {
                 if reached && cut.is_none_or(|(_, r)| rho < r) {
