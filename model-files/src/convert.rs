@@ -12,7 +12,7 @@
 
 use ssm_api::{
     Constraints, Harmonic, MechanicalInfo, MechanicalSystem, Model, PolyTerm, PolyVector,
-    SparseMatrix, TimeKind,
+    SparseMatrix, TimeKind, SYMMETRY_TOLERANCE,
 };
 
 use crate::error::ExportError;
@@ -21,8 +21,13 @@ use crate::outputs::{valid_name, NamedOutput};
 use crate::ModelFiles;
 
 /// What makes `M` singular or not a mass matrix, checked on its entries: a
-/// degree of freedom whose row or column is empty (no inertia), or a diagonal
-/// entry that is not positive. `None` when no such defect shows.
+/// degree of freedom whose row or column is empty (no inertia), a diagonal
+/// entry that is not positive, or an entry pair `M(i, j) != M(j, i)` (beyond
+/// [`SYMMETRY_TOLERANCE`] of the largest entry: the kinetic energy
+/// `x'^T M x' / 2` has a symmetric `M`; the builder checks the same, here
+/// the message names the file). Positive definiteness is not
+/// checked beyond the diagonal (a constrained model's `M` may be singular).
+/// `None` when no such defect shows.
 pub fn mass_defect(m: &SparseMatrix, constrained: bool) -> Option<String> {
     let n = m.nrows as usize;
     let hint = if constrained {
@@ -69,7 +74,24 @@ pub fn mass_defect(m: &SparseMatrix, constrained: bool) -> Option<String> {
             diag[i]
         ));
     }
-    None
+    asymmetry(m)
+}
+
+/// The message naming the first entry pair of `m` that is not symmetric
+/// ([`SparseMatrix::asymmetry`] at [`SYMMETRY_TOLERANCE`]).
+fn asymmetry(m: &SparseMatrix) -> Option<String> {
+    let (i, j, v, w) = m.asymmetry(SYMMETRY_TOLERANCE)?;
+    Some(format!(
+        "M({}, {}) = {v} but M({}, {}) = {w}: a mass matrix must be symmetric (the \
+         kinetic energy x'^T M x' / 2 holds only its symmetric part); the entries \
+         differ by {:.3e}, above {SYMMETRY_TOLERANCE:e} of the largest entry; write both \
+         entries equal (or declare the file symmetric and give the lower triangle)",
+        i + 1,
+        j + 1,
+        j + 1,
+        i + 1,
+        (v - w).abs()
+    ))
 }
 
 impl ModelFiles {
@@ -451,5 +473,34 @@ fn state_named(name: &str, n: usize, nc: usize) -> Option<usize> {
     match rest.strip_suffix("_dot") {
         Some(v) => number(v, n).map(|k| n + k - 1),
         None => number(rest, n).map(|k| k - 1),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn matrix(entries: &[(usize, usize, f64)]) -> SparseMatrix {
+        let mut m = SparseMatrix::zeros(2, 2);
+        for &(i, j, v) in entries {
+            m.push(i, j, v);
+        }
+        m
+    }
+
+    /// An asymmetry at rounding level (1e-14 of the largest entry) is
+    /// accepted; one of 1e-8 is refused naming both entries.
+    #[test]
+    fn mass_asymmetry_beyond_rounding_is_refused() {
+        let base = [(0, 0, 2.0), (1, 1, 1.0), (0, 1, 0.3)];
+        let with = |v: f64| {
+            let mut e = base.to_vec();
+            e.push((1, 0, v));
+            matrix(&e)
+        };
+        assert_eq!(mass_defect(&with(0.3 + 2e-14), false), None);
+        let e = mass_defect(&with(0.3 + 2e-8), false).expect("refused");
+        assert!(e.contains("M(2, 1) = 0.30000002 but M(1, 2) = 0.3"), "{e}");
+        assert!(e.contains("must be symmetric"), "{e}");
     }
 }

@@ -63,7 +63,7 @@ pub use listing::{select_model, ModelInfo, ParamInfo};
 pub use mechanical::{BuildError, Constraints, Equilibrium, MechanicalSystem};
 pub use model::{
     Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyTerm, PolyVector, SparseMatrix,
-    StateInfo, StateKind, TimeKind, Triplet, VarPower, Weight,
+    StateInfo, StateKind, TimeKind, Triplet, VarPower, Weight, SYMMETRY_TOLERANCE,
 };
 pub use params::{ParamKind, ParamSpec, ParamValue, Params, PATH_KIND};
 pub use plugin::{SsmPlugin, SsmPluginRef, API_VERSION};

@@ -10,7 +10,7 @@ use abi_stable::std_types::{RString, RVec};
 use crate::expr::{Expr, ExprVector};
 use crate::model::{
     Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyVector, SparseMatrix, StateInfo,
-    StateKind, TimeKind, Weight,
+    StateKind, TimeKind, Weight, SYMMETRY_TOLERANCE,
 };
 
 /// Configuration constraints `g(x) = 0` (eq. 2) in the `n` displacements: the
@@ -125,6 +125,18 @@ pub enum BuildError {
         /// 1-based constraint index.
         index: usize,
     },
+    /// The mass matrix is not symmetric (beyond [`SYMMETRY_TOLERANCE`]).
+    #[error("M({row}, {col}) = {value} but M({col}, {row}) = {mirror}: a mass matrix must be symmetric (the kinetic energy x'^T M x' / 2 holds only its symmetric part; tolerance {} of its largest entry)", SYMMETRY_TOLERANCE)]
+    AsymmetricMass {
+        /// 1-based row of the first entry.
+        row: usize,
+        /// 1-based column.
+        col: usize,
+        /// `M(row, col)`.
+        value: f64,
+        /// `M(col, row)`.
+        mirror: f64,
+    },
     /// Names do not match the number of degrees of freedom, or repeat.
     #[error("names: {0}")]
     Names(String),
@@ -222,6 +234,14 @@ impl MechanicalSystem {
             ("K", &self.stiffness),
         ] {
             check_matrix(what, m, n)?;
+        }
+        if let Some((row, col, value, mirror)) = self.mass.asymmetry(SYMMETRY_TOLERANCE) {
+            return Err(BuildError::AsymmetricMass {
+                row: row + 1,
+                col: col + 1,
+                value,
+                mirror,
+            });
         }
         check_poly("f(x, x')", &self.internal_force, n, 2 * n)?;
         check_degree("f(x, x')", &self.internal_force, 2)?;
@@ -545,6 +565,26 @@ fn check_degree(what: &'static str, p: &PolyVector, min: u32) -> Result<(), Buil
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every plugin's mass matrix goes through the builder: `M(1, 2) = 0.5`,
+    /// `M(2, 1) = -0.5` is refused naming both entries, a stiffness that is
+    /// not symmetric (follower forces) is accepted.
+    #[test]
+    fn an_asymmetric_mass_matrix_is_refused() {
+        let mut s = MechanicalSystem::new("t", &["x1", "x2"]);
+        s.mass = SparseMatrix::diagonal(&[1.0, 1.0]);
+        s.stiffness = SparseMatrix::diagonal(&[4.0, 9.0]);
+        s.stiffness.push(0, 1, 0.3);
+        assert!(s.clone().into_model().is_ok());
+        s.mass.push(0, 1, 0.5);
+        s.mass.push(1, 0, -0.5);
+        let e = s.into_model().unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("M(2, 1) = -0.5 but M(1, 2) = 0.5: a mass matrix must be symmetric"),
+            "{e}"
+        );
+    }
 
     /// One pendulum-like dof with a spherical-type constraint: checks the block
     /// layout of eq. (5) entry by entry, and that `G_nl^T mu` is the exact

@@ -76,7 +76,30 @@ impl SparseMatrix {
             .iter()
             .map(|t| (t.row as usize, t.col as usize, t.value))
     }
+
+    /// The first entry pair, in column order, whose entries `m(i, j)` and
+    /// `m(j, i)` (duplicates summed) differ by more than `rel_tol` times the
+    /// largest entry, as `(i, j, m(i, j), m(j, i))` (0-based); `None` for a
+    /// symmetric matrix. See [`SYMMETRY_TOLERANCE`].
+    pub fn asymmetry(&self, rel_tol: f64) -> Option<(usize, usize, f64, f64)> {
+        let mut at: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
+        for (i, j, v) in self.iter() {
+            *at.entry((j, i)).or_insert(0.0) += v;
+        }
+        let largest = at.values().fold(0.0_f64, |a, v| a.max(v.abs()));
+        at.iter().find_map(|(&(j, i), &v)| {
+            let w = at.get(&(i, j)).copied().unwrap_or(0.0);
+            ((v - w).abs() > rel_tol * largest).then_some((i, j, v, w))
+        })
+    }
 }
+
+/// Largest difference between `M(i, j)` and `M(j, i)` accepted in a mass
+/// matrix, relative to its largest entry: rounding of a matrix assembled in
+/// double precision (some 1e-16 per operation, times the terms summed into
+/// an entry) stays far below it, a modelling error far above. The kinetic
+/// energy `x'^T M x' / 2` holds only the symmetric part of `M`.
+pub const SYMMETRY_TOLERANCE: f64 = 1e-10;
 
 /// A variable raised to a power inside a monomial.
 #[repr(C)]

@@ -186,6 +186,43 @@ impl Journal {
     fn written(&self) -> Option<PathBuf> {
         self.file.borrow().as_ref().map(|(p, _)| p.clone())
     }
+
+    /// The default journal `<out>.reference-partial.csv`.
+    fn default_path(&self) -> Option<PathBuf> {
+        self.path
+            .as_ref()
+            .map(|p| PathBuf::from(format!("{}.csv", p.display())))
+    }
+
+    /// The journal a resumed run keeps, whatever its end: its own went
+    /// under its process id when the stopped run's was in the way, and
+    /// it replays the stopped run's orbits (restored in the same order)
+    /// before its own, so whichever of the two holds more is the whole
+    /// record; it takes the default name and the other is removed. So
+    /// resumes that fail again leave one journal, not one more each.
+    fn settle_resumed(&self) -> Option<PathBuf> {
+        let written = self.written()?;
+        let Some(default) = self.default_path().filter(|d| *d != written) else {
+            return Some(written);
+        };
+        let size = |p: &std::path::Path| {
+            std::fs::symlink_metadata(p)
+                .ok()
+                .filter(|m| m.file_type().is_file())
+                .map(|m| m.len())
+        };
+        match (size(&written), size(&default)) {
+            (Some(new), Some(old)) if new < old => {
+                let _ = std::fs::remove_file(&written);
+                Some(default)
+            }
+            (Some(_), Some(_)) => match std::fs::rename(&written, &default) {
+                Ok(()) => Some(default),
+                Err(_) => Some(written),
+            },
+            _ => Some(written),
+        }
+    }
 }
 
 /// The spinner, the reference journal and its checkpoint.
@@ -359,7 +396,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     };
     let result = pipeline::run(&scene, &mut registry, &progress);
     progress.spinner.finish();
-    let journal = progress.journal.written();
+    let journal = if resume.is_some() {
+        progress.journal.settle_resumed()
+    } else {
+        progress.journal.written()
+    };
     let kept = progress.checkpoint.written();
     let stopped = |e: anyhow::Error| {
         if let Some(p) = &journal {
@@ -396,11 +437,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     // supersede the stopped run's journal
     let mut done: Vec<PathBuf> = journal.into_iter().chain(kept).collect();
     if resume.is_some() {
-        done.extend(
-            Journal::beside(&out)
-                .path
-                .map(|p| PathBuf::from(format!("{}.csv", p.display()))),
-        );
+        done.extend(progress.journal.default_path());
     }
     for p in done {
         let _ = std::fs::remove_file(p);

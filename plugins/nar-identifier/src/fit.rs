@@ -33,6 +33,20 @@ use crate::embedding::{MonomialBasis, Series};
 /// significant digits even for exact data.
 pub const MAX_CONDITION: f64 = 1e12;
 
+/// Largest `rcond` accepted. `rcond` drops the singular values of the
+/// equilibrated regression below that fraction of the largest, as the noise
+/// level of the data would blur them; a fraction of 10 % drops directions
+/// determined to one digit even with noise of 10 % of the signal, beyond
+/// which no map is identified from the data at all.
+pub const RCOND_MAX: f64 = 0.1;
+
+/// The residual a regularization may leave beyond the data's own (see
+/// [`Fit::excess`]), as a fraction of the signal: a misfit of one part in
+/// a million moves the identified multipliers by about as much (first-order
+/// perturbation of the companion matrix), below the decay per sample of
+/// any damping the identification reports (`zeta omega T` of 1e-4 and up).
+pub const EXCESS_FLOOR: f64 = 1e-6;
+
 /// How the least-squares problem is regularized.
 #[derive(Debug, Clone, Copy)]
 pub struct FitSettings {
@@ -68,6 +82,10 @@ pub struct Fit {
     pub rank: usize,
     /// `|Psi x - b| / |b|` (weighted).
     pub relative_residual: f64,
+    /// The same of the unregularized least-squares solution: what no
+    /// map of this order explains in these data (their noise and the
+    /// truncation of the map), the data's own noise level.
+    pub data_residual: f64,
     /// Regression rows.
     pub rows: usize,
     /// Scale of the data (largest `|y|`).
@@ -118,6 +136,34 @@ pub enum FitError {
         scale: f64,
         /// Polynomial order.
         order: usize,
+    },
+    /// Truncation kept fewer singular directions than the linear part of
+    /// the map has coefficients.
+    #[error("rcond = {rcond:e} keeps {rank} of {unknowns} singular values, fewer than the {needed} coefficients of the map's linear part (2 nu): its multipliers and damping ratios would be a projection, not a fit; lower rcond (e.g. 1e-10) or use ridge")]
+    RankTooLow {
+        /// The truncation.
+        rcond: f64,
+        /// Singular values kept.
+        rank: usize,
+        /// Unknowns.
+        unknowns: usize,
+        /// The linear coefficients.
+        needed: usize,
+    },
+    /// The regularization left unexplained a part of the data that the
+    /// least-squares fit explains.
+    #[error("the regularized fit leaves {residual:.2e} of the data unexplained (relative residual), the least-squares fit {data:.2e}: the regularization removed {excess:.2e} of the signal, above the data's own misfit (their noise level) and above {floor:e}, so the identified linear part (multipliers, damping ratios) cannot be trusted; lower {setting}")]
+    Regularized {
+        /// The regularized fit's relative residual.
+        residual: f64,
+        /// The unregularized fit's.
+        data: f64,
+        /// The part removed by the regularization.
+        excess: f64,
+        /// [`EXCESS_FLOOR`].
+        floor: f64,
+        /// `ridge`, `rcond` or both.
+        setting: &'static str,
     },
     /// The factorization produced non-finite numbers.
     #[error(
@@ -252,6 +298,38 @@ pub fn fit(series: &Series, basis: &MonomialBasis, set: &FitSettings) -> Result<
         res2 += (rx - ci).powi(2);
     }
     let b2 = c.iter().map(|v| v * v).sum::<f64>() + r_tail * r_tail;
+    if set.rcond > 0.0 && rank < dim {
+        return Err(FitError::RankTooLow {
+            rcond: set.rcond,
+            rank,
+            unknowns: n,
+            needed: dim,
+        });
+    }
+    // the discrepancy principle (Morozov; Hansen, Rank-Deficient and
+    // Discrete Ill-Posed Problems (1998), Sect. 7.2): a regularization is
+    // sound while the misfit it adds stays at the data's noise level. The
+    // data's own level, noise and the map's truncation together, is the
+    // residual of the unregularized least squares, |R[N, N]| / |b|; the
+    // misfit the filter factors add is |R11 x - c| / |b|. Above both it and
+    // EXCESS_FLOOR (noise-free data) the fit discards signal, first the
+    // slow decay that the damping ratios are read from.
+    let b = b2.max(f64::MIN_POSITIVE).sqrt();
+    let (residual, data) = (res2.sqrt() / b, r_tail / b);
+    let excess = (res2 - r_tail * r_tail).max(0.0).sqrt() / b;
+    if excess > data.max(EXCESS_FLOOR) {
+        return Err(FitError::Regularized {
+            residual,
+            data,
+            excess,
+            floor: EXCESS_FLOOR,
+            setting: match (set.ridge > 0.0, set.rcond > 0.0) {
+                (true, true) => "ridge and rcond",
+                (true, false) => "ridge",
+                _ => "rcond",
+            },
+        });
+    }
     let coefficients: Vec<f64> = (0..n)
         .map(|j| x[j] / col_norm[j] * scale.powi(1 - basis.degree(j) as i32))
         .collect();
@@ -263,7 +341,8 @@ pub fn fit(series: &Series, basis: &MonomialBasis, set: &FitSettings) -> Result<
         singular_values: s,
         condition,
         rank,
-        relative_residual: (res2 / b2.max(f64::MIN_POSITIVE)).sqrt(),
+        relative_residual: residual,
+        data_residual: data,
         rows,
         scale,
     })
@@ -363,10 +442,57 @@ mod tests {
         let basis = MonomialBasis::new(2, 3);
         let e = fit(&s, &basis, &plain(0.0)).unwrap_err();
         assert!(matches!(e, FitError::RankDeficient { .. }), "{e}");
-        // with truncation the same data give a (minimum-norm) answer
-        let f = fit(&s, &basis, &plain(1e-10)).unwrap();
-        assert!(f.rank < basis.len());
-        assert!(f.relative_residual < 1e-10);
+        // with truncation they keep one singular value, fewer than the two
+        // coefficients of the linear part: refused, not a projection
+        let e = fit(&s, &basis, &plain(1e-10)).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                FitError::RankTooLow {
+                    rank: 1,
+                    needed: 2,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+    }
+
+    /// A regularization that leaves part of exactly fitted data unexplained
+    /// (ridge 0.3 on the recurrence of `recovers_a_known_recurrence`, whose
+    /// least-squares residual is at rounding level) is refused naming ridge;
+    /// a light one (1e-12) is kept.
+    #[test]
+    fn refuses_a_regularization_that_discards_signal() {
+        let exact = |a: f64, b: f64| 1.6 * b - 0.9 * a + 0.3 * a * b;
+        let mut v = vec![0.3, 0.1];
+        for k in 0..400 {
+            let next = exact(v[k], v[k + 1]);
+            v.push(next);
+        }
+        let s = series(vec![v]);
+        let basis = MonomialBasis::new(2, 2);
+        let ridge = |r: f64| FitSettings {
+            ridge: r,
+            ..plain(0.0)
+        };
+        let e = fit(&s, &basis, &ridge(0.3)).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                FitError::Regularized {
+                    setting: "ridge",
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let f = fit(&s, &basis, &ridge(1e-12)).unwrap();
+        assert!(
+            f.relative_residual < EXCESS_FLOOR,
+            "{}",
+            f.relative_residual
+        );
     }
 
     /// Signals of scale 1e-150 or 1e150 put order-5 coefficients (scale^-4)

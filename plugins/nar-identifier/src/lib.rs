@@ -158,8 +158,14 @@ fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, Plu
             "must be in [0, 1) (relative to the largest singular value)",
         ));
     }
-    if !(rcond.is_finite() && (0.0..1.0).contains(&rcond)) {
-        return Err(param_err("rcond", "must be in [0, 1)"));
+    if !(rcond.is_finite() && (0.0..=fit::RCOND_MAX).contains(&rcond)) {
+        return Err(param_err(
+            "rcond",
+            &format!(
+                "must be in [0, {}] (singular values below rcond times the largest are dropped: set it near the data's relative noise level, e.g. 1e-10 for simulated data), found {rcond}",
+                fit::RCOND_MAX
+            ),
+        ));
     }
     if decimate == 0 {
         return Err(param_err("decimate", "must be at least 1"));
@@ -234,6 +240,10 @@ fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, Plu
             FitError::RankDeficient { .. } | FitError::NotFinite => {
                 (ErrorKind::ReductionFailed, "regression".to_owned())
             }
+            FitError::RankTooLow { .. } => (ErrorKind::InvalidParameter, "rcond".to_owned()),
+            FitError::Regularized { setting, .. } => {
+                (ErrorKind::InvalidParameter, (*setting).to_owned())
+            }
         };
         PluginError::new(kind, &ctx, &e.to_string())
     })?;
@@ -275,6 +285,7 @@ fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, Plu
         Diagnostic::values("map_period", &[series.period]),
         Diagnostic::values("data_scale", &[fitted.scale]),
         Diagnostic::values("relative_residual", &[fitted.relative_residual]),
+        Diagnostic::values("least_squares_residual", &[fitted.data_residual]),
         Diagnostic::values("condition_number", &[fitted.condition]),
         Diagnostic::values("singular_values", &fitted.singular_values),
         Diagnostic::values("rank_used", &[fitted.rank as f64]),

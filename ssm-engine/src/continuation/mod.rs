@@ -486,6 +486,9 @@ pub trait Ledger<I> {
     fn step(&self, step: &Step<'_, I>);
     /// Records the end of the open run.
     fn close(&self, stop: &Stop);
+    /// Withdraws the run just opened, fresh and without a step recorded
+    /// (its start failed): the next run opened takes its number.
+    fn withdraw(&self);
 }
 
 /// A ledger that keeps nothing.
@@ -497,6 +500,7 @@ impl<I> Ledger<I> for NoLedger {
     }
     fn step(&self, _step: &Step<'_, I>) {}
     fn close(&self, _stop: &Stop) {}
+    fn withdraw(&self) {}
 }
 
 /// Continues the branch through the solution `u0` in the direction `t0`,
@@ -507,13 +511,39 @@ pub fn continue_branch<P, O>(
     u0: Vec<f64>,
     t0: &[f64],
     s: &Settings,
-    mut observe: O,
+    observe: O,
 ) -> Result<Branch<P::Info>, ContinuationError>
 where
     P: Problem,
     O: FnMut(&Step<'_, P::Info>) -> bool,
 {
-    let first = point_at(p, u0, t0)?;
+    let first = start_point(p, u0, t0)?;
+    Ok(continue_from(p, first, s, observe))
+}
+
+/// The start point of a branch through the solution `u0` in the direction
+/// `t0`: its tangent and monitor, the only part of a continuation that can
+/// fail (so that a caller keeping a record of its runs can withdraw one
+/// that cannot start).
+pub fn start_point<P: Problem>(
+    p: &mut P,
+    u0: Vec<f64>,
+    t0: &[f64],
+) -> Result<Point<P::Info>, ContinuationError> {
+    Ok(point_at(p, u0, t0)?)
+}
+
+/// [`continue_branch`] from its [`start_point`] `first`.
+pub fn continue_from<P, O>(
+    p: &mut P,
+    first: Point<P::Info>,
+    s: &Settings,
+    mut observe: O,
+) -> Branch<P::Info>
+where
+    P: Problem,
+    O: FnMut(&Step<'_, P::Info>) -> bool,
+{
     let trace = Trace {
         points: vec![first],
         events: Vec::new(),
@@ -527,13 +557,13 @@ where
         steps: 0,
     };
     if !observe(&start) {
-        return Ok(Branch {
+        return Branch {
             points: trace.points,
             events: trace.events,
             stop: Stop::Interrupted,
-        });
+        };
     }
-    Ok(resume_branch(p, trace, s, observe))
+    resume_branch(p, trace, s, observe)
 }
 
 /// Continues a traced branch from its last point with the trace's step size

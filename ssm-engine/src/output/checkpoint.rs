@@ -314,6 +314,10 @@ impl Ledger<OrbitInfo> for Checkpoint {
             stop,
         });
     }
+
+    fn withdraw(&self) {
+        self.run.set(self.run.get().saturating_sub(1));
+    }
 }
 
 /// The first of `candidates` that does not exist, created (never over an

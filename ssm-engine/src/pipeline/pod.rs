@@ -16,7 +16,7 @@ use crate::compare::pod::{
 use crate::compare::ssm_run::{ssm_case_run, SsmRom};
 use crate::model::system::{OutputMap, System};
 use crate::reduce::pod::Truncation;
-use crate::scene::{PodRun, PodSection, SceneFile};
+use crate::scene::{load_sampling, PodRun, PodSection, SceneFile};
 use crate::ssm::{self, SsmOptions};
 
 /// The outputs `[pod]` compares (its `outputs`, else `[outputs]
@@ -67,7 +67,7 @@ fn load_case(
     Ok(LoadCase {
         label,
         epsilon: run.epsilon,
-        omega: run.omega,
+        omega: *run.omega.get_ref(),
         t_end: run.t_end,
         start,
         trained,
@@ -183,7 +183,15 @@ pub fn pod_stage(
         progress.stage("POD: SSM models for comparison");
     }
     let ssm = ssm_roms(scene, sys, sec)?;
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<String> = cases
+        .iter()
+        .filter_map(|c| {
+            load_sampling(settings.step, c.omega)
+                .ok()
+                .flatten()
+                .map(|w| format!("[pod] {} run: {w}", c.label))
+        })
+        .collect();
     let mut runs = Vec::with_capacity(cases.len());
     for (k, case) in cases.into_iter().enumerate() {
         progress.stage(&format!("POD: {} (full and reduced runs)", case.label));

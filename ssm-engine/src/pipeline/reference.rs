@@ -126,6 +126,9 @@ pub fn reference_stage(
         warnings.extend(branch.notes.iter().map(|n| {
             format!("[reference] eps = {eps}: a start from the reduced model was dropped: {n}")
         }));
+        warnings.extend(branch.failed.iter().map(|f| {
+            format!("[reference] eps = {eps}: {f}; the branches traced are written without it")
+        }));
         let mut doubled = std::mem::take(&mut branch.doubled);
         let seeded = std::mem::take(&mut branch.seeded);
         let first = branches.len();
@@ -293,6 +296,7 @@ mod tests {
             doubled: Vec::new(),
             seeded: Vec::new(),
             notes: Vec::new(),
+            failed: Vec::new(),
             multiplier_check: check,
         }
     }

@@ -13,7 +13,7 @@ use super::{lift_outputs, Reduction};
 use crate::fom::hht::{integrate, HhtOptions};
 use crate::fom::{given_start, DaeProblem};
 use crate::model::system::System;
-use crate::scene::{ReduceSection, SceneFile, MAX_POD_STEPS};
+use crate::scene::{load_sampling, ReduceSection, SceneFile, MAX_POD_STEPS};
 
 /// The reducers the engine offers itself.
 pub const ENGINE_REDUCERS: [&str; 1] = ["pod"];
@@ -78,6 +78,9 @@ impl PodParams {
                 "epsilon must be finite and omega a non-negative frequency, found {} and {}",
                 self.epsilon, self.omega
             ));
+        }
+        if let Err(m) = load_sampling(self.step, self.omega) {
+            return Some(m);
         }
         if !(-1.0 / 3.0..=0.0).contains(&self.hht_alpha) {
             return Some(format!(
@@ -208,6 +211,12 @@ pub fn engine_reduce(
             )
         })
         .collect();
+    if let Ok(Some(w)) = load_sampling(params.step, params.omega) {
+        diagnostics.push(Diagnostic::text(
+            "warning_sampling",
+            &format!("training run: {w}"),
+        ));
+    }
     diagnostics.extend([
         Diagnostic::values("reduced_coordinates", &[reduced.u.ncols() as f64]),
         Diagnostic::values("constraints_removed", &[c.removed() as f64]),

@@ -28,6 +28,7 @@ use crate::scene::ForcingSection;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{invariance_error, polar, Polar};
 use crate::ssm::forced::{table_warning, ForcedSsm};
+use crate::ssm::modal_residual::ModalResidual;
 use crate::ssm::SsmExpansion;
 use crate::C64;
 
@@ -95,10 +96,18 @@ pub fn forced_response_one_pair(
         .as_ref()
         .map_or(vec![ssm.order], |o| o.get_ref().clone());
     let eps_max = eps_list.iter().copied().fold(0.0, f64::max);
-    let rho_max = sec.rho_max.as_ref().map_or_else(
-        || 3.0 * eps_max * s.norm() / masters[0].lambda.re.abs().max(1e-300),
-        |r| *r.get_ref(),
-    );
+    let mut warnings = Vec::new();
+    let mut cut_short = false;
+    let rho_max = match &sec.rho_max {
+        Some(r) => *r.get_ref(),
+        None => {
+            let (rho_max, cut) =
+                default_rho_max(ssm, sys, &masters[0], &pol, &orders, eps_max * s, range);
+            cut_short = cut.is_some();
+            warnings.extend(cut);
+            rho_max
+        }
+    };
     let points = *sec.points.get_ref();
     let series: Vec<Vec<C64>> = outputs
         .iter()
@@ -129,7 +138,6 @@ pub fn forced_response_one_pair(
     };
     let mut rows = Vec::new();
     let mut curves = Vec::new();
-    let mut warnings = Vec::new();
     let weights: Vec<&[(usize, f64)]> = outputs.iter().map(|o| o.weights.as_slice()).collect();
     let table_error = ctx.forced.tabulate_outputs(range.0, range.1, &weights)?;
     if let Some(w) = table_warning(table_error, range) {
@@ -155,7 +163,11 @@ pub fn forced_response_one_pair(
             if tried.last().is_some_and(|a| a.k == k) {
                 continue;
             }
-            let (r, c, modal) = ctx.curve(order, eps, k)?;
+            let (r, c, modal) = match ctx.curve(order, eps, k) {
+                // the whole response lies beyond the convergence limit (warned)
+                Err(FrcError::Empty { .. }) if cut_short => break,
+                other => other?,
+            };
             let peak = r.iter().map(FrcRow::plotted).fold(0.0, f64::max);
             let mut estimate = modal;
             if let Some(prev) = tried.last_mut() {
@@ -176,6 +188,9 @@ pub fn forced_response_one_pair(
                 chosen = Some(tried.len() - 1);
                 break;
             }
+        }
+        if tried.is_empty() {
+            continue;
         }
         let pick = match (k_na, chosen) {
             (Some(_), _) => 0,
@@ -374,6 +389,90 @@ impl Context<'_> {
             },
         };
         Ok((rows, curve, error_estimate))
+    }
+}
+
+/// Ratio of consecutive amplitudes of the scan of [`default_rho_max`]: fine
+/// enough to place the grid's end within 2 % of the response's largest
+/// amplitude, while 2000 amplitudes cover 17 decades.
+const SCAN_RATIO: f64 = 1.02;
+
+/// The grid's end over the largest amplitude the leading-order response
+/// reaches in the range: the scan's step (2 %) and the shift of the peak by
+/// the non-autonomous terms of higher order (a few percent where the curve
+/// is trusted) stay inside it; spurious roots of the truncated amplitude
+/// equation, which come from its highest terms at amplitudes where they
+/// rival the lowest, lie well beyond (Duffing at O(13): 0.75 against a
+/// response up to 0.41).
+const REACH_MARGIN: f64 = 1.25;
+
+/// Where the scan of [`default_rho_max`] stops: the estimated relative error
+/// of the backbone frequency ([`accuracy::backbone_error`]) at 100 %: beyond
+/// it the truncated expansion no longer describes the motion (the amplitude
+/// is outside its convergence estimate), so its fixed points there are no
+/// response of the model.
+const CONVERGENCE_LIMIT: f64 = 1.0;
+
+/// The amplitude grid's end `rho_max` when `[forcing] rho_max` is not given,
+/// for the forcing `eps_s = eps s` on the master pair of `master`, and the
+/// warning when the expansion's convergence estimate cut the response short.
+///
+/// The response reaches amplitude `rho` inside `range` where
+/// [`OnePair::reaches`]: its damping lets it (`rho |Re g| <= eps |s|`, which
+/// for linear damping bounds it by the linear peak `eps |s| / |Re lambda|`)
+/// and its backbone `Im g(rho^2)` is within `eps |s| / rho` of the range.
+/// Amplitudes are scanned geometrically ([`SCAN_RATIO`]) from far below the
+/// linear peak up to three times it, at every order of `orders`, and the
+/// scan stops where the backbone's error estimate passes
+/// [`CONVERGENCE_LIMIT`]; the grid ends [`REACH_MARGIN`] above the largest
+/// amplitude reached (so that the fixed-point scan of [`one_pair_frc`]
+/// resolves the response, and neither the empty amplitudes beyond a lightly
+/// damped linear peak nor the spurious roots of a truncated expansion far
+/// above the response), at three times the linear peak at most, and at the
+/// convergence limit where the response still reached there (the warning).
+fn default_rho_max(
+    ssm: &SsmExpansion,
+    sys: &System,
+    master: &MasterMode,
+    pol: &Polar,
+    orders: &[usize],
+    eps_s: C64,
+    range: (f64, f64),
+) -> (f64, Option<String>) {
+    let linear = eps_s.norm() / master.lambda.re.abs().max(f64::MIN_POSITIVE);
+    let top = 3.0 * linear;
+    let modal = ModalResidual::new(ssm, sys, &master.left);
+    let (mut reach, mut cut) = (0.0_f64, None::<(usize, f64)>);
+    for &order in orders {
+        let pb = OnePair::new(pol, order, eps_s);
+        let mut rho = top * 1e-17_f64.max(f64::MIN_POSITIVE / top);
+        while rho <= top {
+            let diverged = accuracy::backbone_error(ssm, &modal, master.lambda, rho, order)
+                .is_some_and(|e| e.is_nan() || e > CONVERGENCE_LIMIT);
+            let reached = pb.reaches(rho, range);
+            if diverged {
+                if reached && cut.is_none_or(|(_, r)| rho < r) {
+                    cut = Some((order, rho));
+                }
+                break;
+            }
+            if reached {
+                reach = reach.max(rho);
+            }
+            rho *= SCAN_RATIO;
+        }
+    }
+    match cut {
+        Some((order, at)) => (
+            at,
+            Some(format!(
+                "the forced response at eps |s| = {:.3e} reaches beyond amplitude rho = {at:.4e}, where the O({order}) expansion's backbone error estimate passes {}: the curves end there (their part beyond is not a response of the model); lower the forcing or raise the order, or set [forcing] rho_max to see the expansion beyond",
+                eps_s.norm(),
+                percent(CONVERGENCE_LIMIT)
+            )),
+        ),
+        None if reach > 0.0 => ((REACH_MARGIN * reach).min(top), None),
+        None => (top, None),
     }
 }
 

@@ -207,6 +207,17 @@ impl OnePair {
         (self.force / rho).powi(2) - a * a
     }
 
+    /// Whether the leading-order problem has a fixed point of amplitude
+    /// `rho` at a frequency inside `range`: the discriminant is non-negative
+    /// and the backbone frequency `Im g` lies within its square root of the
+    /// range (the fixed points are at `Im g -+ sqrt(discriminant)`).
+    pub fn reaches(&self, rho: f64, range: (f64, f64)) -> bool {
+        let d = self.discriminant(rho);
+        let w = self.g(rho * rho).0.im;
+        let gap = (range.0 - w).max(w - range.1).max(0.0);
+        d >= 0.0 && gap <= d.sqrt()
+    }
+
     /// The fixed point at amplitude `rho` on side `sign` (`-1`: below the
     /// backbone frequency, `+1`: above), with its stability data
     /// `(trace, det)`. `None` where the discriminant is negative.

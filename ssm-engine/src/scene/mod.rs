@@ -20,7 +20,10 @@ mod simulate;
 mod validate;
 
 pub use crate::spectrum::Normalization;
-pub use pod::{PodRun, PodSection, MAX_POD_ROMS, MAX_POD_STEPS, MAX_POD_TESTS};
+pub use pod::{
+    load_sampling, PodRun, PodSection, MAX_POD_ROMS, MAX_POD_STEPS, MAX_POD_TESTS,
+    MIN_STEPS_PER_PERIOD,
+};
 pub use reduce::{DataSection, ReduceSection};
 pub use reference::{
     ReferenceSection, MAX_HARMONICS, MAX_REFERENCE_COEFFICIENTS, MAX_REFERENCE_CURVES,

@@ -16,6 +16,43 @@ pub const MAX_POD_ROMS: usize = 16;
 /// Most test runs.
 pub const MAX_POD_TESTS: usize = 32;
 
+/// Fewest HHT steps per forcing period without a warning. HHT is a
+/// second-order Newmark method: on an undamped oscillation of frequency
+/// `Omega` its period is too long by about `(Omega h)^2 / 12` relative
+/// (Hilber, Hughes & Taylor 1977; Hughes, *The Finite Element Method*
+/// (1987), Sect. 9.3), which is 0.8 % at 20 steps per period (`Omega h =
+/// 2 pi / 20`) and grows fourfold at each halving of the steps: beyond a
+/// few percent of phase per period the reduced and full responses compared
+/// differ by the integrator, not by the reduction.
+pub const MIN_STEPS_PER_PERIOD: f64 = 20.0;
+
+/// What the fixed HHT step `step` makes of a load of frequency `omega`: an
+/// error above the step's Nyquist frequency `pi / step` (fewer than two
+/// steps per period: the load is sampled as a slower one, aliased), a
+/// warning below [`MIN_STEPS_PER_PERIOD`] steps per period, nothing for
+/// `omega = 0` (a free run) or finer steps.
+pub fn load_sampling(step: f64, omega: f64) -> Result<Option<String>, String> {
+    if omega <= 0.0 {
+        return Ok(None);
+    }
+    let per_period = 2.0 * std::f64::consts::PI / (omega * step);
+    if omega * step > std::f64::consts::PI {
+        return Err(format!(
+            "omega = {omega} is above the Nyquist frequency pi / step = {:.6} of the HHT step {step} ({per_period:.3} steps per forcing period; at least 2 are needed, {MIN_STEPS_PER_PERIOD} for a phase error below 1 % per period): the step cannot resolve the load; lower step to at most {:.3e}",
+            std::f64::consts::PI / step,
+            2.0 * std::f64::consts::PI / (MIN_STEPS_PER_PERIOD * omega)
+        ));
+    }
+    if per_period < MIN_STEPS_PER_PERIOD {
+        return Ok(Some(format!(
+            "omega = {omega} gets {per_period:.1} HHT steps of {step} per forcing period, fewer than {MIN_STEPS_PER_PERIOD}: the integrator's period error, about (omega step)^2 / 12 = {:.1e} per period, is part of every response compared; lower step to at most {:.3e}",
+            (omega * step).powi(2) / 12.0,
+            2.0 * std::f64::consts::PI / (MIN_STEPS_PER_PERIOD * omega)
+        )));
+    }
+    Ok(None)
+}
+
 /// `[pod]`: the reducer's settings, the runs, the models compared.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -64,8 +101,8 @@ pub struct PodRun {
     #[serde(default)]
     pub epsilon: f64,
     /// Forcing frequency.
-    #[serde(default)]
-    pub omega: f64,
+    #[serde(default = "no_frequency")]
+    pub omega: Spanned<f64>,
     /// Length of the run.
     pub t_end: f64,
     /// Given displacements (the others zero), projected onto the constraints.
@@ -91,6 +128,9 @@ fn default_jacobian_samples() -> Spanned<usize> {
 }
 fn default_alpha() -> Spanned<f64> {
     Spanned::new(0..0, -0.1)
+}
+fn no_frequency() -> Spanned<f64> {
+    Spanned::new(0..0, 0.0)
 }
 fn no_tests() -> Spanned<Vec<PodRun>> {
     Spanned::new(0..0, Vec::new())
@@ -275,16 +315,40 @@ impl SceneFile {
                     r.epsilon
                 )));
             }
-            if !(r.omega.is_finite() && r.omega >= 0.0) {
+            let omega = *r.omega.get_ref();
+            if !(omega.is_finite() && omega >= 0.0) {
                 return Err(bad(format!(
-                    "omega must be a non-negative frequency, found {}",
-                    r.omega
+                    "omega must be a non-negative frequency, found {omega}"
                 )));
+            }
+            if let Err(m) = load_sampling(step, omega) {
+                return Err(self.invalid(r.omega.span(), &format!("{key}.omega"), m));
             }
             if let Some((name, _)) = r.given_start().into_iter().find(|(_, v)| !v.is_finite()) {
                 return Err(bad(format!("'{name}' must be a finite number")));
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Steps per period `2 pi / (omega step)`: 1.9 is an error (above
+    /// Nyquist), 2.1 and 19 are warnings, 21 and a free run are silent.
+    #[test]
+    fn load_sampling_refuses_aliasing_and_warns_on_coarse_steps() {
+        let step = 0.01;
+        let omega = |per_period: f64| 2.0 * std::f64::consts::PI / (per_period * step);
+        let e = load_sampling(step, omega(1.9)).unwrap_err();
+        assert!(e.contains("Nyquist"), "{e}");
+        for n in [2.1, 19.0] {
+            let w = load_sampling(step, omega(n)).unwrap().expect("warning");
+            assert!(w.contains("fewer than 20"), "{w}");
+        }
+        assert_eq!(load_sampling(step, omega(21.0)), Ok(None));
+        assert_eq!(load_sampling(step, 0.0), Ok(None));
     }
 }

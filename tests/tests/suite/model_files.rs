@@ -333,6 +333,15 @@ fn each_bad_file_is_named_with_its_line_and_problem() {
             vec!["M.mtx", "M(2, 2) = -2", "positive definite"],
         ),
         (
+            "non-symmetric mass matrix declared general",
+            vec![(
+                "M.mtx",
+                "%%MatrixMarket matrix coordinate real general\n2 2 4\n1 1 1.0\n2 2 1.0\n1 2 0.5\n2 1 -0.5\n".into(),
+            )],
+            "",
+            vec!["M.mtx", "M(2, 1) = -0.5 but M(1, 2) = 0.5", "must be symmetric"],
+        ),
+        (
             "fewer entries than declared",
             vec![("K.mtx", K2.replace("2 2 3\n", "2 2 4\n"))],
             "",

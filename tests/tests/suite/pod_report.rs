@@ -288,6 +288,11 @@ fn pod_section_refuses_bad_input() {
         ("t_end = -1.0", "t_end"),
         ("t_end = 1e9", "at most"),
         ("t_end = 1.0\nomega = nan", "omega"),
+        // step 0.01: Nyquist frequency pi / 0.01 = 314.16
+        (
+            "t_end = 1.0\nomega = 320.0",
+            "pod.test[1].omega: omega = 320 is above the Nyquist frequency pi / step = 314.159265",
+        ),
         ("t_end = 1.0\nx0 = { nope = 1.0 }", "no state 'nope'"),
         ("t_end = 1.0\nx0 = { x1 = inf }", "finite"),
     ];
@@ -297,6 +302,15 @@ fn pod_section_refuses_bad_input() {
         let (_, msg) = scene_error(&text);
         assert!(msg.contains(expect), "{run}: {msg}");
     }
+    // a load above the step's Nyquist frequency is refused at its omega key
+    let text = format!(
+        "{CHAIN}[pod]\nstep = 0.01\n[pod.train]\nt_end = 1.0\n[[pod.test]]\nt_end = 1.0\nomega = 320.0\n"
+    );
+    let at = text
+        .lines()
+        .position(|l| l == "omega = 320.0")
+        .map(|k| k + 1);
+    assert_eq!(Some(scene_error(&text).0), at);
     let (_, msg) = scene_error(
         "[model]\nplugin = \"spatial-oscillator\"\n[reduce]\nplugin = \"modal-truncation\"\n\
          reducer = \"modal-truncation\"\n[pod]\nstep = 0.01\n[pod.train]\nt_end = 1.0\n",

@@ -614,3 +614,55 @@ fn zoo_reference_scene_writes_the_amplitude_response() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Issue 38: the spherical spatial oscillator at eps = 0.5 with 9 (or 15)
+/// harmonics has two period doublings on its main branch in [1.5, 2.5]
+/// (Omega = 1.6391, 1.7075) where the corrector of the switch onto the
+/// period-2T branch does not converge; that failed the whole run and lost
+/// the main branch. Now each failed switch is a warning (in the run's
+/// warnings and summary.json) naming the branch, its start and why, and
+/// the main branch is kept, traced across the whole range with both
+/// doublings located on it.
+#[test]
+fn a_failed_branch_switch_is_a_warning_beside_the_branches_that_worked() {
+    let scene =
+        "[model]\nplugin = \"spatial-oscillator\"\n[model.params]\nconstraint = \"spherical\"\n\
+                 [ssm]\nmaster_pairs = [1]\norder = 5\nnormalization = { scale = 0.8306 }\n\
+                 [outputs]\ncoordinates = [\"x1\"]\n\
+                 [reference]\nepsilon = [0.5]\nomega_range = [1.5, 2.5]\nharmonics = 9\n";
+    let r = ssm_tests::run_scene_text(scene).expect("the run survives a failed branch");
+    let failed: Vec<&String> = r
+        .warnings
+        .iter()
+        .filter(|w| w.contains("could not be traced"))
+        .collect();
+    assert_eq!(failed.len(), 2, "{:?}", r.warnings);
+    for (w, at) in failed.iter().zip(["Omega = 1.639", "Omega = 1.707"]) {
+        assert!(
+            w.contains("[reference] eps = 0.5")
+                && w.contains("period-2T branch from the period doubling")
+                && w.contains(at)
+                && w.contains("Newton did not converge"),
+            "{w}"
+        );
+    }
+    let reference = r.reference.as_ref().expect("reference");
+    let main = &reference.branches[0];
+    assert_eq!(main.stop, Stop::Range);
+    let (lo, hi) = (
+        main.orbits[0].omega,
+        main.orbits.last().expect("orbits").omega,
+    );
+    assert!(lo == 1.5 && hi >= 2.5, "{lo} .. {hi}");
+    let pds = main
+        .events
+        .iter()
+        .filter(|e| e.kind == ReferenceEventKind::PeriodDoubling)
+        .count();
+    assert_eq!(pds, 2);
+    let summary = String::from_utf8_lossy(r.outputs.get("summary.json").expect("summary"));
+    assert!(
+        summary.contains("could not be traced"),
+        "summary.json warnings"
+    );
+}

@@ -500,3 +500,54 @@ fn a_stopped_reference_keeps_its_orbits_and_resumes() {
     assert!(err.contains("no checkpoint to resume"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Issue 38: a resumed run that fails again (here its outputs cannot be
+/// written: the output directory is a non-empty directory that is not a
+/// result set) wrote its journal under its process id beside the stopped
+/// run's, one more `.reference-partial.<pid>.csv` per attempt. Its journal
+/// replays the stopped run's orbits before its own, so it now takes the
+/// default name: after a failed run and two failed resumes there is one
+/// journal, with the fresh run's rows (the reference is the same), and one
+/// checkpoint.
+#[test]
+fn failed_resumes_do_not_pile_up_journals() {
+    let dir = ssm_tests::tmp_dir("resume-pile");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let scene = dir.join("duffing.toml");
+    std::fs::write(
+        &scene,
+        "[model]\nplugin = \"duffing\"\n[ssm]\nmaster_pairs = [1]\norder = 3\n[outputs]\n\
+         coordinates = [\"x\"]\n[reference]\nepsilon = [0.01]\nomega_range = [0.8, 1.2]\nharmonics = 3\n",
+    )
+    .expect("scene");
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).expect("out");
+    std::fs::write(out.join("keep.txt"), "a user's file").expect("user file");
+    let o = engine(&scene, &out, &[]);
+    assert!(
+        !o.status.success(),
+        "the outputs cannot replace a user's directory"
+    );
+    let journals = ssm_tests::files_beside(&out, "reference-partial");
+    assert_eq!(journals.len(), 1, "{journals:?}");
+    let first = std::fs::read_to_string(&journals[0]).expect("journal");
+    assert!(first.lines().count() > 10, "{first}");
+    for _ in 0..2 {
+        let o = engine(&scene, &out, &["--resume"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{err}");
+        assert!(err.contains("restored from"), "{err}");
+        assert_eq!(ssm_tests::files_beside(&out, "reference-partial"), journals);
+        assert_eq!(
+            ssm_tests::files_beside(&out, "reference-checkpoint").len(),
+            1
+        );
+        let text = std::fs::read_to_string(&journals[0]).expect("journal");
+        assert_eq!(text, first);
+    }
+    assert_eq!(
+        std::fs::read_to_string(out.join("keep.txt")).expect("kept"),
+        "a user's file"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

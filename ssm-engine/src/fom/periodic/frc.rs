@@ -152,6 +152,10 @@ pub struct ReferenceBranch {
     pub seeded: Vec<ReferenceBranch>,
     /// What became of the seeds that started no branch.
     pub notes: Vec<String>,
+    /// The branches that could not be traced from this one (a switch at a
+    /// period doubling, a start from the reduced model), each named with
+    /// its start and why; the branches that worked are kept beside them.
+    pub failed: Vec<String>,
     /// The branch's multipliers checked at its most critical orbit (`None`
     /// without multipliers).
     pub multiplier_check: Option<Result<MultiplierCheck, FloquetError>>,
@@ -256,27 +260,48 @@ where
     let (orbits, events, doublings) = classify(&branch, &reader, 1);
     let mut paths = vec![Path::of(1, &branch.points)];
     let mut next = 2;
+    let mut failed = Vec::new();
     let doubled = switch_all(
-        sys, settings, &hb, &doublings, &cs, &mut next, &mut paths, runs,
+        sys,
+        settings,
+        &hb,
+        &doublings,
+        &cs,
+        (&mut next, &mut paths, &mut failed),
+        runs,
     )?;
     let mut seeded = Vec::new();
     let mut notes = Vec::new();
     for seed in &settings.seeds {
-        match seeded_branch(sys, settings, &hb, seed, &cs, next, &paths, runs)? {
-            Seeded::Branch(mut b, path, pds) => {
+        let outcome = seeded_branch(sys, settings, &hb, seed, &cs, next, &paths, runs);
+        match survivable(outcome)? {
+            Err(why) => failed.push(format!(
+                "the branch from the reduced model's orbit at Omega = {:.6} ({}, period {}T) could not be traced: {why}",
+                seed.omega, seed.origin, seed.period_multiple
+            )),
+            Ok(Seeded::Branch(mut b, path, pds)) => {
                 next += 1;
                 paths.push(path);
-                b.doubled = switch_all(sys, settings, &hb, &pds, &cs, &mut next, &mut paths, runs)?;
+                b.doubled = switch_all(
+                    sys,
+                    settings,
+                    &hb,
+                    &pds,
+                    &cs,
+                    (&mut next, &mut paths, &mut failed),
+                    runs,
+                )?;
                 seeded.push(*b);
             }
-            Seeded::Known => {}
-            Seeded::Dropped(note) => notes.push(note),
+            Ok(Seeded::Known) => {}
+            Ok(Seeded::Dropped(note)) => notes.push(note),
         }
     }
     Ok(ReferenceBranch {
         doubled,
         seeded,
         notes,
+        failed,
         ..ReferenceBranch::traced(&mut hb, &branch.points, orbits, events, branch.stop, at)
     })
 }
@@ -322,6 +347,7 @@ impl ReferenceBranch {
             doubled: Vec::new(),
             seeded: Vec::new(),
             notes: Vec::new(),
+            failed: Vec::new(),
             multiplier_check,
         }
     }
@@ -360,19 +386,29 @@ fn check_branch(
     )
 }
 
+/// A branch's failure that the computation survives, as its cause: every
+/// one but a checkpoint that is not this computation's (which would mix
+/// another computation's runs into the later ones).
+fn survivable<T>(outcome: Result<T, ReferenceError>) -> Result<Result<T, String>, ReferenceError> {
+    match outcome {
+        Ok(v) => Ok(Ok(v)),
+        Err(e @ ReferenceError::Checkpoint { .. }) => Err(e),
+        Err(e) => Ok(Err(e.to_string())),
+    }
+}
+
 /// The branches of period `2T` at the period doublings `pds` of a
 /// period-`T` branch of `hb` (when [`ReferenceSettings::period_doubling`]),
 /// numbered from `next`; a doubling where a branch traced earlier ended
-/// (it rejoined the period-`T` branch there) starts none.
-#[allow(clippy::too_many_arguments)]
+/// (it rejoined the period-`T` branch there) starts none, and one whose
+/// switch or trace fails is named in `failed` (the others go on).
 fn switch_all<O>(
     sys: &System,
     settings: &ReferenceSettings,
     hb: &HarmonicBalance<'_>,
     pds: &[Point<OrbitInfo>],
     cs: &Settings,
-    next: &mut usize,
-    paths: &mut Vec<Path>,
+    (next, paths, failed): (&mut usize, &mut Vec<Path>, &mut Vec<String>),
     runs: &mut Runs<'_, O>,
 ) -> Result<Vec<ReferenceBranch>, ReferenceError>
 where
@@ -394,10 +430,18 @@ where
         if reached {
             continue;
         }
-        let (b, path) = super::doubling::doubled_branch(sys, settings, hb, pd, cs, *next, runs)?;
-        *next += 1;
-        paths.push(path);
-        doubled.push(b);
+        let outcome = super::doubling::doubled_branch(sys, settings, hb, pd, cs, *next, runs);
+        match survivable(outcome)? {
+            Ok((b, path)) => {
+                *next += 1;
+                paths.push(path);
+                doubled.push(b);
+            }
+            Err(why) => failed.push(format!(
+                "the period-2T branch from the period doubling at Omega = {:.6} could not be traced: {why}",
+                w * hb.frequency_scale
+            )),
+        }
     }
     Ok(doubled)
 }

@@ -64,23 +64,36 @@ where
         number: usize,
         show_start: bool,
     ) -> Result<Branch<OrbitInfo>, ReferenceError> {
-        self.opened += 1;
-        let run = self.opened;
         let Runs {
-            observe, ledger, ..
+            observe,
+            ledger,
+            opened,
         } = self;
         // the observer sees every orbit but an unshown start
         let mut shown = show_start;
         let mut show = |p: &Point<OrbitInfo>| {
             !std::mem::replace(&mut shown, true) || observe(&reader.orbit(p, number))
         };
+        *opened += 1;
+        let run = *opened;
         // (the branch, whether its end is new: not kept already)
         let (branch, ended_here) = match ledger.open() {
             None => {
-                let b = continuation::continue_branch(hb, u0, t0, cs, |s| {
+                // the start, the only step that can fail: a run that cannot
+                // start is withdrawn, so that the ledger holds no trace of
+                // it and a resumed computation fails at the same place
+                let first = match continuation::start_point(hb, u0, t0) {
+                    Ok(first) => first,
+                    Err(e) => {
+                        ledger.withdraw();
+                        *opened -= 1;
+                        return Err(e.into());
+                    }
+                };
+                let b = continuation::continue_from(hb, first, cs, |s| {
                     ledger.step(s);
                     show(s.point)
-                })?;
+                });
                 (b, true)
             }
             Some((trace, stop)) => {
