@@ -6,6 +6,7 @@
 //! by `ssm-engine --help` and in the README; a test keeps them equal):
 #![doc = concat!("```toml\n", include_str!("format.toml"), "```")]
 
+use crate::number::short;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -506,7 +507,7 @@ impl SceneFile {
             return Err(self.invalid(
                 ssm.resonance_tol.span(),
                 "ssm.resonance_tol",
-                format!("must lie in (0, 1), found {tol}"),
+                format!("must lie in (0, 1), found {}", short(tol)),
             ));
         }
         let tol = *ssm.tolerance.get_ref();
@@ -514,10 +515,14 @@ impl SceneFile {
             return Err(self.invalid(
                 ssm.tolerance.span(),
                 "ssm.tolerance",
-                format!("must lie in (0, 1) (a relative error, 0.01 = 1 %), found {tol}"),
+                format!(
+                    "must lie in (0, 1) (a relative error, 0.01 = 1 %), found {}",
+                    short(tol)
+                ),
             ));
         }
         self.check_model_source()?;
+        self.check_unique_names()?;
         self.check_outputs()?;
         self.check_forcing()?;
         self.check_validate()?;
@@ -651,13 +656,54 @@ impl SceneFile {
         Ok(())
     }
 
+    /// Refuses a list that names one output (or data column) twice: each
+    /// entry is computed and written, so a repeated name only multiplies
+    /// the work.
+    fn check_unique_names(&self) -> Result<(), SceneError> {
+        let sc = &self.scene;
+        let lists = [
+            (Some(&sc.outputs.coordinates), "outputs.coordinates"),
+            (
+                sc.validate.as_ref().and_then(|v| v.outputs.as_ref()),
+                "validate.outputs",
+            ),
+            (
+                sc.simulate.as_ref().and_then(|v| v.outputs.as_ref()),
+                "simulate.outputs",
+            ),
+            (
+                sc.pod.as_ref().and_then(|v| v.outputs.as_ref()),
+                "pod.outputs",
+            ),
+            (
+                sc.reference.as_ref().and_then(|v| v.outputs.as_ref()),
+                "reference.outputs",
+            ),
+            (
+                sc.data.as_ref().and_then(|v| v.columns.as_ref()),
+                "data.columns",
+            ),
+        ];
+        for (names, key) in lists.into_iter().filter_map(|(n, k)| Some((n?, k))) {
+            let mut seen = std::collections::HashSet::new();
+            if let Some(dup) = names.get_ref().iter().find(|n| !seen.insert(n.as_str())) {
+                return Err(self.invalid(
+                    names.span(),
+                    key,
+                    format!("names '{dup}' more than once: give each name once"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     fn check_positive(&self, v: &Spanned<f64>, key: &str) -> Result<(), SceneError> {
         let x = *v.get_ref();
         if !(x.is_finite() && x > 0.0) {
             return Err(self.invalid(
                 v.span(),
                 key,
-                format!("must be a positive number, found {x}"),
+                format!("must be a positive number, found {}", short(x)),
             ));
         }
         Ok(())
@@ -737,7 +783,7 @@ impl SceneFile {
                     "outputs.transient.rtol",
                     format!(
                         "must be below 1e-2 (found {}): a looser tolerance lets the step size grow past the oscillation and the transient is wrong",
-                        tr.rtol.get_ref()
+                        short(*tr.rtol.get_ref())
                     ),
                 ));
             }

@@ -4,6 +4,7 @@
 //! HHT on the training load and on the `[[pod.test]]` loads, optionally
 //! beside SSM reduced models of the same model.
 
+use crate::number::short;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -173,7 +174,10 @@ impl SceneFile {
             return Err(self.invalid(
                 p.rank_tol.span(),
                 "pod.rank_tol",
-                format!("must lie in (0, 1) (relative to the largest singular value), found {tol}"),
+                format!(
+                    "must lie in (0, 1) (relative to the largest singular value), found {}",
+                    short(tol)
+                ),
             ));
         }
         let js = *p.jacobian_samples.get_ref();
@@ -190,7 +194,10 @@ impl SceneFile {
             return Err(self.invalid(
                 p.hht_alpha.span(),
                 "pod.hht_alpha",
-                format!("must lie in [-1/3, 0] (0: no numerical damping), found {a}"),
+                format!(
+                    "must lie in [-1/3, 0] (0: no numerical damping), found {}",
+                    short(a)
+                ),
             ));
         }
         if let Some(o) = &p.outputs {
@@ -261,7 +268,10 @@ impl SceneFile {
         for (key, span, r) in runs {
             let bad = |m: String| self.invalid(span.clone(), &key, m);
             if !(r.t_end.is_finite() && r.t_end > 0.0) {
-                return Err(bad(format!("t_end must be positive, found {}", r.t_end)));
+                return Err(bad(format!(
+                    "t_end must be positive, found {}",
+                    short(r.t_end)
+                )));
             }
             if r.t_end / step > MAX_POD_STEPS {
                 return Err(bad(format!(
@@ -272,13 +282,13 @@ impl SceneFile {
             if !r.epsilon.is_finite() {
                 return Err(bad(format!(
                     "epsilon must be a finite number, found {}",
-                    r.epsilon
+                    short(r.epsilon)
                 )));
             }
             if !(r.omega.is_finite() && r.omega >= 0.0) {
                 return Err(bad(format!(
                     "omega must be a non-negative frequency, found {}",
-                    r.omega
+                    short(r.omega)
                 )));
             }
             if let Some((name, _)) = r.given_start().into_iter().find(|(_, v)| !v.is_finite()) {
