@@ -576,11 +576,28 @@ fn check_forcing(
 }
 
 /// Continuation steps assumed per reference branch when `max_steps` allows
-/// more (the zoo's branches take 100-300).
-const REFERENCE_STEPS: f64 = 500.0;
+/// more (measured: 143 orbits a branch on the spatial oscillator's zoo
+/// scene, 377 on the divider's, below).
+const REFERENCE_STEPS: f64 = 400.0;
 
-/// Factor of the reference's continuation cost (to be fitted).
-const REFERENCE_CALIBRATION: f64 = 1.0;
+/// Factor of the reference's per-orbit operation count, fitted to two
+/// measured runs (release build, 2 shared cores; CPU time of the reference,
+/// since the machine was loaded):
+/// - `zoo/spatial_oscillator_cubic_reference.toml` (7 states, H = 9, three
+///   branches in `Omega` and one amplitude response, 643 orbits): 11.2 s
+///   wall, under 6 s of CPU; the uncalibrated count said 83 s (at 500 steps
+///   a branch);
+/// - the divider of `benches/benches/reference.rs` (146 states, H = 5,
+///   1606 Fourier coefficients, multipliers by the monodromy map; one
+///   branch from rest at eps = 0.1 over [43.07, 49.87], 377 orbits): 651 s
+///   wall, 329 s of CPU; the uncalibrated count said 14 min.
+///
+/// With 400 steps a branch and this factor the divider is estimated at
+/// 5.6 min (its CPU time) and the oscillator at 33 s, an overestimate of
+/// about 6 for small models, where the Hill eigenproblem's `(N (2H+1))^3`
+/// bound is loose; the old count refused sound requests at 7-15 times their
+/// run time.
+const REFERENCE_CALIBRATION: f64 = 0.5;
 
 /// Refuses a `[reference]` that would not finish within `limits`: per step
 /// five sparse factorizations of the harmonic-balance Jacobian (a dense
