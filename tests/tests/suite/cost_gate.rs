@@ -229,3 +229,28 @@ fn reference_refusals_name_the_key_that_drives_the_cost() {
         assert_refused(code, &err, line, key, "needs about");
     }
 }
+
+/// A huge number from the scene is echoed as `1e300`, not as its 301 digits
+/// (`{}` of an f64 never uses an exponent).
+#[test]
+fn huge_numbers_are_echoed_in_exponent_form() {
+    let base =
+        "[model]\nplugin = \"duffing\"\n[ssm]\norder = 3\n[outputs]\ncoordinates = [\"x\"]\n";
+    let cases = [
+        ("[ssm]\ntolerance = 1e300\n", "ssm.tolerance", "found 1e300"),
+        (
+            "[forcing]\nepsilon = 0.01\nomega_range = [0.9, 1.1]\n[reference]\nepsilon = 0.01\ntol = -1e300\n",
+            "reference.tol",
+            "found -1e300",
+        ),
+    ];
+    for (rest, key, echo) in cases {
+        let text = if rest.starts_with("[ssm]") {
+            base.replace("[ssm]\n", rest)
+        } else {
+            format!("{base}{rest}")
+        };
+        let (_, msg) = scene_error(&text);
+        assert!(msg.starts_with(key) && msg.ends_with(echo), "{msg}");
+    }
+}
