@@ -21,7 +21,7 @@ mod simulate;
 mod validate;
 
 pub use crate::spectrum::Normalization;
-pub use pod::{PodRun, PodSection, MAX_POD_ROMS, MAX_POD_STEPS, MAX_POD_TESTS};
+pub use pod::{PodRun, PodSection, MAX_POD_ROMS, MAX_POD_TESTS};
 pub use reduce::{DataSection, ReduceSection};
 pub use reference::{
     ReferenceSection, MAX_HARMONICS, MAX_REFERENCE_COEFFICIENTS, MAX_REFERENCE_CURVES,

@@ -10,8 +10,6 @@ use toml::Spanned;
 
 use super::{SceneError, SceneFile, AUTO_MAX_ORDER};
 
-/// Most HHT steps of one run (`t_end / step`).
-pub const MAX_POD_STEPS: f64 = 2e6;
 /// Most reduced models (truncations plus SSM pair sets).
 pub const MAX_POD_ROMS: usize = 16;
 /// Most test runs.
@@ -256,7 +254,6 @@ impl SceneFile {
                 format!("at most {MAX_POD_TESTS} test runs"),
             ));
         }
-        let step = *p.step.get_ref();
         let runs = std::iter::once(("pod.train".to_owned(), p.train.span(), p.train.get_ref()))
             .chain(
                 p.test
@@ -271,12 +268,6 @@ impl SceneFile {
                 return Err(bad(format!(
                     "t_end must be positive, found {}",
                     short(r.t_end)
-                )));
-            }
-            if r.t_end / step > MAX_POD_STEPS {
-                return Err(bad(format!(
-                    "t_end / step = {:.3e} steps; at most {MAX_POD_STEPS:e}: lengthen pod.step or shorten the run",
-                    r.t_end / step
                 )));
             }
             if !r.epsilon.is_finite() {

@@ -6,6 +6,8 @@
 //! that drives it. The address-space cases run the engine binary in a child
 //! under `ulimit -v`: without the gate they abort on an allocation (or run
 //! for minutes, stopped by `timeout`), with it they exit with the scene error.
+//! The `[pod]` study, the engine's `pod` reducer and `[simulate]` are costed
+//! by the same gate before their runs start.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -253,4 +255,133 @@ fn huge_numbers_are_echoed_in_exponent_form() {
         let (_, msg) = scene_error(&text);
         assert!(msg.starts_with(key) && msg.ends_with(echo), "{msg}");
     }
+}
+
+/// The line of the first `needle` in `text` (1-based).
+fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.find(needle).expect("needle in scene")]
+        .lines()
+        .count()
+        + 1
+}
+
+/// `[pod] step = 1e-9` on the zoo's chain (405 states, three runs of 30):
+/// 3e10 HHT steps a run, days of work and terabytes of stored states,
+/// refused at `pod.step` before the training run starts (it ran for hours
+/// filling memory with snapshots).
+#[test]
+fn a_pod_step_of_days_is_refused_at_pod_step() {
+    let scene = zoo_scene(
+        "pendulum_chain_pod.toml",
+        None,
+        "step = 0.01",
+        "step = 1e-9",
+    );
+    let (line, msg) = scene_error(&scene);
+    assert_eq!(line, line_of(&scene, "step = 1e-9"), "{msg}");
+    assert!(
+        msg.starts_with("pod.step: the [pod] study (3 full-model HHT run(s)")
+            && msg.contains("days")
+            && msg.contains("lengthen the step"),
+        "{msg}"
+    );
+}
+
+/// 10 000 Jacobian samples of the 5-pendulum chain over 101 snapshots: the
+/// stacked projected constraint Jacobian has up to `101 x 10^4` columns
+/// (the reduced coordinates bounded by the snapshots), minutes of SVD,
+/// refused under a one-minute limit at `pod.jacobian_samples`, not at the
+/// step that the full runs (101 steps) do not need changed.
+#[test]
+fn pod_jacobian_samples_that_drive_the_cost_are_named() {
+    let scene = "[model]\nplugin = \"pendulum\"\nname = \"chain\"\n[outputs]\ncoordinates = [\"x1\"]\n\
+        [pod]\nstep = 0.01\nrank_tol = 1e-2\njacobian_samples = 10000\n[pod.train]\nepsilon = 0.6\nomega = 2.0\nt_end = 1.0\n";
+    let env = [("SSM_TIME_LIMIT_MINUTES", "1")];
+    let (code, err) = run_limited("pod-samples", scene, 8_000_000, &env);
+    assert_refused(
+        code,
+        &err,
+        9,
+        "pod.jacobian_samples",
+        "lower jacobian_samples",
+    );
+}
+
+/// The engine's `pod` reducer with `step = 1e-9` over `t_end = 30`: its
+/// training run is refused at the step's own line inside `[reduce.params]`.
+#[test]
+fn the_pod_reducer_training_run_is_costed() {
+    let scene = "[model]\nplugin = \"pendulum\"\nname = \"chain\"\n[reduce]\nreducer = \"pod\"\n\
+        [reduce.params]\nt_end = 30.0\nstep = 1e-9\nrank_tol = 1e-2\n[ssm]\norder = 3\n\
+        [outputs]\ncoordinates = [\"x1\"]\n";
+    let (line, msg) = scene_error(scene);
+    assert_eq!(line, 8, "{msg}");
+    assert!(
+        msg.starts_with("reduce.params.step: the pod reducer's training run")
+            && msg.contains("days"),
+        "{msg}"
+    );
+}
+
+/// `[simulate]` is costed from the master mode's frequency: runs of
+/// `1999 x 1e6` time units are some 3e8 periods of the oscillator, refused
+/// at `simulate.period` (in a child under `timeout`: without the gate it
+/// integrates for days); `1e12` samples at `simulate.samples`.
+#[test]
+fn simulate_runs_are_costed_at_their_keys() {
+    let scene = zoo_scene(
+        "spatial_oscillator_data.toml",
+        None,
+        "period = 0.2",
+        "period = 1e6",
+    );
+    let (code, err) = run_limited("simulate-period", &scene, 8_000_000, &[]);
+    let line = line_of(&scene, "period = 1e6");
+    assert_refused(code, &err, line, "simulate.period", "2000 samples over");
+    let scene = zoo_scene(
+        "spatial_oscillator_data.toml",
+        None,
+        "samples = 2000",
+        "samples = 1000000000000",
+    );
+    let (line, msg) = scene_error(&scene);
+    assert_eq!(line, line_of(&scene, "samples = 1000000000000"), "{msg}");
+    assert!(msg.starts_with("simulate.samples"), "{msg}");
+}
+
+/// Two million samples a run, each at least a step of the full model: the
+/// samples drive the cost and are named under a 0.6 s limit.
+#[test]
+fn simulate_samples_that_drive_the_cost_are_named() {
+    let scene = zoo_scene(
+        "spatial_oscillator_data.toml",
+        None,
+        "period = 0.2\nsamples = 2000",
+        "period = 1e-3\nsamples = 2000000",
+    );
+    let env = [("SSM_TIME_LIMIT_MINUTES", "0.01")];
+    let (code, err) = run_limited("simulate-samples", &scene, 8_000_000, &env);
+    let line = line_of(&scene, "samples = 2000000");
+    assert_refused(code, &err, line, "simulate.samples", "take fewer samples");
+}
+
+/// Times and frequencies from the scene in integration errors print in
+/// exponent form (`{}` wrote `t_end = 1e300` as 301 digits).
+#[test]
+fn integration_errors_echo_huge_times_in_exponent_form() {
+    use ssm_engine::fom::SimError;
+    let e = SimError::TooManySteps {
+        t: 2.5,
+        steps: 10,
+        t_end: 1e300,
+    };
+    assert!(
+        e.to_string().contains("t = 2.5 before t_end = 1e300:"),
+        "{e}"
+    );
+    let e = SimError::Inconsistent {
+        t: -1e300,
+        detail: "x".into(),
+    };
+    assert!(e.to_string().contains("at t = -1e300: x"), "{e}");
 }

@@ -227,7 +227,7 @@ fn pod_section_refuses_bad_input() {
     }
     let runs = [
         ("t_end = -1.0", "t_end"),
-        ("t_end = 1e9", "at most"),
+        ("t_end = 1e9", "pod.step: the [pod] study"),
         ("t_end = 1.0\nomega = nan", "omega"),
         ("t_end = 1.0\nx0 = { nope = 1.0 }", "no state 'nope'"),
         ("t_end = 1.0\nx0 = { x1 = inf }", "finite"),

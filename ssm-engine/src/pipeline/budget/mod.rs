@@ -13,12 +13,16 @@
 //! They are meant to separate "seconds to minutes" from "days", not to
 //! predict run times: a factor of a few either way is expected.
 
+mod runs;
+
 use std::ops::Range;
+
+pub use runs::{check_pod, check_pod_reducer};
 
 use super::error::JobError;
 use crate::model::system::System;
 use crate::number::short;
-use crate::scene::{SceneFile, AUTO_MAX_ORDER};
+use crate::scene::{SceneError, SceneFile, AUTO_MAX_ORDER};
 use crate::spectrum::{MasterMode, DENSE_LIMIT};
 use crate::ssm::Dynamics;
 
@@ -127,13 +131,12 @@ fn ensure(
     cost: &Cost,
     limits: &Limits,
     advice: &str,
-) -> Result<(), JobError> {
+) -> Result<(), SceneError> {
     if within(cost, limits) {
         return Ok(());
     }
     let secs = cost.ops / OPS_PER_SECOND;
-    Err(scene
-        .invalid(
+    Err(scene.invalid(
             span,
             key,
             format!(
@@ -144,8 +147,7 @@ fn ensure(
                 bytes(limits.bytes),
                 limits.memory_source,
             ),
-        )
-        .into())
+        ))
 }
 
 /// The position of the line that opens `header` (e.g. `[reference]`), for
@@ -426,6 +428,10 @@ pub fn check(
             "shorten the transient or take fewer samples",
         )?;
     }
+    if let Some(s) = &sc.simulate {
+        let length = *s.period.get_ref() * (*s.samples.get_ref() as f64 - 1.0);
+        runs::check_simulate(scene, s, &sizes, (steps(length), periods(length)), limits)?;
+    }
     if let Some(f) = &sc.forcing {
         check_forcing(scene, f, masters, n_idx, coords, limits)?;
     }
@@ -573,6 +579,7 @@ fn check_forcing(
             "use ratios near the master pairs' frequencies over Omega (small integers or fractions)"
         },
     )
+    .map_err(Into::into)
 }
 
 /// Continuation steps assumed per reference branch when `max_steps` allows
@@ -698,4 +705,5 @@ pub fn check_reference(
         limits,
         advice,
     )
+    .map_err(Into::into)
 }
