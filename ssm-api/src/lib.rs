@@ -49,6 +49,7 @@ mod tag;
 
 mod error;
 mod expr;
+pub mod limits;
 mod listing;
 mod mechanical;
 mod model;

@@ -22,7 +22,8 @@
 //!   steady-state references) and the speed-against-error report;
 //! - [`output`]: writers of `summary.json`, CSV and SVG from typed results
 //!   (they compute nothing), written atomically;
-//! - [`pipeline`]: running a scene, stage after stage.
+//! - [`pipeline`]: running a scene, stage after stage;
+//! - [`number`]: numbers from user input in messages and CSV files.
 //!
 //! Dependencies point one way: `pipeline` uses every stage, `output` reads
 //! the stages' result types, and no two modules import each other.
@@ -32,6 +33,7 @@ pub mod compare;
 pub mod continuation;
 pub mod fom;
 pub mod model;
+pub mod number;
 pub mod output;
 pub mod pipeline;
 pub mod poly;

@@ -91,7 +91,20 @@ impl MultiIndexSet {
     fn build_splits(&mut self) {
         let nvar = self.nvar;
         let mut split_start = Vec::with_capacity(self.len() + 1);
-        let mut splits = Vec::new();
+        // sized exactly (the pairs `0 <= a <= m` less the two trivial ones),
+        // so the table, the largest array of an SSM, never grows by doubling
+        // past what the cost gate counted
+        let count: usize = (0..self.len())
+            .map(|idx| {
+                let m = self.exponents(idx);
+                if m.iter().map(|&x| x as usize).sum::<usize>() < 2 {
+                    0
+                } else {
+                    m.iter().map(|&x| x as usize + 1).product::<usize>() - 2
+                }
+            })
+            .sum();
+        let mut splits = Vec::with_capacity(count);
         let mut a = vec![0u16; nvar];
         let mut b = vec![0u16; nvar];
         for idx in 0..self.len() {

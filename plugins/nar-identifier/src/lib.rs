@@ -37,9 +37,19 @@ const REDUCER: &str = "nar";
 /// has one column each, and beyond this the dense QR takes minutes.
 pub const MAX_UNKNOWNS: usize = 5000;
 
-/// Largest regression matrix accepted, in entries (2 GB of doubles): the
-/// dense QR holds it whole.
-pub const MAX_ENTRIES: usize = 250_000_000;
+/// Largest regression accepted, in bytes (the matrix and its factors), when
+/// the process may use more (see [`ssm_api::limits::memory_room`]): the
+/// dense QR holds the matrix whole.
+pub const MAX_BYTES: f64 = 2e9;
+
+/// Monomials of degree `1..=order` in `dim` variables,
+/// `C(dim + order, order) - 1`, in floating point (exact to 2^53, no
+/// overflow for any parameters), computed without building them.
+fn monomial_count(dim: usize, order: usize) -> f64 {
+    let m = dim.min(order);
+    let top = (dim + order) as f64;
+    (1..=m).fold(1.0, |acc, i| acc * (top - (m - i) as f64) / i as f64) - 1.0
+}
 
 fn specs() -> Vec<ParamSpec> {
     vec![
@@ -171,13 +181,14 @@ fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, Plu
         return Err(param_err("decimate", "must be at least 1"));
     }
     let dim = 2 * nu;
-    let basis = MonomialBasis::new(dim, order);
-    if basis.len() > MAX_UNKNOWNS {
+    // counted before the basis is built: nu = 16, order = 25 would be
+    // 9.9e15 monomials
+    let unknowns = monomial_count(dim, order);
+    if unknowns > MAX_UNKNOWNS as f64 {
         return Err(param_err(
             "order",
             &format!(
-                "order {order} with 2nu = {dim} has {} unknowns (at most {MAX_UNKNOWNS}); lower order or nu",
-                basis.len()
+                "nu = {nu}, order = {order}: the monomials of degree 1 to {order} in 2nu = {dim} delay coordinates are {unknowns:.3e} unknowns (at most {MAX_UNKNOWNS}); lower order or nu"
             ),
         ));
     }
@@ -209,17 +220,26 @@ fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, Plu
     }
     let series = Series::new(signals, 0, skip, decimate);
     let rows: usize = (0..series.values.len()).map(|p| series.rows(p, dim)).sum();
-    if rows.saturating_mul(basis.len() + 1) > MAX_ENTRIES {
+    // the regression matrix (rows x unknowns and the right-hand side), then
+    // the triangle of its QR and the SVD's factors (about 4 n^2)
+    let n = unknowns;
+    let bytes = 8.0 * (rows as f64 * (n + 1.0) + 4.0 * n * n);
+    let room = ssm_api::limits::memory_room();
+    let allowed = (0.75 * room.bytes).min(MAX_BYTES);
+    if bytes > allowed {
         return Err(PluginError::new(
             ErrorKind::InvalidInput,
             "data",
             &format!(
-                "the regression would have {rows} rows by {} unknowns ({:.1} GB); use decimate or skip, fewer signals, or a lower order or nu",
-                basis.len(),
-                (rows as f64) * (basis.len() + 1) as f64 * 8e-9
+                "nu = {nu}, order = {order}: the regression would have {rows} rows by {n} unknowns, about {:.2} GB with its factors; this process may use {:.2} GB (3/4 of the {}, at most {:.0} GB): use decimate or skip, fewer signals, or a lower order or nu",
+                bytes / 1e9,
+                allowed / 1e9,
+                room.source,
+                MAX_BYTES / 1e9
             ),
         ));
     }
+    let basis = MonomialBasis::new(dim, order);
     let fitted = fit::fit(
         &series,
         &basis,
@@ -357,4 +377,23 @@ ssm_api::declare_plugin! {
     build: build,
     reducers: reducers,
     reduce: reduce,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_unknowns_are_counted_without_building_the_basis() {
+        for (dim, order) in [(2, 1), (2, 7), (4, 5), (6, 3), (1, 9)] {
+            assert_eq!(
+                monomial_count(dim, order),
+                MonomialBasis::new(dim, order).len() as f64,
+                "2nu = {dim}, order = {order}"
+            );
+        }
+        // nu = 16, order = 25: C(57, 25) - 1
+        let c = monomial_count(32, 25);
+        assert!((c / 9_929_472_283_517_786.0 - 1.0).abs() < 1e-12, "{c}");
+    }
 }

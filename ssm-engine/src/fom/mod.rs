@@ -58,6 +58,7 @@ pub mod radau;
 pub mod sample;
 pub mod steady;
 
+use crate::number::short;
 pub use consistent::{consistent_initial, consistent_initial_keeping, given_start, Consistent};
 pub use problem::DaeProblem;
 pub use radau::{Radau, RadauOptions, RadauStats};
@@ -68,7 +69,7 @@ pub use steady::{steady_state, SteadyOptions, SteadyState};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimError {
     /// The step size fell below its floor.
-    #[error("full-system integration: step size collapsed to {h:.3e} at t = {t:.6}: {cause}")]
+    #[error("full-system integration: step size collapsed to {h:.3e} at t = {}: {cause}", short(.t))]
     StepCollapse {
         /// Time reached.
         t: f64,
@@ -79,7 +80,8 @@ pub enum SimError {
     },
     /// The iteration matrix `(gamma/h) B - J` could not be solved.
     #[error(
-        "full-system integration: singular iteration matrix at t = {t:.6} (h = {h:.3e}): {detail}"
+        "full-system integration: singular iteration matrix at t = {} (h = {h:.3e}): {detail}",
+        short(.t)
     )]
     SingularIteration {
         /// Time reached.
@@ -90,7 +92,7 @@ pub enum SimError {
         detail: String,
     },
     /// The state became NaN or infinite.
-    #[error("full-system integration: non-finite state at t = {t:.6} (state '{state}'): the solution blew up")]
+    #[error("full-system integration: non-finite state at t = {} (state '{state}'): the solution blew up", short(.t))]
     NonFinite {
         /// Time reached.
         t: f64,
@@ -98,7 +100,7 @@ pub enum SimError {
         state: String,
     },
     /// The step budget ran out.
-    #[error("full-system integration: the step budget of {steps} steps ran out at t = {t:.6} before t_end = {t_end}: shorten [validate] t_end (or max_periods), loosen rtol/atol, or check the model for a fast or unbounded motion")]
+    #[error("full-system integration: the step budget of {steps} steps ran out at t = {} before t_end = {}: shorten [validate] t_end (or max_periods), loosen rtol/atol, or check the model for a fast or unbounded motion", short(.t), short(.t_end))]
     TooManySteps {
         /// Time reached.
         t: f64,
@@ -108,7 +110,7 @@ pub enum SimError {
         t_end: f64,
     },
     /// The initial point cannot be made consistent with the constraints.
-    #[error("inconsistent initial condition at t = {t}: {detail}")]
+    #[error("inconsistent initial condition at t = {}: {detail}", short(.t))]
     Inconsistent {
         /// Initial time.
         t: f64,
@@ -116,7 +118,7 @@ pub enum SimError {
         detail: String,
     },
     /// The steady state was not reached.
-    #[error("steady state at Omega = {omega}: not periodic after {periods} forcing periods (t = {t:.3}); last relative change over one period {change:.3e} > delta = {delta:.1e} (criterion (47), periods up to {max_multiple} T tried); raise max_periods, or max_period_multiple if the response may be subharmonic")]
+    #[error("steady state at Omega = {}: not periodic after {periods} forcing periods (t = {}); last relative change over one period {change:.3e} > delta = {delta:.1e} (criterion (47), periods up to {max_multiple} T tried); raise max_periods, or max_period_multiple if the response may be subharmonic", short(.omega), short(.t))]
     NotPeriodic {
         /// Forcing frequency.
         omega: f64,

@@ -2,6 +2,7 @@
 //! reference of `[validate]` drawn in) and the summary's `frc`. They format a
 //! [`ForcedResponse`] and compute nothing.
 
+use crate::number::short;
 use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
@@ -69,7 +70,7 @@ fn curves(f: &ForcedResponse) -> Vec<Curve> {
                     format!(
                         "O({}), eps = {}, estimated error {}{}",
                         c.order,
-                        c.epsilon,
+                        short(c.epsilon),
                         percent(c.error_estimate()),
                         if c.untrusted {
                             "  UNTRUSTED: error estimate above [ssm] tolerance"
@@ -114,7 +115,7 @@ pub fn frc_svg(
     }
     if let Some(r) = reference {
         drawn.push(Curve {
-            label: format!("full system, eps = {} (steady state)", r.epsilon),
+            label: format!("full system, eps = {} (steady state)", short(r.epsilon)),
             points: Vec::new(),
             markers: r
                 .points

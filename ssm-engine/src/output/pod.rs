@@ -4,6 +4,7 @@
 //! `pod_povs.svg` (the POV decay), `pod_constraints.csv` and the summary's
 //! `pod`. They format a [`PodStudy`] and compute nothing.
 
+use crate::number::short;
 use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
@@ -81,9 +82,9 @@ pub fn comparison_csv(study: &PodStudy) -> String {
                 } else {
                     String::new()
                 },
-                c.epsilon,
-                c.omega,
-                c.t_end,
+                short(c.epsilon),
+                short(c.omega),
+                short(c.t_end),
                 info.dimension,
                 info.states,
                 info.offline_s,
@@ -277,9 +278,9 @@ pub fn report_md(model: &str, study: &PodStudy) -> String {
             "\n## {}: eps = {}, Omega = {}, {} s{}{}\n\nFull model: {} ({} steps).\n\n\
              | Model | Online | Speed-up | Error | Late error | Reaction gap | In the subspace |\n|---|---|---|---|---|---|---|\n",
             c.label,
-            c.epsilon,
-            c.omega,
-            c.t_end,
+            short(c.epsilon),
+            short(c.omega),
+            short(c.t_end),
             if c.start.is_empty() { ", from rest" } else { ", from a given start" },
             if c.trained { " (POD trained on it)" } else { "" },
             fmt_s(case.full_s),

@@ -69,7 +69,8 @@ pub fn reference_curves(r: &ReferenceFrc) -> Vec<Curve> {
     let label = |o: &ReferenceOrbit| {
         format!(
             "full system (harmonic balance, H = {}), eps = {}",
-            r.harmonics, o.epsilon
+            r.harmonics,
+            crate::number::short(o.epsilon)
         )
     };
     curves(r, &r.branches, |o| o.omega, label)

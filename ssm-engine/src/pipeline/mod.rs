@@ -402,8 +402,12 @@ pub fn run(
     let (system, reduction, full_model) = obtain_model(scene, registry)?;
     let plugins = registry.take_used();
     let mut warnings = Vec::new();
+    // one gate: every request is costed against the same limits before it
+    // runs ([pod] first, since it runs before the spectrum)
+    let limits = budget::Limits::of_machine();
     let pod = match (&sc.pod, &full_model) {
         (Some(sec), Some(model)) => {
+            budget::check_pod(scene, &system, &limits)?;
             let t = Instant::now();
             let (study, w) = pod::pod_stage(scene, sec, model, &system, progress)?;
             warnings.extend(w);
@@ -433,7 +437,6 @@ pub fn run(
     }
     let coordinates = checks::coordinates(scene, &system)?;
 
-    let limits = budget::Limits::of_machine();
     let ceiling = budget::check_spectrum(scene, &system, &limits)?;
     progress.stage("spectrum");
     let sp = spectral::spectral(scene, &system, ceiling)?;

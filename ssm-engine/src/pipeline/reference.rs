@@ -87,7 +87,7 @@ pub fn reference_stage(
         };
         if sec.from_ssm(scene) && seeds.is_empty() {
             warnings.push(format!(
-                "[reference] eps = {eps}: no forced response of the reduced model at this amplitude to start from; the reference starts from rest only (add eps to [forcing] epsilon)"
+                "[reference] eps = {eps}: no forced response of the reduced model at this amplitude to start from; the reference starts from rest only (add eps to [forcing] epsilon)", eps = crate::number::short(eps)
             ));
         }
         let settings = ReferenceSettings {
@@ -119,12 +119,15 @@ pub fn reference_stage(
         samples = branch.samples;
         warnings.extend(branch_warnings(
             &branch,
-            &format!("[reference] eps = {eps}"),
+            &format!("[reference] eps = {eps}", eps = crate::number::short(eps)),
             ("Omega", range.1 - range.0),
             tolerance,
         ));
         warnings.extend(branch.notes.iter().map(|n| {
-            format!("[reference] eps = {eps}: a start from the reduced model was dropped: {n}")
+            format!(
+                "[reference] eps = {eps}: a start from the reduced model was dropped: {n}",
+                eps = crate::number::short(eps)
+            )
         }));
         warnings.extend(branch.failed.iter().map(|f| {
             format!("[reference] eps = {eps}: {f}; the branches traced are written without it")
@@ -141,14 +144,20 @@ pub fn reference_stage(
         }
         for b in &branches[first..] {
             let number = b.orbits.first().map_or(0, |o| o.branch);
-            let at = format!("[reference] eps = {eps}, branch {number}");
+            let at = format!(
+                "[reference] eps = {eps}, branch {number}",
+                eps = crate::number::short(eps)
+            );
             warnings.extend(multiplier_warning(b, &at));
         }
     }
     let mut amplitude = Vec::new();
     let eps_range = sec.amplitude_range();
     for (k, &omega) in sec.amplitude_frequencies().iter().enumerate() {
-        progress.stage(&format!("full-system amplitude response, Omega = {omega}"));
+        progress.stage(&format!(
+            "full-system amplitude response, Omega = {omega}",
+            omega = crate::number::short(omega)
+        ));
         let settings = AmplitudeSettings {
             omega,
             epsilon_range: eps_range,
@@ -166,13 +175,17 @@ pub fn reference_stage(
             count += 1;
             progress.detail(&format!(
                 "full-system amplitude response, Omega = {omega}: orbit {count}, eps = {:.4e}",
-                o.epsilon
+                o.epsilon,
+                omega = crate::number::short(omega)
             ));
             true
         });
         let branch = reference_amplitude_resumable(system, &settings, k + 1, &mut runs)?;
         samples = branch.samples;
-        let at = format!("[reference] amplitude response at Omega = {omega}");
+        let at = format!(
+            "[reference] amplitude response at Omega = {omega}",
+            omega = crate::number::short(omega)
+        );
         warnings.extend(branch_warnings(
             &branch,
             &at,

@@ -13,7 +13,9 @@ use super::{lift_outputs, Reduction};
 use crate::fom::hht::{integrate, HhtOptions};
 use crate::fom::{given_start, DaeProblem};
 use crate::model::system::System;
-use crate::scene::{load_sampling, ReduceSection, SceneFile, MAX_POD_STEPS};
+use crate::number::short;
+use crate::pipeline::budget::{check_pod_reducer, Limits};
+use crate::scene::{load_sampling, ReduceSection, SceneFile};
 
 /// The reducers the engine offers itself.
 pub const ENGINE_REDUCERS: [&str; 1] = ["pod"];
@@ -64,19 +66,15 @@ impl PodParams {
         if !positive(self.step) || !positive(self.t_end) {
             return Some(format!(
                 "step and t_end must be positive, found {} and {}",
-                self.step, self.t_end
-            ));
-        }
-        if self.t_end / self.step > MAX_POD_STEPS {
-            return Some(format!(
-                "t_end / step = {:.3e} steps; at most {MAX_POD_STEPS:e}",
-                self.t_end / self.step
+                short(self.step),
+                short(self.t_end)
             ));
         }
         if !(self.epsilon.is_finite() && self.omega.is_finite() && self.omega >= 0.0) {
             return Some(format!(
                 "epsilon must be finite and omega a non-negative frequency, found {} and {}",
-                self.epsilon, self.omega
+                short(self.epsilon),
+                short(self.omega)
             ));
         }
         if let Err(m) = load_sampling(self.step, self.omega) {
@@ -85,23 +83,26 @@ impl PodParams {
         if !(-1.0 / 3.0..=0.0).contains(&self.hht_alpha) {
             return Some(format!(
                 "hht_alpha must lie in [-1/3, 0], found {}",
-                self.hht_alpha
+                short(self.hht_alpha)
             ));
         }
         match (self.energy, self.drop) {
             (Some(_), Some(_)) => return Some("give energy or drop, not both".into()),
             (Some(e), None) if !(e.is_finite() && e > 0.0 && e < 1.0) => {
-                return Some(format!("energy must lie in (0, 1), found {e}"))
+                return Some(format!("energy must lie in (0, 1), found {}", short(e)))
             }
             (None, Some(d)) if !(d.is_finite() && d > 0.0 && d <= 16.0) => {
-                return Some(format!("drop must lie in (0, 16] decades, found {d}"))
+                return Some(format!(
+                    "drop must lie in (0, 16] decades, found {}",
+                    short(d)
+                ))
             }
             _ => {}
         }
         if !(self.rank_tol.is_finite() && self.rank_tol > 0.0 && self.rank_tol < 1.0) {
             return Some(format!(
                 "rank_tol must lie in (0, 1), found {}",
-                self.rank_tol
+                short(self.rank_tol)
             ));
         }
         if !(1..=10_000).contains(&self.jacobian_samples) {
@@ -154,6 +155,13 @@ pub fn engine_reduce(
         return Err(bad("reduce.params", red.params.span(), m));
     }
     let sys = System::from_model(&plugin, model.clone())?;
+    check_pod_reducer(
+        scene,
+        &sys,
+        red.params.span(),
+        (params.step, params.t_end, params.jacobian_samples),
+        &Limits::of_machine(),
+    )?;
     let start = crate::scene::given_values([&params.x0, &params.v0].into_iter().flatten());
     if let Some((name, _)) = start
         .iter()

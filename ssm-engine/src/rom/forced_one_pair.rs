@@ -213,7 +213,7 @@ pub fn forced_response_one_pair(
                     "raise [forcing] nonautonomous_order (or leave it out to let the engine choose)"
                 } else {
                     "raise the expansion order, or lower the forcing (the response may lie beyond the SSM's convergence radius)"
-                }
+                }, eps = crate::number::short(eps)
             ));
         }
         let mut curve = best.curve;
@@ -310,7 +310,7 @@ impl Context<'_> {
             if linf.iter().chain(&h1).any(|v| !v.is_finite()) {
                 return Err(FrcError::Unsupported(format!(
                 "O({order}), eps = {eps}: non-finite response amplitude at rho = {}: the expansion diverges there; lower [forcing] rho_max",
-                p.rho
+                p.rho, eps = crate::number::short(eps)
             )));
             }
             rows.push(FrcRow {

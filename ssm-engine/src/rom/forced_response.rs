@@ -202,6 +202,16 @@ pub fn auto_ratios(masters: &[MasterMode], omega: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The external resonance ratios of `sec`: its `resonance`, else
+/// [`auto_ratios`] at the middle of its frequency range.
+pub fn resonance_ratios(sec: &ForcingSection, masters: &[MasterMode]) -> Vec<f64> {
+    let range = sec.omega_range.get_ref();
+    match &sec.resonance {
+        Some(r) => r.get_ref().clone(),
+        None => auto_ratios(masters, 0.5 * (range[0] + range[1])),
+    }
+}
+
 /// FRCs for every `(order, epsilon)` of `sec`, with the amplitudes of
 /// `outputs`; each curve's error estimate is checked against the relative
 /// `tolerance`.
@@ -218,11 +228,7 @@ pub fn forced_response(
             "the model is a map; [forcing] needs a flow".into(),
         ));
     }
-    let range = (sec.omega_range.get_ref()[0], sec.omega_range.get_ref()[1]);
-    let ratios = match &sec.resonance {
-        Some(r) => r.get_ref().clone(),
-        None => auto_ratios(masters, 0.5 * (range.0 + range.1)),
-    };
+    let ratios = resonance_ratios(sec, masters);
     if masters.len() > 1 {
         return crate::rom::forced_multi::forced_response_multi(
             ssm, sys, masters, sec, outputs, &ratios, tolerance,

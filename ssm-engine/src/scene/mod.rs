@@ -6,6 +6,7 @@
 //! by `ssm-engine --help` and in `docs/scenes.md`; a test keeps them equal):
 #![doc = concat!("```toml\n", include_str!("format.toml"), "```")]
 
+use crate::number::short;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -13,6 +14,7 @@ use serde::Deserialize;
 use ssm_model_files::input::{self, InputError, InputFile};
 use toml::Spanned;
 
+mod names;
 mod pod;
 mod reduce;
 mod reference;
@@ -21,8 +23,7 @@ mod validate;
 
 pub use crate::spectrum::Normalization;
 pub use pod::{
-    load_sampling, PodRun, PodSection, MAX_POD_ROMS, MAX_POD_STEPS, MAX_POD_TESTS,
-    MIN_STEPS_PER_PERIOD,
+    load_sampling, PodRun, PodSection, MAX_POD_ROMS, MAX_POD_TESTS, MIN_STEPS_PER_PERIOD,
 };
 pub use reduce::{DataSection, ReduceSection};
 pub use reference::{
@@ -503,7 +504,7 @@ impl SceneFile {
             return Err(self.invalid(
                 ssm.resonance_tol.span(),
                 "ssm.resonance_tol",
-                format!("must lie in (0, 1), found {tol}"),
+                format!("must lie in (0, 1), found {}", short(tol)),
             ));
         }
         let tol = *ssm.tolerance.get_ref();
@@ -511,10 +512,14 @@ impl SceneFile {
             return Err(self.invalid(
                 ssm.tolerance.span(),
                 "ssm.tolerance",
-                format!("must lie in (0, 1) (a relative error, 0.01 = 1 %), found {tol}"),
+                format!(
+                    "must lie in (0, 1) (a relative error, 0.01 = 1 %), found {}",
+                    short(tol)
+                ),
             ));
         }
         self.check_model_source()?;
+        self.check_unique_names()?;
         self.check_outputs()?;
         self.check_forcing()?;
         self.check_validate()?;
@@ -654,7 +659,7 @@ impl SceneFile {
             return Err(self.invalid(
                 v.span(),
                 key,
-                format!("must be a positive number, found {x}"),
+                format!("must be a positive number, found {}", short(x)),
             ));
         }
         Ok(())
@@ -734,7 +739,7 @@ impl SceneFile {
                     "outputs.transient.rtol",
                     format!(
                         "must be below 1e-2 (found {}): a looser tolerance lets the step size grow past the oscillation and the transient is wrong",
-                        tr.rtol.get_ref()
+                        short(*tr.rtol.get_ref())
                     ),
                 ));
             }

@@ -2,6 +2,7 @@
 //! continuation ([`crate::fom::periodic`]), the reference for the reduced
 //! model's forced response curves.
 
+use crate::number::{list, short};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -168,7 +169,10 @@ impl SceneFile {
                 return Err(self.invalid(
                     span,
                     "reference.omega_range",
-                    format!("must be positive, finite and increasing, found [{lo}, {hi}]"),
+                    format!(
+                        "must be positive, finite and increasing, found {}",
+                        list(&[lo, hi])
+                    ),
                 ))
             }
             _ => {}
@@ -186,7 +190,7 @@ impl SceneFile {
             return Err(self.invalid(
                 r.step.span(),
                 "reference.step",
-                format!("must lie in [1e-4, 10] (scaled arclength; 0.5 crosses a resonance peak in about 100 steps), found {step}"),
+                format!("must lie in [1e-4, 10] (scaled arclength; 0.5 crosses a resonance peak in about 100 steps), found {}", short(step)),
             ));
         }
         let tol = *r.tol.get_ref();
@@ -194,7 +198,7 @@ impl SceneFile {
             return Err(self.invalid(
                 r.tol.span(),
                 "reference.tol",
-                format!("must lie in [1e-14, 1e-3], found {tol}"),
+                format!("must lie in [1e-14, 1e-3], found {}", short(tol)),
             ));
         }
         if let Some(st) = &r.start {
@@ -257,8 +261,8 @@ impl SceneFile {
                 ))
             } else if !(v[0].is_finite() && v[1].is_finite() && v[0] >= 0.0 && v[1] > v[0]) {
                 Some(format!(
-                    "must be finite, non-negative and increasing, found [{}, {}]",
-                    v[0], v[1]
+                    "must be finite, non-negative and increasing, found {}",
+                    list(&v[..2])
                 ))
             } else {
                 None

@@ -1,6 +1,7 @@
 //! `[simulate]`: sampled full-system runs written as `[data]` CSV files, the
 //! input of data-driven reducers (e.g. the NAR identifier).
 
+use crate::number::short;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -108,7 +109,7 @@ impl SceneFile {
             return Err(self.invalid(
                 s.noise.span(),
                 "simulate.noise",
-                format!("must lie in [0, 1] (relative to each output's largest value; 0.01 = 1 %), found {noise}"),
+                format!("must lie in [0, 1] (relative to each output's largest value; 0.01 = 1 %), found {}", short(noise)),
             ));
         }
         for (tol, key) in [(&s.rtol, "simulate.rtol"), (&s.atol, "simulate.atol")] {
@@ -120,7 +121,10 @@ impl SceneFile {
                 return Err(self.invalid(
                     alpha.span(),
                     "simulate.hht_alpha",
-                    format!("must lie in [-1/3, 0] (0: no numerical damping), found {a}"),
+                    format!(
+                        "must lie in [-1/3, 0] (0: no numerical damping), found {}",
+                        short(a)
+                    ),
                 ));
             }
         }

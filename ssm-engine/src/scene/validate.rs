@@ -1,6 +1,7 @@
 //! `[validate]`, `[validate.steady_state]` and `[report]`: full-system
 //! references and the speed-against-error report.
 
+use crate::number::short;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -332,7 +333,7 @@ impl SceneFile {
             return Err(self.invalid(
                 s.delta.span(),
                 "validate.steady_state.delta",
-                format!("must lie in (0, 1), found {d}"),
+                format!("must lie in (0, 1), found {}", short(d)),
             ));
         }
         self.check_at_least(&s.max_periods, 2, "validate.steady_state.max_periods")?;

@@ -51,7 +51,7 @@ pub enum ForcedError {
     #[error("the forcing depends on the state; higher-order non-autonomous terms need a state-independent Fext")]
     StateDependentForcing,
     /// A harmonic's homological equation failed.
-    #[error("harmonic {harmonic} at Omega = {omega}: {source}")]
+    #[error("harmonic {harmonic} at Omega = {}: {source}", crate::number::short(.omega))]
     Solve {
         /// 1-based harmonic.
         harmonic: usize,

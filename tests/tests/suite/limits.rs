@@ -72,7 +72,7 @@ fn unbounded_requests_are_refused_at_their_key_with_the_estimate() {
         let (at, msg) = scene_error(&oscillator(rest));
         assert!(msg.starts_with(key), "expected {key}: {msg}");
         assert!(
-            msg.contains("needs about") && msg.contains("this machine allows"),
+            msg.contains("needs about") && msg.contains("this run allows"),
             "{msg}"
         );
         assert_eq!(at, line, "{msg}");

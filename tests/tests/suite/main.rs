@@ -5,6 +5,7 @@
 
 mod accuracy;
 mod continuation;
+mod cost_gate;
 mod crank_drive;
 mod divider;
 mod docs;

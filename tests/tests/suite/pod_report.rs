@@ -286,7 +286,7 @@ fn pod_section_refuses_bad_input() {
     }
     let runs = [
         ("t_end = -1.0", "t_end"),
-        ("t_end = 1e9", "at most"),
+        ("t_end = 1e9", "pod.step: the [pod] study"),
         ("t_end = 1.0\nomega = nan", "omega"),
         // step 0.01: Nyquist frequency pi / 0.01 = 314.16
         (

@@ -85,7 +85,8 @@ where
     let omega = settings.omega;
     if !(omega.is_finite() && omega > 0.0) {
         return Err(ReferenceError::Settings(format!(
-            "the frequency {omega} of an amplitude response must be finite and positive"
+            "the frequency {omega} of an amplitude response must be finite and positive",
+            omega = crate::number::short(omega)
         )));
     }
     if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo) {
@@ -118,7 +119,7 @@ where
     let scale = c_top.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     if !(scale.is_finite() && scale > 0.0) {
         return Err(ReferenceError::Settings(format!(
-            "the linear response at Omega = {omega}, eps = {hi} is {scale}: no forcing reaches the model"
+            "the linear response at Omega = {omega}, eps = {hi} is {scale}: no forcing reaches the model", omega = crate::number::short(omega)
         )));
     }
     hb.amplitude_scale = scale;
@@ -144,7 +145,7 @@ where
         .map(|pd| {
             format!(
                 "period doubling at Omega = {omega}, eps = {:e}: the branch of period 2T is traced only in a continuation in Omega",
-                pd.parameter() * hb.epsilon_scale
+                pd.parameter() * hb.epsilon_scale, omega = crate::number::short(omega)
             )
         })
         .collect();

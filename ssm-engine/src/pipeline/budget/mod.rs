@@ -13,11 +13,16 @@
 //! They are meant to separate "seconds to minutes" from "days", not to
 //! predict run times: a factor of a few either way is expected.
 
+mod runs;
+
 use std::ops::Range;
+
+pub use runs::{check_pod, check_pod_reducer};
 
 use super::error::JobError;
 use crate::model::system::System;
-use crate::scene::{SceneFile, AUTO_MAX_ORDER};
+use crate::number::short;
+use crate::scene::{SceneError, SceneFile, AUTO_MAX_ORDER};
 use crate::spectrum::{MasterMode, DENSE_LIMIT};
 use crate::ssm::Dynamics;
 
@@ -41,35 +46,30 @@ pub struct Limits {
     pub seconds: f64,
     /// Bytes of memory.
     pub bytes: f64,
+    /// The limit that sets `bytes` (see [`ssm_api::limits::MemoryRoom`]).
+    pub memory_source: &'static str,
 }
 
 impl Limits {
     /// One hour (or `SSM_TIME_LIMIT_MINUTES`), and three quarters of the
-    /// memory available now (`MemAvailable` of `/proc/meminfo`; 8 GiB where
-    /// it cannot be read).
+    /// memory this process may still allocate: the smallest of the machine's
+    /// available memory, the address space left under `ulimit -v` and the
+    /// room under the cgroup's memory limit
+    /// ([`ssm_api::limits::memory_room`]).
     pub fn of_machine() -> Self {
         let minutes = std::env::var(TIME_LIMIT_VAR)
             .ok()
             .and_then(|v| v.trim().parse::<f64>().ok())
             .filter(|m| m.is_finite() && *m > 0.0)
             .unwrap_or(60.0);
-        let available = std::fs::read_to_string("/proc/meminfo")
-            .ok()
-            .and_then(|s| {
-                s.lines()
-                    .find(|l| l.starts_with("MemAvailable:"))
-                    .and_then(|l| l.split_whitespace().nth(1))
-                    .and_then(|kb| kb.parse::<f64>().ok())
-            })
-            .map_or(8.0 * GIB, |kb| kb * 1024.0);
+        let room = ssm_api::limits::memory_room();
         Self {
             seconds: minutes * 60.0,
-            bytes: 0.75 * available,
+            bytes: 0.75 * room.bytes,
+            memory_source: room.source,
         }
     }
 }
-
-const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 
 /// The cost of one request.
 struct Cost {
@@ -131,24 +131,40 @@ fn ensure(
     cost: &Cost,
     limits: &Limits,
     advice: &str,
-) -> Result<(), JobError> {
+) -> Result<(), SceneError> {
     if within(cost, limits) {
         return Ok(());
     }
     let secs = cost.ops / OPS_PER_SECOND;
-    Err(scene
-        .invalid(
+    Err(scene.invalid(
             span,
             key,
             format!(
-                "{what} needs about {} and {} of memory; this machine allows {} ({TIME_LIMIT_VAR}) and {}: {advice}",
+                "{what} needs about {} and {} of memory; this run allows {} ({TIME_LIMIT_VAR}) and {} (3/4 of the {}): {advice}",
                 duration(secs),
                 bytes(cost.bytes),
                 duration(limits.seconds),
                 bytes(limits.bytes),
+                limits.memory_source,
             ),
-        )
-        .into())
+        ))
+}
+
+/// The position of the line that opens `header` (e.g. `[reference]`), for
+/// a key left at its default; the start of the file without one.
+fn section(scene: &SceneFile, header: &str) -> Range<usize> {
+    let at = scene
+        .text
+        .match_indices(header)
+        .map(|(i, _)| i)
+        .find(|&i| {
+            scene.text[..i]
+                .trim_end_matches([' ', '\t'])
+                .ends_with('\n')
+                || i == 0
+        })
+        .unwrap_or(0);
+    at..at
 }
 
 fn duration(s: f64) -> String {
@@ -200,10 +216,9 @@ pub fn check_spectrum(
         bytes: 6.0 * 16.0 * n * n,
     };
     if dense {
-        let at = scene.text.find("[spectrum]").unwrap_or(0);
         ensure(
             scene,
-            at..at,
+            section(scene, "[spectrum]"),
             "spectrum.method",
             format!("the dense spectrum of {n} states"),
             &cost,
@@ -247,9 +262,10 @@ fn order_cost(scene: &SceneFile, system: &System, pairs: usize, order: usize) ->
     let sc = &scene.scene;
     let forced = sc.forcing.is_some() || sc.validate.is_some();
     let mut ssm = ssm_cost(&Sizes::of(system), pairs, order, forced);
-    if sc.report.is_some() {
-        // the report rebuilds the SSM at each of its orders (at most `order`)
-        ssm.ops *= order as f64;
+    if let Some(r) = &sc.report {
+        // the report rebuilds the SSM at each of its orders (at most `order`;
+        // a given list counts with its length)
+        ssm.ops *= r.orders.as_ref().map_or(order, |o| o.get_ref().len()) as f64;
     }
     ssm
 }
@@ -294,8 +310,13 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
     let products = binomial(2 * nvar, order);
     let once = Cost {
         ops: 4.0 * sizes.factors * products + 0.5 * n_idx * sizes.sparse_solve(),
-        // the series product table holds one 8-byte entry per product
-        bytes: 16.0 * n_idx * (2.0 * sizes.states + sizes.factors + nvar as f64) + 8.0 * products,
+        // the series product table holds one 8-byte entry per product (the
+        // split pairs of every multi-index, allocated exactly); the index
+        // set some 100 + 8 nvar bytes per multi-index (exponents, hash
+        // lookup, conjugates, lower neighbours)
+        bytes: 16.0 * n_idx * (2.0 * sizes.states + sizes.factors + nvar as f64)
+            + n_idx * (100.0 + 8.0 * nvar as f64)
+            + 8.0 * products,
     };
     if forced {
         Cost {
@@ -407,32 +428,18 @@ pub fn check(
             "shorten the transient or take fewer samples",
         )?;
     }
+    if let Some(s) = &sc.simulate {
+        let length = *s.period.get_ref() * (*s.samples.get_ref() as f64 - 1.0);
+        runs::check_simulate(scene, s, &sizes, (steps(length), periods(length)), limits)?;
+    }
     if let Some(f) = &sc.forcing {
-        let points = *f.points.get_ref() as f64;
-        let curves =
-            (f.epsilon.get_ref().len() * f.orders.as_ref().map_or(1, |o| o.get_ref().len())) as f64;
-        // one pair: amplitude roots per frequency; several: continuation steps
-        // (up to 20 per point), each a Newton solve of the reduced equations
-        let per_point = if pairs == 1 {
-            4.0 * n_idx * 64.0
-        } else {
-            20.0 * 8.0 * (4.0 * n_idx * nvar as f64 + (nvar as f64).powi(3))
-        };
-        let cost = Cost {
-            ops: curves * points * per_point,
-            bytes: curves * points * 8.0 * (16.0 + 4.0 * nvar as f64 + coords),
-        };
-        ensure(
-            scene,
-            f.points.span(),
-            "forcing.points",
-            format!("{curves} forced response curve(s) of {points:.1e} points"),
-            &cost,
-            limits,
-            "lower the number of points",
-        )?;
+        check_forcing(scene, f, masters, n_idx, coords, limits)?;
     }
     if let Some(v) = &sc.validate {
+        let coords = v
+            .outputs
+            .as_ref()
+            .map_or(coords, |o| o.get_ref().len() as f64);
         let step = sizes.sparse_solve();
         if let Some(t_end) = &v.t_end {
             let n = steps(*t_end.get_ref());
@@ -494,9 +501,110 @@ pub fn check(
     Ok(())
 }
 
+/// The forced response curves of `f`: one pair, amplitude roots per
+/// frequency; several, continuation steps (up to 20 per point), each a
+/// Newton solve of the reduced equations, and per point the response
+/// sampled from the harmonic table of [`crate::rom::forced_multi`], whose
+/// slots grow with the resonance ratios times the order.
+fn check_forcing(
+    scene: &SceneFile,
+    f: &crate::scene::ForcingSection,
+    masters: &[MasterMode],
+    n_idx: f64,
+    coords: f64,
+    limits: &Limits,
+) -> Result<(), JobError> {
+    let pairs = masters.len().max(1);
+    let nvar = 2.0 * pairs as f64;
+    let points = *f.points.get_ref() as f64;
+    let orders = f.orders.as_ref().map_or(&[][..], |o| o.get_ref());
+    let curves = (f.epsilon.get_ref().len() * orders.len().max(1)) as f64;
+    let top = orders
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(0)
+        .max(scene.scene.ssm.order.as_ref().map_or(0, |o| *o.get_ref()));
+    let (slots, samples) = if pairs > 1 {
+        let ratios = crate::rom::forced_response::resonance_ratios(f, masters);
+        crate::rom::forced_multi::harmonic_table(&ratios, top.max(1))
+    } else {
+        (0.0, 0.0)
+    };
+    let per_point = if pairs == 1 {
+        4.0 * n_idx * 64.0
+    } else {
+        20.0 * 8.0 * (4.0 * n_idx * nvar + nvar.powi(3))
+            + coords * (4.0 * n_idx + 4.0 * samples * slots)
+    };
+    let table = Cost {
+        ops: curves * 20.0 * samples * slots,
+        bytes: 16.0 * samples * slots + 16.0 * coords * slots,
+    };
+    let cost = Cost {
+        ops: curves * points * per_point + table.ops,
+        bytes: curves * points * 8.0 * (16.0 + 4.0 * nvar + coords) + table.bytes,
+    };
+    let (span, key, what) = match &f.resonance {
+        Some(r) if table.bytes * 2.0 > cost.bytes || table.ops * 2.0 > cost.ops => (
+            r.span(),
+            "forcing.resonance",
+            format!(
+                "forced response curves at resonance ratios {} ({} harmonics sampled at {} phases)",
+                crate::number::list(r.get_ref()),
+                short(slots),
+                short(samples)
+            ),
+        ),
+        _ => (
+            f.points.span(),
+            "forcing.points",
+            format!(
+                "{} forced response curve(s) of {} points",
+                short(curves),
+                short(points)
+            ),
+        ),
+    };
+    ensure(
+        scene,
+        span,
+        key,
+        what,
+        &cost,
+        limits,
+        if key == "forcing.points" {
+            "lower the number of points, epsilon values or orders"
+        } else {
+            "use ratios near the master pairs' frequencies over Omega (small integers or fractions)"
+        },
+    )
+    .map_err(Into::into)
+}
+
 /// Continuation steps assumed per reference branch when `max_steps` allows
-/// more (the zoo's branches take 100-300).
-const REFERENCE_STEPS: f64 = 500.0;
+/// more (measured: 143 orbits a branch on the spatial oscillator's zoo
+/// scene, 377 on the divider's, below).
+const REFERENCE_STEPS: f64 = 400.0;
+
+/// Factor of the reference's per-orbit operation count, fitted to two
+/// measured runs (release build, 2 shared cores; CPU time of the reference,
+/// since the machine was loaded):
+/// - `zoo/spatial_oscillator_cubic_reference.toml` (7 states, H = 9, three
+///   branches in `Omega` and one amplitude response, 643 orbits): 11.2 s
+///   wall, under 6 s of CPU; the uncalibrated count said 83 s (at 500 steps
+///   a branch);
+/// - the divider of `benches/benches/reference.rs` (146 states, H = 5,
+///   1606 Fourier coefficients, multipliers by the monodromy map; one
+///   branch from rest at eps = 0.1 over [43.07, 49.87], 377 orbits): 651 s
+///   wall, 329 s of CPU; the uncalibrated count said 14 min.
+///
+/// With 400 steps a branch and this factor the divider is estimated at
+/// 5.6 min (its CPU time) and the oscillator at 33 s, an overestimate of
+/// about 6 for small models, where the Hill eigenproblem's `(N (2H+1))^3`
+/// bound is loose; the old count refused sound requests at 7-15 times their
+/// run time.
+const REFERENCE_CALIBRATION: f64 = 0.5;
 
 /// Refuses a `[reference]` that would not finish within `limits`: per step
 /// five sparse factorizations of the harmonic-balance Jacobian (a dense
@@ -543,22 +651,59 @@ pub fn check_reference(
     };
     let branches = (r.epsilon.get_ref().len() + r.amplitude_frequencies().len()) as f64;
     // a branch's scaled arclength is of order ten: small steps take more
-    let steps = (*r.max_steps.get_ref() as f64).min(REFERENCE_STEPS.max(10.0 / *r.step.get_ref()));
+    let max_steps = *r.max_steps.get_ref() as f64;
+    let by_step = REFERENCE_STEPS.max(10.0 / *r.step.get_ref());
+    let steps = max_steps.min(by_step);
+    // each orbit's amplitudes of every output (a sum over the harmonics)
+    let outputs = r
+        .outputs
+        .as_ref()
+        .map_or(scene.scene.outputs.coordinates.get_ref().len(), |o| {
+            o.get_ref().len()
+        }) as f64;
     let cost = Cost {
-        ops: branches * steps * (5.0 * factor + hill),
+        ops: REFERENCE_CALIBRATION * branches * steps * (5.0 * factor + hill)
+            + branches * steps * outputs * 8.0 * nu,
         bytes: 8.0 * (sizes.nnz + sizes.factors) * k * k * 4.0
             + 8.0 * nu * nu.min(1500.0)
-            + kept_lus,
+            + kept_lus
+            + branches * steps * 8.0 * (outputs + 8.0),
+    };
+    // the key that drives the cost: the number of steps when it exceeds a
+    // typical branch's (max_steps when it caps the steps a small step asks
+    // for, unless only step was given), else the harmonics
+    let caps = max_steps <= by_step && (!r.max_steps.span().is_empty() || r.step.span().is_empty());
+    let (span, key, advice) = if steps > REFERENCE_STEPS && caps {
+        (r.max_steps.span(), "reference.max_steps", "lower max_steps")
+    } else if steps > REFERENCE_STEPS {
+        (
+            r.step.span(),
+            "reference.step",
+            "raise step (fewer, longer steps)",
+        )
+    } else {
+        (
+            r.harmonics.span(),
+            "reference.harmonics",
+            "lower harmonics, or give fewer epsilon or amplitude_at",
+        )
+    };
+    // a default value has no span of its own: point at the section
+    let span = if span.is_empty() {
+        section(scene, "[reference]")
+    } else {
+        span
     };
     ensure(
         scene,
-        r.harmonics.span(),
-        "reference.harmonics",
+        span,
+        key,
         format!(
-            "the full-system reference ({branches:.0} branches of orbits with {nu:.0} Fourier coefficients)"
+            "the full-system reference ({branches:.0} branches of up to {steps:.0} orbits with {nu:.0} Fourier coefficients)"
         ),
         &cost,
         limits,
-        "lower harmonics or max_steps, or give fewer epsilon or amplitude_at",
+        advice,
     )
+    .map_err(Into::into)
 }

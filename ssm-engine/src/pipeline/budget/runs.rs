@@ -1,0 +1,408 @@
+//! The costs of the full-model runs that are not answers read off the SSM:
+//! the `[pod]` study, the engine's `pod` reducer (`[reduce] reducer =
+//! "pod"`) and `[simulate]`. Each is costed before it allocates anything;
+//! the refusal names the key of the part that dominates the estimate.
+
+use std::ops::Range;
+
+use super::{ensure, section, ssm_cost, Cost, Limits, Sizes, OPS_PER_SECOND};
+use crate::model::system::System;
+use crate::number::short;
+use crate::scene::{PodSection, SceneError, SceneFile};
+
+/// Newton iterations assumed per fixed HHT step (the iteration matrix is
+/// factored once per step at a fixed step size, and again when Newton needs
+/// more than three iterations; at most 8 iterations).
+const HHT_NEWTON: f64 = 4.0;
+
+/// Factor of the HHT step's operation count, fitted to a measured run
+/// (release build; 2.05 s of CPU in all, at 39 % of a core on the loaded
+/// machine, so the parts' wall times below are scaled by 0.39):
+/// `zoo/pendulum_chain_pod.toml` with every `t_end` at 10 (405 states,
+/// 1001 steps a run; three full runs, two POD and two SSM models run on
+/// each load). Measured against estimated (with this factor):
+/// - the three full runs: 0.39 s of CPU (1.0 s wall); 0.40 s;
+/// - the POD models' runs: 1.2 s (3.0 s wall); 4.2 s (with the lift);
+/// - the two POD reductions: 0.08 s (0.2 s wall); 4.8 s, since the
+///   reduced coordinates (6 and 13) are bounded by the 122 displacements
+///   before the training run has shown how few POD keeps;
+/// - the SSM models and their runs: 0.03 s; 0.15 s.
+const HHT_CALIBRATION: f64 = 0.16;
+
+/// A POD model's fixed HHT step against the full model's (measured on the
+/// chain of [`HHT_CALIBRATION`]: 0.7 and 2.4 times the full run for the
+/// models of 6 and 13 coordinates (96 and 114 states with the recast's
+/// auxiliaries), whose Galerkin projections are dense).
+const REDUCED_RUN: f64 = 3.0;
+
+/// Operations of one fixed HHT step of a model of `sizes`: one sparse LU of
+/// the iteration matrix and [`HHT_NEWTON`] Newton iterations, each a
+/// residual (the pencil's products and the nonlinearity) and a solve.
+fn hht_step(s: &Sizes) -> f64 {
+    HHT_CALIBRATION
+        * (s.sparse_solve() + HHT_NEWTON * (10.0 * (s.nnz + s.states) + 4.0 * s.factors))
+}
+
+/// Bytes of one stored HHT step: the state and the accelerations (two
+/// boxed vectors) and the time.
+fn hht_bytes(s: &Sizes) -> f64 {
+    2.0 * (8.0 * s.states + 40.0) + 8.0
+}
+
+/// One part of a request's cost and the key that drives it.
+struct Part {
+    cost: Cost,
+    span: Range<usize>,
+    key: String,
+    advice: &'static str,
+}
+
+/// Refuses `what` when the parts together exceed `limits`, at the key of
+/// the part that takes the largest share of the time or memory allowed.
+fn refuse_parts(
+    scene: &SceneFile,
+    what: String,
+    parts: &[Part],
+    limits: &Limits,
+) -> Result<(), SceneError> {
+    let total = Cost {
+        ops: parts.iter().map(|p| p.cost.ops).sum(),
+        bytes: parts.iter().map(|p| p.cost.bytes).sum(),
+    };
+    let share = |c: &Cost| (c.ops / OPS_PER_SECOND / limits.seconds).max(c.bytes / limits.bytes);
+    let Some(top) = parts
+        .iter()
+        .max_by(|a, b| share(&a.cost).total_cmp(&share(&b.cost)))
+    else {
+        return Ok(());
+    };
+    ensure(
+        scene,
+        top.span.clone(),
+        &top.key,
+        what,
+        &total,
+        limits,
+        top.advice,
+    )
+}
+
+/// What a POD reduction is made from: the fixed step, the training run's
+/// length, the Jacobian samples and the number of truncations.
+struct Training {
+    step: f64,
+    t_end: f64,
+    jacobian_samples: f64,
+    truncations: f64,
+}
+
+/// Displacements and constraints of `system` (half the states and none
+/// for a model that is not mechanical).
+fn mechanical(system: &System) -> (f64, f64) {
+    system.mechanical.as_ref().map_or_else(
+        || ((system.n_states() / 2) as f64, 0.0),
+        |m| (m.n_dof as f64, m.n_constraints as f64),
+    )
+}
+
+/// The POD reductions from the training run `t`: per truncation, the thin
+/// SVD of the velocity snapshots (`n x K`, `K` steps) and the SVDs of the
+/// stacked projected constraint Jacobian (`m x r J`, `r <= min(n, K)`
+/// reduced coordinates, `J` samples) and of each of its `J` blocks.
+fn reduction_parts(
+    system: &System,
+    t: &Training,
+    snapshots: (Range<usize>, String),
+    samples: (Range<usize>, String),
+) -> [Part; 2] {
+    let (n, m) = mechanical(system);
+    let k = t.t_end / t.step + 1.0;
+    let svd = Cost {
+        ops: t.truncations * (4.0 * n * k * n.min(k) + 8.0 * n.min(k).powi(3)),
+        bytes: 8.0 * (n * k + (n + k) * n.min(k)),
+    };
+    let r = n.min(k);
+    let cols = r * t.jacobian_samples;
+    let stack = Cost {
+        ops: t.truncations * 4.0 * (m * cols * m.min(cols) + t.jacobian_samples * m * r * m.min(r)),
+        bytes: 3.0 * 8.0 * m * cols,
+    };
+    [
+        Part {
+            cost: svd,
+            span: snapshots.0,
+            key: snapshots.1,
+            advice: "lengthen the step or shorten the training run (fewer snapshots)",
+        },
+        Part {
+            cost: stack,
+            span: samples.0,
+            key: samples.1,
+            advice: "lower jacobian_samples",
+        },
+    ]
+}
+
+/// Refuses a `[pod]` study that would not finish within `limits`, before
+/// any of it runs: the full model's HHT runs (`t_end / step` steps each,
+/// see [`hht_step`]) and their stored states; the POD reductions
+/// ([`reduction_parts`]); each POD model's run on every load (bounded by
+/// the full model's step, plus the lift to the full states, which are
+/// stored); the SSM models of `ssm_pairs` and their runs, lifted through
+/// `W` at every step end.
+pub fn check_pod(scene: &SceneFile, system: &System, limits: &Limits) -> Result<(), SceneError> {
+    let Some(p) = &scene.scene.pod else {
+        return Ok(());
+    };
+    let sizes = Sizes::of(system);
+    let step = *p.step.get_ref();
+    let runs: Vec<&crate::scene::PodRun> = std::iter::once(p.train.get_ref())
+        .chain(p.test.get_ref())
+        .collect();
+    let steps: Vec<f64> = runs.iter().map(|r| r.t_end / step + 1.0).collect();
+    let all: f64 = steps.iter().sum();
+    let longest_test = steps[1..].iter().copied().fold(0.0, f64::max);
+    let pod_models = truncation_count(p);
+    let sets = p.ssm_pairs.as_ref().map_or(&[][..], |s| s.get_ref());
+    let outputs = p
+        .outputs
+        .as_ref()
+        .map_or(scene.scene.outputs.coordinates.get_ref().len(), |o| {
+            o.get_ref().len()
+        }) as f64;
+    let models = pod_models + sets.len() as f64;
+    let step_key = (p.step.span(), "pod.step".to_owned());
+    let full = Part {
+        cost: Cost {
+            ops: all * hht_step(&sizes),
+            bytes: (steps[0] + longest_test) * hht_bytes(&sizes)
+                + all * (8.0 + (1.0 + models) * (8.0 * outputs + 40.0)),
+        },
+        span: step_key.0.clone(),
+        key: step_key.1.clone(),
+        advice: "lengthen the step or shorten the runs (t_end)",
+    };
+    let (n, _) = mechanical(system);
+    let r = n.min(steps[0]);
+    let reduced = Part {
+        cost: Cost {
+            ops: pod_models * all * (REDUCED_RUN * hht_step(&sizes) + 4.0 * n * r),
+            bytes: steps[0].max(longest_test) * 2.0 * hht_bytes(&sizes),
+        },
+        span: step_key.0.clone(),
+        key: step_key.1.clone(),
+        advice: "lengthen the step, shorten the runs (t_end) or give fewer truncations",
+    };
+    let training = Training {
+        step,
+        t_end: runs[0].t_end,
+        jacobian_samples: *p.jacobian_samples.get_ref() as f64,
+        truncations: pod_models,
+    };
+    let samples_span = if p.jacobian_samples.span().is_empty() {
+        section(scene, "[pod]")
+    } else {
+        p.jacobian_samples.span()
+    };
+    let [svd, stack] = reduction_parts(
+        system,
+        &training,
+        step_key,
+        (samples_span, "pod.jacobian_samples".to_owned()),
+    );
+    let order = p.ssm_order(scene.scene.ssm.order.as_ref().map(|o| *o.get_ref()));
+    let forced = runs.iter().any(|r| r.epsilon != 0.0);
+    let ssm = sets.iter().fold(
+        Cost {
+            ops: 0.0,
+            bytes: 0.0,
+        },
+        |acc, set| {
+            let c = ssm_cost(&sizes, set.len(), order, forced);
+            let n_idx = super::multi_indices(2 * set.len(), order);
+            // each step end: the reduced state lifted through W to the outputs
+            Cost {
+                ops: acc.ops + c.ops + all * 4.0 * n_idx * (outputs + 2.0 * set.len() as f64),
+                bytes: acc.bytes + c.bytes,
+            }
+        },
+    );
+    let (ssm_span, ssm_key) = match (&p.ssm_order, &p.ssm_pairs) {
+        (Some(o), _) => (o.span(), "pod.ssm_order"),
+        (None, Some(s)) => (s.span(), "pod.ssm_pairs"),
+        (None, None) => (section(scene, "[pod]"), "pod.ssm_pairs"),
+    };
+    let parts = [
+        full,
+        reduced,
+        svd,
+        stack,
+        Part {
+            cost: ssm,
+            span: ssm_span,
+            key: ssm_key.to_owned(),
+            advice: "lower ssm_order or give fewer ssm_pairs",
+        },
+    ];
+    refuse_parts(
+        scene,
+        format!(
+            "the [pod] study ({} full-model HHT run(s) of up to {} steps of a {}-state model, {} reduced model(s) run on each)",
+            runs.len(),
+            short(steps.iter().copied().fold(0.0, f64::max).floor()),
+            sizes.states,
+            models
+        ),
+        &parts,
+        limits,
+    )
+}
+
+/// Reduced models of `[pod]`'s truncations (one by default).
+fn truncation_count(p: &PodSection) -> f64 {
+    match (&p.energy, &p.drop) {
+        (Some(e), _) => e.get_ref().len() as f64,
+        (None, Some(d)) => d.get_ref().len() as f64,
+        (None, None) => 1.0,
+    }
+}
+
+/// The span of the line `key = ...` of the table whose header (or inline
+/// value) is at `table` (a `[reduce.params]` table keeps no spans of its own
+/// keys): the lines up to the next table header are searched; the table's
+/// own span without such a line.
+fn key_in(scene: &SceneFile, table: Range<usize>, key: &str) -> Range<usize> {
+    let text = scene.text.get(table.start..).unwrap_or("");
+    let mut at = table.start;
+    for (k, line) in text.split_inclusive('\n').enumerate() {
+        let trimmed = line.trim_start();
+        if k > 0 && trimmed.starts_with('[') {
+            break;
+        }
+        if let Some(rest) = trimmed.strip_prefix(key) {
+            if rest.trim_start().starts_with('=') {
+                let start = at + (line.len() - trimmed.len());
+                return start..start + trimmed.trim_end().len();
+            }
+        }
+        at += line.len();
+    }
+    table
+}
+
+/// Refuses the engine's `pod` reducer (`[reduce] reducer = "pod"`) when its
+/// training run of `system` (`t_end / step` HHT steps, the states stored)
+/// and its POD reduction ([`reduction_parts`]) would not finish within
+/// `limits`; `params` is the span of `[reduce.params]`.
+pub fn check_pod_reducer(
+    scene: &SceneFile,
+    system: &System,
+    params: Range<usize>,
+    (step, t_end, jacobian_samples): (f64, f64, usize),
+    limits: &Limits,
+) -> Result<(), SceneError> {
+    let sizes = Sizes::of(system);
+    let steps = t_end / step + 1.0;
+    let step_key = (
+        key_in(scene, params.clone(), "step"),
+        "reduce.params.step".to_owned(),
+    );
+    let training = Training {
+        step,
+        t_end,
+        jacobian_samples: jacobian_samples as f64,
+        truncations: 1.0,
+    };
+    let [svd, stack] = reduction_parts(
+        system,
+        &training,
+        step_key.clone(),
+        (
+            key_in(scene, params, "jacobian_samples"),
+            "reduce.params.jacobian_samples".to_owned(),
+        ),
+    );
+    let run = Part {
+        cost: Cost {
+            ops: steps * hht_step(&sizes),
+            bytes: steps * hht_bytes(&sizes),
+        },
+        span: step_key.0,
+        key: step_key.1,
+        advice: "lengthen the step or shorten the training run (t_end)",
+    };
+    refuse_parts(
+        scene,
+        format!(
+            "the pod reducer's training run ({} HHT steps of a {}-state model) and its POD",
+            short(steps.floor()),
+            sizes.states
+        ),
+        &[run, svd, stack],
+        limits,
+    )
+}
+
+/// Sparse solves of the pencil's size per adaptive Radau IIA step (a real
+/// and a complex factorization of the stage system and the Newton solves),
+/// fitted to two measured release runs of the zoo (CPU time, the machine
+/// loaded): `pendulum_chain_data.toml` (405 states, 400 samples over 32
+/// periods of the master mode) 2.1 s, estimated 3.3 s;
+/// `spatial_oscillator_data.toml` (7 states, 2000 samples over 127
+/// periods) 0.25 s, estimated 0.18 s.
+const RADAU_STEP: f64 = 4.0;
+
+/// `[simulate]`: `runs` full-model runs over `(samples - 1) period`, each
+/// of `steps` adaptive integration steps (the caller's estimate from the
+/// master modes' fastest frequency) or at least one step a sample,
+/// [`RADAU_STEP`] sparse solves each; runs share the machine's cores;
+/// memory for the sampled outputs of every run.
+pub(super) fn check_simulate(
+    scene: &SceneFile,
+    sec: &crate::scene::SimulateSection,
+    sizes: &Sizes,
+    (steps, periods): (f64, f64),
+    limits: &Limits,
+) -> Result<(), SceneError> {
+    let runs = sec.run.get_ref().len() as f64;
+    let samples = *sec.samples.get_ref() as f64;
+    let outputs = sec
+        .outputs
+        .as_ref()
+        .map_or(scene.scene.outputs.coordinates.get_ref().len(), |o| {
+            o.get_ref().len()
+        }) as f64;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    let per_run = steps.max(samples) * RADAU_STEP * sizes.sparse_solve() + samples * 8.0 * outputs;
+    let cost = Cost {
+        ops: per_run * runs / cores.min(runs).max(1.0),
+        bytes: runs * samples * (8.0 * outputs + 8.0) + cores.min(runs) * 64.0 * sizes.states,
+    };
+    let (span, key, advice) = if steps > samples {
+        (
+            sec.period.span(),
+            "simulate.period",
+            "shorten the runs: a smaller period or fewer samples",
+        )
+    } else {
+        (
+            sec.samples.span(),
+            "simulate.samples",
+            "take fewer samples (or fewer runs)",
+        )
+    };
+    ensure(
+        scene,
+        span,
+        key,
+        format!(
+            "{} full-system run(s) of {} samples over {} periods of the fastest master mode",
+            short(runs),
+            short(samples),
+            short(periods.round())
+        ),
+        &cost,
+        limits,
+        advice,
+    )
+}
