@@ -294,6 +294,7 @@ impl SceneFile {
                 format!("at most {MAX_POD_TESTS} test runs"),
             ));
         }
+        let step = *p.step.get_ref();
         let runs = std::iter::once(("pod.train".to_owned(), p.train.span(), p.train.get_ref()))
             .chain(
                 p.test
