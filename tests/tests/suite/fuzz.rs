@@ -4,8 +4,9 @@
 //! an abort (out of memory, stack overflow) or a hang fails the property, not
 //! the test binary. The property: the run ends in `Ok` or a typed error, and
 //! an `Ok` run writes no NaN or infinity into a CSV file. The other input
-//! surfaces (reference, checkpoints, POD, data files, model folders, plugin
-//! parameters, output directories) are in `fuzz_inputs.rs`.
+//! surfaces are in `fuzz_inputs.rs` (reference, POD, data files, model
+//! folders, plugin parameters), `fuzz_checkpoints.rs` (resumed checkpoints)
+//! and `fuzz_outputs.rs` (output directories).
 //!
 //! The number of cases is proptest's `PROPTEST_CASES` (default below), the
 //! seed fixed unless `PROPTEST_RNG_SEED` is set (so CI is reproducible and a

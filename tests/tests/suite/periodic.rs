@@ -593,14 +593,29 @@ fn chain_reference_agrees_with_steady_states_by_integration() {
         "{check:?}"
     );
     let refs: Vec<&OutputMap> = outputs.iter().collect();
-    for omega in omegas {
-        let p = DaeProblem::new(&sys, 0.6, omega);
-        let opts = SteadyOptions {
-            delta: 1e-6,
-            max_periods: 3000,
-            ..SteadyOptions::default()
-        };
-        let ss = steady_state(&p, &vec![0.0; sys.n_states()], &refs, &opts).expect("steady state");
+    // the five integrations are independent: one thread each, so that this
+    // test (the suite's longest) is not the last one running alone
+    let states = std::thread::scope(|scope| {
+        let runs: Vec<_> = omegas
+            .iter()
+            .map(|&omega| {
+                let (sys, refs) = (&sys, &refs);
+                scope.spawn(move || {
+                    let p = DaeProblem::new(sys, 0.6, omega);
+                    let opts = SteadyOptions {
+                        delta: 1e-6,
+                        max_periods: 3000,
+                        ..SteadyOptions::default()
+                    };
+                    steady_state(&p, &vec![0.0; sys.n_states()], refs, &opts).expect("steady state")
+                })
+            })
+            .collect();
+        runs.into_iter()
+            .map(|r| r.join().expect("the integration thread"))
+            .collect::<Vec<_>>()
+    });
+    for (omega, ss) in omegas.into_iter().zip(states) {
         assert_eq!(ss.multiple, 1);
         let norm = ss.z_end.iter().map(|v| v * v).sum::<f64>().sqrt();
         let gap =
