@@ -6,6 +6,8 @@
 //!
 //! The folders follow the pipeline of a run ([`pipeline::run`]):
 //! - [`scene`]: the TOML scene format, validated with line numbers;
+//! - [`plan`]: a scene's sections resolved to the span-free [`spec`]s that
+//!   the numerics take (code builds specs directly: no TOML below `plan`);
 //! - [`model`]: plugins found and loaded, the declared constraint layout, the
 //!   engine-side first-order system, the recast of non-polynomial terms;
 //! - [`reduce`]: models made by reducers, from `[data]` signals and/or a model;
@@ -36,10 +38,12 @@ pub mod model;
 pub mod number;
 pub mod output;
 pub mod pipeline;
+pub mod plan;
 pub mod poly;
 pub mod reduce;
 pub mod rom;
 pub mod scene;
+pub mod spec;
 pub mod spectrum;
 pub mod ssm;
 

@@ -5,13 +5,29 @@ must agree to a relative 1e-12 (timings and the keys the newer run adds are
 skipped; warnings must be identical).
 
 usage: zoo_compare.py BEFORE_DIR AFTER_DIR
+       zoo_compare.py --run ENGINE OUT_DIR   (every zoo scene into OUT_DIR/<scene>)
+
+The data scenes (`*_data.toml`) run first and also write into the
+repository's `out/`, where the NAR scenes read their signals.
 """
+
 import json
 import math
+import shutil
+import subprocess
 import sys
 from pathlib import Path
 
-SKIP_KEYS = {"timing_s", "steps_per_second", "time_s", "wall_s"}
+# timings, ratios of timings, and where the plugin libraries were built
+SKIP_KEYS = {
+    "timing_s",
+    "steps_per_second",
+    "time_s",
+    "wall_s",
+    "seconds",
+    "speedup",
+    "file",
+}
 TOL = 1e-12
 
 
@@ -37,11 +53,17 @@ def cmp_json(a, b, path, errs):
             cmp_json(v, b[k], f"{path}.{k}", errs)
     elif isinstance(a, list):
         if not isinstance(b, list) or len(a) != len(b):
-            errs.append(f"{path}: list length {len(a)} -> {len(b) if isinstance(b, list) else '?'}")
+            errs.append(
+                f"{path}: list length {len(a)} -> {len(b) if isinstance(b, list) else '?'}"
+            )
             return
         for i, (x, y) in enumerate(zip(a, b)):
             cmp_json(x, y, f"{path}[{i}]", errs)
-    elif isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
+    elif (
+        isinstance(a, (int, float))
+        and isinstance(b, (int, float))
+        and not isinstance(a, bool)
+    ):
         if not close(float(a), float(b)):
             errs.append(f"{path}: {a} -> {b}")
     elif a != b:
@@ -54,7 +76,9 @@ def cmp_csv(a, b, name, errs):
         errs.append(f"{name}: {len(la)} -> {len(lb)} lines")
         return
     header = la[0].split(",")
-    time_cols = {i for i, h in enumerate(header) if h.endswith("_s") or h == "steps"}
+    time_cols = {
+        i for i, h in enumerate(header) if h.endswith("_s") or h in ("steps", "speedup")
+    }
     for n, (x, y) in enumerate(zip(la, lb)):
         fx, fy = x.split(","), y.split(",")
         if len(fx) != len(fy):
@@ -71,7 +95,41 @@ def cmp_csv(a, b, name, errs):
                     errs.append(f"{name}:{n + 1} col {i}: {u!r} -> {v!r}")
 
 
+def run(engine, out):
+    root = Path(__file__).resolve().parents[2]
+    scenes = sorted(
+        (root / "zoo").glob("*.toml"),
+        key=lambda p: (not p.stem.endswith("_data"), p.stem),
+    )
+    failed = 0
+    for scene in scenes:
+        dest = out / scene.stem
+        if scene.stem.endswith("_data"):
+            # where the NAR scenes read it, then copied beside the others
+            target = root / "out" / scene.stem
+        else:
+            target = dest
+        r = subprocess.run(
+            [engine, str(scene), "--out", str(target)],
+            check=False,
+            capture_output=True,
+            text=True,
+        )
+        if r.returncode != 0:
+            failed += 1
+            print(f"{scene.stem}: exit {r.returncode}: {r.stderr.strip()[-300:]}")
+            continue
+        if target != dest:
+            if dest.exists():
+                shutil.rmtree(dest)
+            shutil.copytree(target, dest)
+        print(f"{scene.stem}: ok")
+    return 1 if failed else 0
+
+
 def main():
+    if sys.argv[1] == "--run":
+        return run(Path(sys.argv[2]).resolve(), Path(sys.argv[3]).resolve())
     before, after = Path(sys.argv[1]), Path(sys.argv[2])
     total = 0
     for scene in sorted(p for p in before.iterdir() if p.is_dir()):
@@ -82,11 +140,15 @@ def main():
             if not g.exists():
                 errs.append(f"{f.name}: missing after")
             elif f.suffix == ".json":
-                cmp_json(json.loads(f.read_text()), json.loads(g.read_text()), f.name, errs)
+                cmp_json(
+                    json.loads(f.read_text()), json.loads(g.read_text()), f.name, errs
+                )
             elif f.suffix == ".csv" and f.name != "report.csv":
                 cmp_csv(f, g, f.name, errs)
         total += len(errs)
-        print(f"{scene.name}: {'identical' if not errs else f'{len(errs)} differences'}")
+        print(
+            f"{scene.name}: {'identical' if not errs else f'{len(errs)} differences'}"
+        )
         for e in errs[:10]:
             print("   ", e)
     print(f"{total} differences")

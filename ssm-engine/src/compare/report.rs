@@ -10,13 +10,11 @@
 
 use std::time::Instant;
 
-use toml::Spanned;
-
 use super::validation::{frc_error, frc_error_at, reference_points, Validation};
 use crate::fom::periodic::frc::ReferenceFrc;
 use crate::model::system::{OutputMap, System};
 use crate::rom::forced_response::{forced_response, FrcError};
-use crate::scene::ForcingSection;
+use crate::spec::FrcSpec;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar};
 use crate::ssm::rom::{integrate, RomError};
@@ -89,7 +87,7 @@ pub struct ReportInputs<'a> {
     /// Outputs (first one: backbone amplitude, FRC amplitude).
     pub outputs: &'a [&'a OutputMap],
     /// `[forcing]`, if any.
-    pub forcing: Option<&'a ForcingSection>,
+    pub forcing: Option<&'a FrcSpec>,
     /// The full-system references, if any.
     pub validation: Option<&'a Validation>,
     /// Initial reduced coordinates of the validation transient.
@@ -189,12 +187,11 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
             row.invariance_rho = Some(rho);
         }
         if let Some(f) = inp.forcing {
-            let mut sec = f.clone();
-            sec.orders = Some(Spanned::new(0..0, vec![order]));
+            let mut sec = f.at_order(order);
             if let Some((eps, _)) = &harmonic {
-                sec.epsilon = Spanned::new(0..0, vec![*eps]);
+                sec.epsilon = vec![*eps];
             } else if let Some(r) = steady {
-                sec.epsilon = Spanned::new(0..0, vec![r.epsilon]);
+                sec.epsilon = vec![r.epsilon];
             }
             let t = Instant::now();
             let rep = forced_response(&ssm, sys, inp.masters, &sec, inp.outputs, inp.tolerance)

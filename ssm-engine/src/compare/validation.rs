@@ -22,7 +22,7 @@ use crate::fom::{
 use crate::model::system::{OutputMap, System};
 use crate::rom::autonomous::polar_point;
 use crate::rom::forced_response::FrcRow;
-use crate::scene::{SteadyStart, ValidateSection};
+use crate::spec::{SteadyStart, ValidationSpec, ValidationStart, ValidationTransientSpec};
 use crate::spectrum::MasterMode;
 use crate::ssm::SsmExpansion;
 use crate::C64;
@@ -150,47 +150,47 @@ fn multiplier_outputs(sys: &System) -> Vec<&OutputMap> {
 pub fn validation(
     ssm: &SsmExpansion,
     sys: &System,
-    sec: &ValidateSection,
+    sec: &ValidationSpec,
     compared: &[&OutputMap],
     coordinates: &[&OutputMap],
     masters: &[MasterMode],
     frc: Option<&[FrcRow]>,
 ) -> Result<Validation, ValidateError> {
     let opts = RadauOptions {
-        rtol: *sec.rtol.get_ref(),
-        atol: *sec.atol.get_ref(),
+        rtol: sec.rtol,
+        atol: sec.atol,
         ..RadauOptions::default()
     };
     let transient = sec
-        .t_end
+        .transient
         .as_ref()
-        .map(|t_end| transient_comparison(ssm, sys, sec, compared, masters, *t_end.get_ref(), opts))
+        .map(|tr| transient_comparison(ssm, sys, tr, compared, masters, opts))
         .transpose()?;
     let mut steady = None;
     if let Some(ss) = &sec.steady_state {
-        let eps = *ss.epsilon.get_ref();
-        let omegas = ss.omegas();
+        let eps = ss.epsilon;
+        let omegas = &ss.omegas;
         let sopts = SteadyOptions {
-            delta: *ss.delta.get_ref(),
-            max_periods: *ss.max_periods.get_ref(),
-            samples_per_period: *ss.samples_per_period.get_ref(),
-            max_multiple: *ss.max_period_multiple.get_ref(),
+            delta: ss.delta,
+            max_periods: ss.max_periods,
+            samples_per_period: ss.samples_per_period,
+            max_multiple: ss.max_period_multiple,
             radau: opts,
         };
-        let starts = match (ss.start(), frc) {
-            (SteadyStart::Ssm, Some(rows)) => Some(ssm_starts(ssm, rows, eps, &omegas)),
+        let starts = match (ss.start, frc) {
+            (SteadyStart::Ssm, Some(rows)) => Some(ssm_starts(ssm, rows, eps, omegas)),
             _ => None,
         };
         let t0 = Instant::now();
         let points =
-            steady_state_reference(sys, eps, &omegas, coordinates, &sopts, starts.as_deref())?;
+            steady_state_reference(sys, eps, omegas, coordinates, &sopts, starts.as_deref())?;
         let mut reference = SteadyReference {
             epsilon: eps,
             steps: points.iter().map(|p| p.stats.accepted).sum(),
             points,
             outputs: coordinates.iter().map(|o| o.name.clone()).collect(),
             wall_s: t0.elapsed().as_secs_f64(),
-            delta: *ss.delta.get_ref(),
+            delta: ss.delta,
             from_ssm: starts.map(|st| st.iter().map(Option::is_some).collect()),
             frc_errors: None,
         };
@@ -200,37 +200,34 @@ pub fn validation(
     Ok(Validation { transient, steady })
 }
 
-/// The transient comparison of `sec` up to `t_end`.
+/// The transient comparison of `sec`.
 fn transient_comparison(
     ssm: &SsmExpansion,
     sys: &System,
-    sec: &ValidateSection,
+    sec: &ValidationTransientSpec,
     compared: &[&OutputMap],
     masters: &[MasterMode],
-    t_end: f64,
     radau: RadauOptions,
 ) -> Result<TransientComparison, ValidateError> {
-    let order = sec.order.as_ref().map_or(ssm.order, |o| *o.get_ref());
-    let (p0, full_start, start) = match &sec.rho0 {
-        Some(rho0) => {
-            let theta0 = sec
-                .theta0
-                .as_ref()
-                .map_or_else(|| vec![0.0; rho0.get_ref().len()], |t| t.get_ref().clone());
-            let p0 = polar_point(rho0.get_ref(), &theta0);
+    let order = sec.order.unwrap_or(ssm.order);
+    let t_end = sec.t_end;
+    let (p0, full_start, start) = match &sec.start {
+        ValidationStart::Ssm { rho0, theta0 } => {
+            let theta0 = theta0.clone().unwrap_or_else(|| vec![0.0; rho0.len()]);
+            let p0 = polar_point(rho0, &theta0);
             let start = TransientStart::Ssm {
-                rho0: rho0.get_ref().clone(),
+                rho0: rho0.clone(),
                 theta0,
             };
             (p0, None, start)
         }
-        None => {
-            let (z, keep) = sys.given_state(&sec.given_start());
+        ValidationStart::Given { values } => {
+            let (z, keep) = sys.given_state(values);
             let problem = DaeProblem::new(sys, 0.0, 0.0);
             let c = consistent_initial_keeping(&problem, 0.0, &z, &keep)?;
             let (p0, distance) = nearest_on_ssm(ssm, sys, order, masters, &c.z);
             let start = TransientStart::Given {
-                values: sec.given_start(),
+                values: values.clone(),
                 distance,
                 rho0: p0.iter().step_by(2).map(|q| q.norm()).collect(),
                 theta0: p0.iter().step_by(2).map(|q| q.arg()).collect(),
@@ -256,7 +253,7 @@ fn transient_comparison(
             order,
             p0: &p0,
             t_end,
-            samples: *sec.samples.get_ref(),
+            samples: sec.samples,
             outputs: &outs,
             radau,
             full_start: full_start

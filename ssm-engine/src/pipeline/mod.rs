@@ -35,12 +35,14 @@ use crate::model::source::build_model;
 use crate::model::system::{OutputMap, System};
 use crate::output::summary::{Summary, Timing};
 use crate::output::{pod_only_files, result_files, OutputSet, Products};
+use crate::plan::{self, AnswerSpecs};
 use crate::reduce::scene::reduce_scene;
 use crate::reduce::Reduction;
 use crate::rom::accuracy::{percent, Accuracy, AnswerEstimate, MeasuredError, OrdersTried};
 use crate::rom::autonomous::{self, BackboneCurve, InvarianceEntry, LiftedTransient};
 use crate::rom::forced_response::{forced_response, ForcedResponse};
 use crate::scene::SceneFile;
+use crate::spec::ValidationSpec;
 use crate::spectrum::{MasterMode, Spectrum};
 use crate::ssm::analysis::polar;
 use crate::ssm::{self, Dynamics, SsmExpansion, SsmOptions};
@@ -123,6 +125,7 @@ struct Reduced {
 /// What every order tried shares.
 struct Stage<'a> {
     scene: &'a SceneFile,
+    specs: &'a AnswerSpecs,
     system: &'a System,
     sp: &'a Spectral,
     others: &'a [C64],
@@ -149,14 +152,14 @@ impl Stage<'_> {
         self.progress
             .stage("backbone, invariance error, transients");
         let t = Instant::now();
-        let out = &sc.outputs;
+        let specs = self.specs;
         let answers = Autonomous {
-            invariance: out
-                .invariance_error
+            invariance: specs
+                .invariance
                 .as_ref()
                 .map(|sec| autonomous::invariance_table(&expansion, sys, sec))
                 .transpose()?,
-            backbone: out
+            backbone: specs
                 .backbone
                 .as_ref()
                 .map(|sec| {
@@ -164,7 +167,7 @@ impl Stage<'_> {
                     autonomous::backbone(&expansion, sys, &masters[0], sec, coords, tolerance)
                 })
                 .transpose()?,
-            transient: out
+            transient: specs
                 .transient
                 .as_ref()
                 .map(|sec| {
@@ -176,8 +179,8 @@ impl Stage<'_> {
         let results_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let frc = sc
-            .forcing
+        let frc = specs
+            .frc
             .as_ref()
             .map(|sec| {
                 self.progress.stage("forced response curves");
@@ -185,11 +188,11 @@ impl Stage<'_> {
             })
             .transpose()?;
         let frc_s = t.elapsed().as_secs_f64();
-        let transient_order = out
+        let transient_order = specs
             .transient
             .as_ref()
-            .and_then(|t| t.order.as_ref())
-            .map_or(order, |o| *o.get_ref());
+            .and_then(|t| t.order)
+            .unwrap_or(order);
         let estimates = estimates(&answers, transient_order, frc.as_ref());
         Ok(Reduced {
             expansion,
@@ -446,8 +449,10 @@ pub fn run(
     budget::check_reference(scene, &system, &limits)?;
 
     let others: Vec<C64> = ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
+    let specs = plan::answers(scene);
     let stage = Stage {
         scene,
+        specs: &specs,
         system: &system,
         sp: &sp,
         others: &others,
@@ -507,21 +512,21 @@ pub fn run(
 
     let t = Instant::now();
     let mut compared = coordinates.clone();
-    let checked = match &sc.validate {
-        Some(vsec) => {
+    let checked = match (&sc.validate, &specs.validation) {
+        (Some(vsec), Some(vspec)) => {
             progress.stage("full-system validation");
             compared = checks::validation_outputs(scene, &system, vsec, &coordinates)?;
             Some(validation(
                 &expansion,
                 &system,
-                vsec,
+                vspec,
                 &compared,
                 &coordinates,
                 &sp.masters,
                 frc.as_ref().map(|f| f.rows.as_slice()),
             )?)
         }
-        None => None,
+        _ => None,
     };
     accuracy.measured = checked.as_ref().map_or_else(Vec::new, measured_errors);
     if let (Some(f), Some(r)) = (&frc, &full_frc) {
@@ -540,13 +545,16 @@ pub fn run(
                 others: &others,
                 resonance_tol: *sc.ssm.resonance_tol.get_ref(),
                 outputs: &compared,
-                forcing: sc.forcing.as_ref(),
+                forcing: specs.frc.as_ref(),
                 validation: checked.as_ref(),
                 p0: checked
                     .as_ref()
                     .and_then(|v| v.transient.as_ref())
                     .map(|t| t.result.p0.clone()),
-                rtol: sc.validate.as_ref().map_or(1e-8, |v| *v.rtol.get_ref()),
+                rtol: specs
+                    .validation
+                    .as_ref()
+                    .map_or(ValidationSpec::DEFAULT_RTOL, |v| v.rtol),
                 tolerance: *sc.ssm.tolerance.get_ref(),
                 reference: full_frc.as_ref(),
             };

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::model::system::{OutputMap, System};
 use crate::rom::accuracy;
-use crate::scene::{BackboneSection, InvarianceErrorSection, TransientSection};
+use crate::spec::{BackboneSpec, InvarianceSpec, TransientSpec};
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar, PolarError};
 use crate::ssm::modal_residual::ModalResidual;
@@ -80,21 +80,18 @@ pub fn backbone(
     ssm: &SsmExpansion,
     sys: &System,
     master: &MasterMode,
-    sec: &BackboneSection,
+    sec: &BackboneSpec,
     outputs: &[&OutputMap],
     tolerance: f64,
 ) -> Result<Vec<BackboneCurve>, ResultError> {
     let p = polar(ssm)?;
-    let orders = sec
-        .orders
-        .as_ref()
-        .map_or_else(|| vec![ssm.order], |o| o.get_ref().clone());
+    let orders = sec.orders.clone().unwrap_or_else(|| vec![ssm.order]);
     let series: Vec<Vec<C64>> = outputs
         .iter()
         .map(|o| ssm.output_series(&o.weights))
         .collect();
-    let n = *sec.points.get_ref();
-    let rho_max = *sec.rho_max.get_ref();
+    let n = sec.points;
+    let rho_max = sec.rho_max;
     let modal = ModalResidual::new(ssm, sys, &master.left);
     let mut curves = Vec::with_capacity(orders.len());
     for &order in &orders {
@@ -202,19 +199,12 @@ pub struct InvarianceEntry {
 pub fn invariance_table(
     ssm: &SsmExpansion,
     sys: &System,
-    sec: &InvarianceErrorSection,
+    sec: &InvarianceSpec,
 ) -> Result<Vec<InvarianceEntry>, ResultError> {
     let mut rows = Vec::new();
-    for &order in sec.orders.get_ref() {
-        for &radius in sec.radii.get_ref() {
-            let error = invariance_error(
-                ssm,
-                sys,
-                order,
-                radius,
-                *sec.n_alpha.get_ref(),
-                *sec.n_theta.get_ref(),
-            );
+    for &order in &sec.orders {
+        for &radius in &sec.radii {
+            let error = invariance_error(ssm, sys, order, radius, sec.n_alpha, sec.n_theta);
             if !error.is_finite() {
                 return Err(ResultError::NonFinite {
                     what: "invariance error".into(),
@@ -299,25 +289,15 @@ pub fn transient(
     ssm: &SsmExpansion,
     sys: &System,
     masters: &[MasterMode],
-    sec: &TransientSection,
+    sec: &TransientSpec,
     outputs: &[&OutputMap],
     tolerance: f64,
 ) -> Result<LiftedTransient, ResultError> {
-    let order = sec.order.as_ref().map_or(ssm.order, |o| *o.get_ref());
+    let order = sec.order.unwrap_or(ssm.order);
     let m = ssm.dim() / 2;
-    let theta0 = sec
-        .theta0
-        .as_ref()
-        .map_or_else(|| vec![0.0; m], |t| t.get_ref().clone());
-    let p0 = polar_point(sec.rho0.get_ref(), &theta0);
-    let tr = integrate(
-        ssm,
-        order,
-        &p0,
-        *sec.t_end.get_ref(),
-        *sec.samples.get_ref(),
-        *sec.rtol.get_ref(),
-    )?;
+    let theta0 = sec.theta0.clone().unwrap_or_else(|| vec![0.0; m]);
+    let p0 = polar_point(&sec.rho0, &theta0);
+    let tr = integrate(ssm, order, &p0, sec.t_end, sec.samples, sec.rtol)?;
     let series: Vec<Vec<C64>> = outputs
         .iter()
         .map(|o| ssm.output_series(&o.weights))
@@ -333,17 +313,10 @@ pub fn transient(
         // several pairs: the smaller of the modal defect and the change from
         // two orders lower (see accuracy::order_change)
         Some(d) if m > 1 && order >= 3 => {
-            let lower = integrate(
-                ssm,
-                order - 2,
-                &p0,
-                *sec.t_end.get_ref(),
-                *sec.samples.get_ref(),
-                *sec.rtol.get_ref(),
-            )
-            .ok()
-            .and_then(|l| lift(ssm, &series, order - 2, &l.times, &l.states).ok())
-            .filter(|l| l.len() == values.len());
+            let lower = integrate(ssm, order - 2, &p0, sec.t_end, sec.samples, sec.rtol)
+                .ok()
+                .and_then(|l| lift(ssm, &series, order - 2, &l.times, &l.states).ok())
+                .filter(|l| l.len() == values.len());
             // a lower order that blows up or stops early leaves the defect
             Some(lower.map_or(d, |l| d.min(accuracy::order_change(&values, &l))))
         }

@@ -17,7 +17,7 @@ use crate::rom::continuation::{
 use crate::rom::forced_response::{
     CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
 };
-use crate::scene::ForcingSection;
+use crate::spec::FrcSpec;
 use crate::spectrum::MasterMode;
 use crate::ssm::forced::{table_warning, ForcedSsm};
 use crate::ssm::SsmExpansion;
@@ -203,22 +203,18 @@ pub fn forced_response_multi(
     ssm: &SsmExpansion,
     sys: &System,
     masters: &[MasterMode],
-    sec: &ForcingSection,
+    sec: &FrcSpec,
     outputs: &[&OutputMap],
     ratios: &[f64],
     tolerance: f64,
 ) -> Result<ForcedResponse, FrcError> {
-    if sec
-        .nonautonomous_order
-        .as_ref()
-        .is_some_and(|k| *k.get_ref() > 0)
-    {
+    if sec.nonautonomous_order.is_some_and(|k| k > 0) {
         return Err(FrcError::Unsupported(
             "nonautonomous_order > 0 is implemented for one master pair only".into(),
         ));
     }
     let m = masters.len();
-    let range = (sec.omega_range.get_ref()[0], sec.omega_range.get_ref()[1]);
+    let range = (sec.omega_range[0], sec.omega_range[1]);
     let mut forced = ForcedSsm::new(sys, masters, ratios)?;
     let center = forced.at(0.5 * (range.0 + range.1))?;
     let s: Vec<C64> = (0..m).map(|j| center.resonant_forcing(2 * j)).collect();
@@ -227,10 +223,7 @@ pub fn forced_response_multi(
             "the forcing reaches no master pair at these resonance ratios (u^* F = 0)".into(),
         ));
     }
-    let orders = sec
-        .orders
-        .as_ref()
-        .map_or(vec![ssm.order], |o| o.get_ref().clone());
+    let orders = sec.orders.clone().unwrap_or_else(|| vec![ssm.order]);
     let series: Vec<Vec<C64>> = outputs
         .iter()
         .map(|o| ssm.output_series(&o.weights))
@@ -246,7 +239,7 @@ pub fn forced_response_multi(
     }
     for (&order, &eps) in orders
         .iter()
-        .flat_map(|o| sec.epsilon.get_ref().iter().map(move |e| (o, e)))
+        .flat_map(|o| sec.epsilon.iter().map(move |e| (o, e)))
     {
         let (terms, dropped) = rotating_terms(ssm, ratios, order);
         let harmonics = Harmonics::new(ssm, ratios, periods, order);
@@ -285,8 +278,8 @@ pub fn forced_response_multi(
             omega_range: range,
             h_max: H_MAX * width,
             h_min: 1e-10 * top.max(width),
-            max_steps: 20 * *sec.points.get_ref(),
-            max_amplitude: sec.rho_max.as_ref().map(|r| *r.get_ref() / a),
+            max_steps: 20 * sec.points,
+            max_amplitude: sec.rho_max.map(|r| r / a),
         };
         let guess: Vec<f64> = (0..m)
             .flat_map(|j| {
@@ -333,7 +326,7 @@ pub fn forced_response_multi(
                     "O({order}), eps = {eps}: branch {} was stopped at Omega = {:.6}, where a pair amplitude passed [forcing] rho_max = {}; beyond it the expansion is not trusted",
                     bi + 1,
                     last.omega,
-                    crate::number::short(sec.rho_max.as_ref().map_or(f64::INFINITY, |r| *r.get_ref())), eps = crate::number::short(eps),
+                    crate::number::short(sec.rho_max.unwrap_or(f64::INFINITY)), eps = crate::number::short(eps),
                 ));
             }
             let first_of_branch = rows.len();

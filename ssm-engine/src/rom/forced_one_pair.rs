@@ -24,7 +24,7 @@ use crate::rom::forced_response::{
     CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
 };
 use crate::rom::frc::{one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair};
-use crate::scene::ForcingSection;
+use crate::spec::FrcSpec;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{invariance_error, polar, Polar};
 use crate::ssm::forced::{table_warning, ForcedSsm};
@@ -76,12 +76,12 @@ pub fn forced_response_one_pair(
     ssm: &SsmExpansion,
     sys: &System,
     masters: &[MasterMode],
-    sec: &ForcingSection,
+    sec: &FrcSpec,
     outputs: &[&OutputMap],
     ratios: Vec<f64>,
     tolerance: f64,
 ) -> Result<ForcedResponse, FrcError> {
-    let range = (sec.omega_range.get_ref()[0], sec.omega_range.get_ref()[1]);
+    let range = (sec.omega_range[0], sec.omega_range[1]);
     let mut forced = ForcedSsm::new(sys, masters, &ratios)?;
     let s = forced.at(0.5 * (range.0 + range.1))?.resonant_forcing(0);
     if s.norm() == 0.0 {
@@ -90,16 +90,13 @@ pub fn forced_response_one_pair(
         ));
     }
     let pol = polar(ssm)?;
-    let eps_list = sec.epsilon.get_ref();
-    let orders = sec
-        .orders
-        .as_ref()
-        .map_or(vec![ssm.order], |o| o.get_ref().clone());
+    let eps_list = &sec.epsilon;
+    let orders = sec.orders.clone().unwrap_or_else(|| vec![ssm.order]);
     let eps_max = eps_list.iter().copied().fold(0.0, f64::max);
     let mut warnings = Vec::new();
     let mut cut_short = false;
-    let rho_max = match &sec.rho_max {
-        Some(r) => *r.get_ref(),
+    let rho_max = match sec.rho_max {
+        Some(r) => r,
         None => {
             let (rho_max, cut) =
                 default_rho_max(ssm, sys, &masters[0], &pol, &orders, eps_max * s, range);
@@ -108,13 +105,13 @@ pub fn forced_response_one_pair(
             rho_max
         }
     };
-    let points = *sec.points.get_ref();
+    let points = sec.points;
     let series: Vec<Vec<C64>> = outputs
         .iter()
         .map(|o| ssm.output_series(&o.weights))
         .collect();
     let single_harmonic = sys.forcing.len() == 1 && sys.forcing[0].multiple == 1.0;
-    let k_na = sec.nonautonomous_order.as_ref().map(|k| *k.get_ref());
+    let k_na = sec.nonautonomous_order;
     if k_na.is_some_and(|k| k > 0) && !single_harmonic {
         return Err(FrcError::Unsupported(
             "nonautonomous_order > 0 needs a single forcing harmonic at Omega".into(),

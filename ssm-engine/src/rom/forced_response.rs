@@ -11,7 +11,7 @@
 //! eqs. (16), (41), (60), Figs. 5-6.
 
 use crate::model::system::{OutputMap, System};
-use crate::scene::ForcingSection;
+use crate::spec::FrcSpec;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::PolarError;
 use crate::ssm::forced::ForcedError;
@@ -204,10 +204,10 @@ pub fn auto_ratios(masters: &[MasterMode], omega: f64) -> Vec<f64> {
 
 /// The external resonance ratios of `sec`: its `resonance`, else
 /// [`auto_ratios`] at the middle of its frequency range.
-pub fn resonance_ratios(sec: &ForcingSection, masters: &[MasterMode]) -> Vec<f64> {
-    let range = sec.omega_range.get_ref();
+pub fn resonance_ratios(sec: &FrcSpec, masters: &[MasterMode]) -> Vec<f64> {
+    let range = sec.omega_range;
     match &sec.resonance {
-        Some(r) => r.get_ref().clone(),
+        Some(r) => r.clone(),
         None => auto_ratios(masters, 0.5 * (range[0] + range[1])),
     }
 }
@@ -219,7 +219,7 @@ pub fn forced_response(
     ssm: &SsmExpansion,
     sys: &System,
     masters: &[MasterMode],
-    sec: &ForcingSection,
+    sec: &FrcSpec,
     outputs: &[&OutputMap],
     tolerance: f64,
 ) -> Result<ForcedResponse, FrcError> {

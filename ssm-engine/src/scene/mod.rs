@@ -14,6 +14,8 @@ use serde::Deserialize;
 use ssm_model_files::input::{self, InputError, InputFile};
 use toml::Spanned;
 
+use crate::spec::{BackboneSpec, FrcSpec, InvarianceSpec, TransientSpec};
+
 mod names;
 mod pod;
 mod reduce;
@@ -31,7 +33,7 @@ pub use reference::{
     MAX_REFERENCE_STEPS,
 };
 pub use simulate::{SimulateRun, SimulateSection, MAX_SAMPLES};
-pub use validate::{ReportSection, SteadyStart, SteadyStateSection, ValidateSection};
+pub use validate::{ReportSection, SteadyStateSection, ValidateSection};
 
 /// The annotated scene format, every section and key with its default: the
 /// one source of the format's documentation (module docs, `--help`, `docs/scenes.md`).
@@ -210,7 +212,7 @@ pub struct ForcingSection {
 }
 
 fn default_frc_points() -> Spanned<usize> {
-    Spanned::new(0..0, 200)
+    Spanned::new(0..0, FrcSpec::DEFAULT_POINTS)
 }
 
 /// `[model]`.
@@ -402,19 +404,19 @@ pub struct TransientSection {
 }
 
 fn default_n_alpha() -> Spanned<usize> {
-    Spanned::new(0..0, 10)
+    Spanned::new(0..0, InvarianceSpec::DEFAULT_N_ALPHA)
 }
 fn default_n_theta() -> Spanned<usize> {
-    Spanned::new(0..0, 30)
+    Spanned::new(0..0, InvarianceSpec::DEFAULT_N_THETA)
 }
 fn default_points() -> Spanned<usize> {
-    Spanned::new(0..0, 101)
+    Spanned::new(0..0, BackboneSpec::DEFAULT_POINTS)
 }
 fn default_samples() -> Spanned<usize> {
-    Spanned::new(0..0, 1001)
+    Spanned::new(0..0, TransientSpec::DEFAULT_SAMPLES)
 }
 fn default_rtol() -> Spanned<f64> {
-    Spanned::new(0..0, 1e-9)
+    Spanned::new(0..0, TransientSpec::DEFAULT_RTOL)
 }
 
 fn empty_list() -> Spanned<Vec<String>> {

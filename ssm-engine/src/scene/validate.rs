@@ -6,6 +6,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::{SceneError, SceneFile};
+use crate::spec::{SteadyStateSpec, ValidationSpec, ValidationTransientSpec};
 
 /// `[validate]`: the full system against the reduced model.
 #[derive(Debug, Clone, Deserialize)]
@@ -87,15 +88,6 @@ pub struct SteadyStateSection {
     pub start: Option<Spanned<String>>,
 }
 
-/// Where steady-state integrations start.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SteadyStart {
-    /// The unforced equilibrium.
-    Rest,
-    /// The largest stable response of the FRC.
-    Ssm,
-}
-
 impl ValidateSection {
     /// Given initial values `(state name, value)` of `x0` and `v0`.
     pub fn given_start(&self) -> Vec<(String, f64)> {
@@ -105,34 +97,6 @@ impl ValidateSection {
                 .flatten()
                 .map(|t| t.get_ref()),
         )
-    }
-}
-
-impl SteadyStateSection {
-    /// Where the integrations start.
-    pub fn start(&self) -> SteadyStart {
-        match self.start.as_ref().map(|s| s.get_ref().as_str()) {
-            Some("ssm") => SteadyStart::Ssm,
-            _ => SteadyStart::Rest,
-        }
-    }
-
-    /// The forcing frequencies.
-    pub fn omegas(&self) -> Vec<f64> {
-        if let Some(o) = &self.omega {
-            return o.get_ref().clone();
-        }
-        let r = self.omega_range.as_ref().map_or(&[][..], |r| r.get_ref());
-        let n = *self.points.get_ref();
-        if r.len() != 2 {
-            return Vec::new();
-        }
-        if n == 1 {
-            return vec![0.5 * (r[0] + r[1])];
-        }
-        (0..n)
-            .map(|i| r[0] + (r[1] - r[0]) * i as f64 / (n - 1) as f64)
-            .collect()
     }
 }
 
@@ -146,28 +110,28 @@ pub struct ReportSection {
 }
 
 fn default_samples() -> Spanned<usize> {
-    Spanned::new(0..0, 1001)
+    Spanned::new(0..0, ValidationTransientSpec::DEFAULT_SAMPLES)
 }
 fn default_rtol() -> Spanned<f64> {
-    Spanned::new(0..0, 1e-8)
+    Spanned::new(0..0, ValidationSpec::DEFAULT_RTOL)
 }
 fn default_atol() -> Spanned<f64> {
-    Spanned::new(0..0, 1e-10)
+    Spanned::new(0..0, ValidationSpec::DEFAULT_ATOL)
 }
 fn default_points() -> Spanned<usize> {
-    Spanned::new(0..0, 21)
+    Spanned::new(0..0, SteadyStateSpec::DEFAULT_POINTS)
 }
 fn default_delta() -> Spanned<f64> {
-    Spanned::new(0..0, 1e-3)
+    Spanned::new(0..0, SteadyStateSpec::DEFAULT_DELTA)
 }
 fn default_max_periods() -> Spanned<usize> {
-    Spanned::new(0..0, 2000)
+    Spanned::new(0..0, SteadyStateSpec::DEFAULT_MAX_PERIODS)
 }
 fn default_multiple() -> Spanned<usize> {
-    Spanned::new(0..0, 1)
+    Spanned::new(0..0, SteadyStateSpec::DEFAULT_MAX_PERIOD_MULTIPLE)
 }
 fn default_period_samples() -> Spanned<usize> {
-    Spanned::new(0..0, 128)
+    Spanned::new(0..0, SteadyStateSpec::DEFAULT_SAMPLES_PER_PERIOD)
 }
 
 impl SceneFile {

@@ -526,7 +526,7 @@ fn check_forcing(
         .unwrap_or(0)
         .max(scene.scene.ssm.order.as_ref().map_or(0, |o| *o.get_ref()));
     let (slots, samples) = if pairs > 1 {
-        let ratios = crate::rom::forced_response::resonance_ratios(f, masters);
+        let ratios = crate::rom::forced_response::resonance_ratios(&crate::plan::frc(f), masters);
         crate::rom::forced_multi::harmonic_table(&ratios, top.max(1))
     } else {
         (0.0, 0.0)
