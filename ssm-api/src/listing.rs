@@ -5,7 +5,6 @@ use abi_stable::std_types::{RString, RVec};
 use abi_stable::StableAbi;
 
 use crate::error::{ErrorKind, PluginError};
-use crate::params::ParamSpec;
 
 /// Listing of one parameter of a model.
 #[repr(C)]
@@ -21,7 +20,8 @@ pub struct ParamInfo {
     pub description: RString,
 }
 
-/// Listing of one model a plugin offers.
+/// Listing of one model a plugin offers (built from parameter specs by
+/// [`ModelInfo::new`]).
 #[repr(C)]
 #[derive(StableAbi, Clone, Debug, PartialEq)]
 pub struct ModelInfo {
@@ -31,17 +31,6 @@ pub struct ModelInfo {
     pub description: RString,
     /// Parameters with defaults.
     pub params: RVec<ParamInfo>,
-}
-
-impl ModelInfo {
-    /// The listing of a model with the parameters `specs` (defaults included).
-    pub fn new(name: &str, description: &str, specs: &[ParamSpec]) -> Self {
-        Self {
-            name: name.into(),
-            description: description.into(),
-            params: specs.iter().map(ParamSpec::info).collect(),
-        }
-    }
 }
 
 /// The model a `build` call asks for: `requested`, or the first of `offered`

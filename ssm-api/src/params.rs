@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 
 use crate::error::{ErrorKind, PluginError};
-use crate::listing::ParamInfo;
+use crate::listing::{ModelInfo, ParamInfo};
 
 /// Type (and for strings, the allowed values) of a parameter.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -261,6 +261,17 @@ impl Params {
         match self.values.get(name) {
             Some(ParamValue::Floats(v)) => v,
             _ => panic!("parameter '{name}' is not a declared list parameter"),
+        }
+    }
+}
+
+impl ModelInfo {
+    /// The listing of a model with the parameters `specs` (defaults included).
+    pub fn new(name: &str, description: &str, specs: &[ParamSpec]) -> Self {
+        Self {
+            name: name.into(),
+            description: description.into(),
+            params: specs.iter().map(ParamSpec::info).collect(),
         }
     }
 }

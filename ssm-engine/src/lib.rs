@@ -24,11 +24,13 @@
 //!   steady-state references) and the speed-against-error report;
 //! - [`output`]: writers of `summary.json`, CSV and SVG from typed results
 //!   (they compute nothing), written atomically;
-//! - [`pipeline`]: running a scene, stage after stage;
+//! - [`pipeline`]: running a scene, stage after stage (its model built from
+//!   `[model]` or by the reducer of `[reduce]`);
 //! - [`number`]: numbers from user input in messages and CSV files.
 //!
 //! Dependencies point one way: `pipeline` uses every stage, `output` reads
-//! the stages' result types, and no two modules import each other.
+//! the stages' result types, and no two files or folders import each other
+//! (checked by the suite's `layers::no_import_cycles_between_files_or_folders`).
 
 pub mod chebyshev;
 pub mod compare;

@@ -12,10 +12,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ssm_engine::continuation::Ledger;
 use ssm_engine::fom::periodic::{OrbitInfo, ReferenceOrbit};
 use ssm_engine::model::plugin::Registry;
-use ssm_engine::model::source::scene_inputs;
 use ssm_engine::output;
 use ssm_engine::output::check_not_input;
 use ssm_engine::output::checkpoint::{create_first, Checkpoint};
+use ssm_engine::pipeline::source::scene_inputs;
 use ssm_engine::pipeline::{self, export, Progress};
 use ssm_engine::scene::{ReportSection, SceneFile};
 

@@ -21,6 +21,8 @@ use crate::fom::{given_start, DaeProblem, SimError};
 use crate::model::system::{ModelError, OutputMap, System};
 use crate::reduce::pod::Truncation;
 use crate::reduce::pod_model::{pod_reduce, PodReduceError, PodReduction, PodSettings, Reactions};
+use crate::spectrum::MasterMode;
+use crate::ssm::SsmExpansion;
 
 /// Most instants at which the reaction forces are compared per run.
 const REACTION_INSTANTS: usize = 400;
@@ -409,6 +411,21 @@ fn reaction_gap(rom: &PodRom, sys: &System, full: &[Vec<f64>], lifted: &[Vec<f64
     }
 }
 
+/// An SSM reduced model.
+#[derive(Debug, Clone)]
+pub struct SsmRom {
+    /// Its label (`ssm pairs [1, 2] O(5)`).
+    pub label: String,
+    /// The master pairs.
+    pub pairs: Vec<usize>,
+    /// The master modes.
+    pub masters: Vec<MasterMode>,
+    /// The expansion.
+    pub expansion: SsmExpansion,
+    /// Seconds of spectrum and SSM.
+    pub offline_s: f64,
+}
+
 /// Every model's run on one load case.
 #[derive(Debug, Clone)]
 pub struct CaseRun {
@@ -440,7 +457,7 @@ pub struct PodStudy {
     /// The POD models.
     pub pod: Vec<PodRom>,
     /// The SSM models.
-    pub ssm: Vec<super::ssm_run::SsmRom>,
+    pub ssm: Vec<SsmRom>,
     /// The training run first, then the tests.
     pub cases: Vec<CaseRun>,
 }

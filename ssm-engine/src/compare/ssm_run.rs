@@ -12,32 +12,15 @@
 use std::time::Instant;
 
 use super::nearest_on_ssm;
-use super::pod::{error_figures, FullRun, LoadCase, RomRun};
+use super::pod::{error_figures, FullRun, LoadCase, RomRun, SsmRom};
 use crate::model::system::{OutputMap, System};
 use crate::rom::forced_response::auto_ratios;
-use crate::spectrum::MasterMode;
 use crate::ssm::forced::{ForcedSsm, ForcedTerms};
 use crate::ssm::rom::integrate_forced;
-use crate::ssm::SsmExpansion;
 use crate::C64;
 
 /// Relative tolerance of the reduced integration.
 const RTOL: f64 = 1e-9;
-
-/// An SSM reduced model.
-#[derive(Debug, Clone)]
-pub struct SsmRom {
-    /// Its label (`ssm pairs [1, 2] O(5)`).
-    pub label: String,
-    /// The master pairs.
-    pub pairs: Vec<usize>,
-    /// The master modes.
-    pub masters: Vec<MasterMode>,
-    /// The expansion.
-    pub expansion: SsmExpansion,
-    /// Seconds of spectrum and SSM.
-    pub offline_s: f64,
-}
 
 /// The run of `rom` on `case` against the full run `full` (at its step
 /// ends). A load makes the SSM periodic: the forced terms `X0`, `S0` are

@@ -39,7 +39,7 @@
 //! algebraic one exactly; both rows are divided by `beta h^2` like the
 //! constraints.
 //!
-//! Consistent starts come from [`consistent_initial`](super::consistent_initial)
+//! Consistent starts come from [`consistent_initial`]
 //! (positions, velocities and multipliers); the first accelerations from
 //! `M a_0 = f(z_0, t_0)`.
 //!

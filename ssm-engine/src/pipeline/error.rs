@@ -1,13 +1,12 @@
 //! What stops a run.
 
+use super::source::SourceError;
 use crate::compare::report::ReportError;
 use crate::compare::ValidateError;
 use crate::model::plugin::PluginLoadError;
-use crate::model::source::SourceError;
 use crate::model::system::ModelError;
 use crate::output::plot::PlotError;
 use crate::output::OutputError;
-use crate::reduce::scene::ReduceError;
 use crate::reduce::SignalsError;
 use crate::rom::autonomous::ResultError;
 use crate::rom::forced_response::FrcError;
@@ -86,5 +85,25 @@ impl From<ReduceError> for JobError {
             ReduceError::Signals(e) => Self::Signals(e),
             ReduceError::Model(e) => Self::Model(e),
         }
+    }
+}
+
+/// Why a reduced model could not be had.
+#[derive(Debug, thiserror::Error)]
+pub enum ReduceError {
+    /// The scene or the reducer's plugin failed.
+    #[error(transparent)]
+    Source(#[from] SourceError),
+    /// A `[data]` file cannot be used.
+    #[error("data: {0}")]
+    Signals(#[from] SignalsError),
+    /// The reduced model is inconsistent.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}
+
+impl From<SceneError> for ReduceError {
+    fn from(e: SceneError) -> Self {
+        Self::Source(SourceError::Scene(e))
     }
 }

@@ -4,8 +4,8 @@
 
 use ssm_model_files::{ExportError, ModelFiles};
 
+use super::source::{build_model, SourceError};
 use crate::model::plugin::Registry;
-use crate::model::source::{build_model, SourceError};
 use crate::model::system::{ModelError, System};
 use crate::output::OutputSet;
 use crate::scene::SceneFile;

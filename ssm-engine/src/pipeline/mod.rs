@@ -13,8 +13,11 @@ mod checks;
 mod error;
 pub mod export;
 mod pod;
+mod pod_reducer;
+mod reduce;
 mod reference;
 mod simulate;
+pub mod source;
 mod spectral;
 
 use std::path::PathBuf;
@@ -31,12 +34,10 @@ use crate::continuation::Ledger;
 use crate::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
 use crate::fom::periodic::OrbitInfo;
 use crate::model::plugin::{PluginOrigin, Registry};
-use crate::model::source::build_model;
 use crate::model::system::{OutputMap, System};
 use crate::output::summary::{Summary, Timing};
 use crate::output::{pod_only_files, result_files, OutputSet, Products};
 use crate::plan::{self, AnswerSpecs};
-use crate::reduce::scene::reduce_scene;
 use crate::reduce::Reduction;
 use crate::rom::accuracy::{percent, Accuracy, AnswerEstimate, MeasuredError, OrdersTried};
 use crate::rom::autonomous::{self, BackboneCurve, InvarianceEntry, LiftedTransient};
@@ -47,6 +48,8 @@ use crate::spectrum::{MasterMode, Spectrum};
 use crate::ssm::analysis::polar;
 use crate::ssm::{self, Dynamics, SsmExpansion, SsmOptions};
 use crate::C64;
+use reduce::reduce_scene;
+use source::build_model;
 
 /// Stages reported to a progress display.
 pub trait Progress {

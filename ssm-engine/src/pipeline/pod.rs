@@ -10,10 +10,11 @@ use super::checks::named_outputs;
 use super::error::JobError;
 use super::spectral::spectral;
 use super::Progress;
+use crate::compare::pod::SsmRom;
 use crate::compare::pod::{
     full_run, pod_case_run, pod_roms, CaseRun, LoadCase, PodStudy, StudySettings,
 };
-use crate::compare::ssm_run::{ssm_case_run, SsmRom};
+use crate::compare::ssm_run::ssm_case_run;
 use crate::model::system::{OutputMap, System};
 use crate::reduce::pod::Truncation;
 use crate::scene::{load_sampling, PodRun, PodSection, SceneFile};

@@ -2,11 +2,9 @@
 //! reducer run through its plugin, and the reduced model's outputs completed
 //! through the lift `z ~ V y + z0` from the full model's.
 
-pub mod engine;
 pub mod galerkin;
 pub mod pod;
 pub mod pod_model;
-pub mod scene;
 
 use std::path::{Path, PathBuf};
 

@@ -14,7 +14,7 @@ use crate::rom::accuracy::{self, percent};
 use crate::rom::continuation::{
     Branch, BranchPoint, LocatedKind, PolarTerm, RotatingFrame, Settings,
 };
-use crate::rom::forced_response::{
+use crate::rom::frc_result::{
     CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
 };
 use crate::spec::FrcSpec;

@@ -20,10 +20,10 @@ use std::collections::HashMap;
 use crate::model::system::{OutputMap, System};
 use crate::poly::MultiIndexSet;
 use crate::rom::accuracy::{self, percent};
-use crate::rom::forced_response::{
+use crate::rom::frc::{one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair};
+use crate::rom::frc_result::{
     CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
 };
-use crate::rom::frc::{one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair};
 use crate::spec::FrcSpec;
 use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{invariance_error, polar, Polar};

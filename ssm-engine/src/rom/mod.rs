@@ -12,3 +12,4 @@ pub mod forced_multi;
 pub mod forced_one_pair;
 pub mod forced_response;
 pub mod frc;
+pub mod frc_result;

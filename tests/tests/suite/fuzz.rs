@@ -172,6 +172,40 @@ pub(crate) enum SceneEdit {
     Insert { key: usize, value: usize },
     /// Cut the text at a byte.
     Truncate { at: usize },
+    /// Scale the number (or each number of the list) of the `line`-th
+    /// numeric `key = value` line by one of [`SCALES`], keeping its type: a
+    /// well-formed scene whose sizes and tolerances a user got wrong, which
+    /// reaches the numerics where a syntax error would stop at the parser.
+    Scale { line: usize, factor: usize },
+}
+
+/// Factors of [`SceneEdit::Scale`]: zero, tiny and huge, sign flips, and
+/// the near misses of a plausible value.
+pub(crate) const SCALES: [f64; 12] = [
+    0.0, 1e-12, 1e-3, 0.1, 0.5, 0.9, 1.1, 2.0, 10.0, 1e3, 1e12, -1.0,
+];
+
+/// `value` (a TOML number or list of numbers) times `factor`, integers kept
+/// integers; `None` when it is not numeric.
+fn scaled(value: &str, factor: f64) -> Option<String> {
+    let one = |v: &str| -> Option<String> {
+        let v = v.trim();
+        if let Ok(i) = v.parse::<i64>() {
+            return Some(format!("{}", (i as f64 * factor).round() as i64));
+        }
+        let x = v.parse::<f64>().ok()?;
+        Some(format!("{:e}", x * factor))
+    };
+    let value = value.trim();
+    if let Some(inner) = value.strip_prefix('[').and_then(|v| v.strip_suffix(']')) {
+        let items: Option<Vec<String>> = inner
+            .split(',')
+            .filter(|v| !v.trim().is_empty())
+            .map(one)
+            .collect();
+        return items.map(|i| format!("[{}]", i.join(", ")));
+    }
+    one(value)
 }
 
 pub(crate) fn scene_edit() -> impl Strategy<Value = SceneEdit> {
@@ -181,6 +215,7 @@ pub(crate) fn scene_edit() -> impl Strategy<Value = SceneEdit> {
         1 => any::<usize>().prop_map(|line| SceneEdit::Duplicate { line }),
         3 => (any::<usize>(), any::<usize>()).prop_map(|(key, value)| SceneEdit::Insert { key, value }),
         1 => any::<usize>().prop_map(|at| SceneEdit::Truncate { at }),
+        5 => (any::<usize>(), any::<usize>()).prop_map(|(line, factor)| SceneEdit::Scale { line, factor }),
     ]
 }
 
@@ -234,6 +269,19 @@ pub(crate) fn apply_scene_edit(text: &str, edit: &SceneEdit, keys: &[(String, St
                     lines.push(header);
                     lines.push(line);
                 }
+            }
+        }
+        SceneEdit::Scale { line, factor } => {
+            let factor = SCALES[factor % SCALES.len()];
+            let numeric: Vec<(usize, String)> = (0..lines.len())
+                .filter(|&i| !lines[i].trim_start().starts_with('#'))
+                .filter_map(|i| {
+                    let (key, old) = lines[i].split_once('=')?;
+                    Some((i, format!("{key}= {}", scaled(old, factor)?)))
+                })
+                .collect();
+            if let Some((i, new)) = numeric.get(line % numeric.len().max(1)) {
+                lines[*i] = new.clone();
             }
         }
         SceneEdit::Truncate { at } => {

@@ -33,14 +33,31 @@ pub(crate) const CASES: u32 = 32;
 /// it resolve there), run with the test registry under the fuzz work budget.
 fn run_in(dir: &Path, text: &str) -> Result<ssm_engine::pipeline::JobResult, String> {
     std::env::set_var("SSM_TIME_LIMIT_MINUTES", WORK_MINUTES);
-    let scene = ssm_engine::scene::SceneFile::parse(&dir.join("scene.toml"), text.to_owned())
-        .map_err(|e| e.to_string())?;
-    ssm_engine::pipeline::run(
-        &scene,
-        &mut ssm_tests::registry(),
-        &ssm_engine::pipeline::Quiet,
-    )
-    .map_err(|e| e.to_string())
+    let result = ssm_engine::scene::SceneFile::parse(&dir.join("scene.toml"), text.to_owned())
+        .map_err(|e| e.to_string())
+        .and_then(|scene| {
+            ssm_engine::pipeline::run(
+                &scene,
+                &mut ssm_tests::registry(),
+                &ssm_engine::pipeline::Quiet,
+            )
+            .map_err(|e| e.to_string())
+        });
+    if std::env::var_os("SSM_FUZZ_VERBOSE").is_some() {
+        match &result {
+            Ok(r) => eprintln!("fuzz case: ok, {} warnings", r.warnings.len()),
+            Err(e) => eprintln!(
+                "fuzz case: error: {}",
+                e.lines()
+                    .next()
+                    .unwrap_or("")
+                    .chars()
+                    .take(120)
+                    .collect::<String>()
+            ),
+        }
+    }
+    result
 }
 
 /// A fresh directory for one forked case.

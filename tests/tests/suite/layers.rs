@@ -1,7 +1,12 @@
-//! The engine's layers, checked on its sources: below the plan layer
-//! (`ssm_engine::plan`) nothing reads the scene's types, TOML or its spans.
-//! The numerics take the span-free specs of `ssm_engine::spec`.
+//! The engine's layers, checked on its sources:
+//! - below the plan layer (`ssm_engine::plan`) nothing reads the scene's
+//!   types, TOML or its spans: the numerics take the span-free specs of
+//!   `ssm_engine::spec`, and building a model from a scene is the front
+//!   end's (`ssm_engine::pipeline`);
+//! - no two files and no two folders import each other, directly or around
+//!   a longer loop, in the engine, `ssm-api` and `ssm-model-files`.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use ssm_tests::repo_root;
@@ -20,11 +25,6 @@ const CORE: [&str; 11] = [
     "chebyshev.rs",
     "spec.rs",
 ];
-
-/// Core files that still build models from the scene (the model source and
-/// the reducer front end); each leaves this list when it moves to the plan
-/// layer, and the test fails if a listed file no longer needs to be here.
-const NOT_YET: [&str; 3] = ["model/source.rs", "reduce/engine.rs", "reduce/scene.rs"];
 
 fn rust_files(path: &Path, out: &mut Vec<PathBuf>) {
     if path.is_dir() {
@@ -66,12 +66,8 @@ fn numerics_do_not_read_the_scene() {
             .to_string_lossy()
             .replace('\\', "/");
         let uses = scene_uses(&std::fs::read_to_string(file).expect("a source file"));
-        match (NOT_YET.contains(&rel.as_str()), uses.is_empty()) {
-            (false, false) => offenders.push(format!("{rel}: {}", uses.join(" | "))),
-            (true, true) => offenders.push(format!(
-                "{rel} no longer reads the scene: take it off NOT_YET"
-            )),
-            _ => {}
+        if !uses.is_empty() {
+            offenders.push(format!("{rel}: {}", uses.join(" | ")));
         }
     }
     assert!(
@@ -79,4 +75,322 @@ fn numerics_do_not_read_the_scene() {
         "core code reads the scene (take a spec from ssm_engine::spec instead):\n{}",
         offenders.join("\n")
     );
+}
+
+/// A module's path (`["fom", "periodic", "frc"]`) from its file's path under
+/// `src` (`mod.rs`, `lib.rs` and `main.rs` name their folder).
+fn module_of(rel: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = rel
+        .with_extension("")
+        .iter()
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    if matches!(
+        parts.last().map(String::as_str),
+        Some("mod" | "lib" | "main")
+    ) {
+        parts.pop();
+    }
+    parts
+}
+
+/// The code of a file without comments, string contents and its test
+/// module (`#[cfg(test)]` to the end).
+fn code_of(text: &str) -> String {
+    let text = text.split("#[cfg(test)]").next().unwrap_or("");
+    let mut out = String::with_capacity(text.len());
+    for line in text.lines() {
+        let line = line.split("//").next().unwrap_or("");
+        let mut in_string = false;
+        let mut escaped = false;
+        for c in line.chars() {
+            if in_string {
+                if escaped {
+                    escaped = false;
+                } else if c == '\\' {
+                    escaped = true;
+                } else if c == '"' {
+                    in_string = false;
+                    out.push('"');
+                }
+                continue;
+            }
+            if c == '"' {
+                in_string = true;
+            }
+            out.push(c);
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// The paths a `use` tree names (`a::{b, c::{d, e}}` gives `a::b`, `a::c::d`,
+/// `a::c::e`), each as its segments.
+fn expand_use(tree: &str, prefix: &[String], out: &mut Vec<Vec<String>>) {
+    let tree = tree.trim();
+    let Some(open) = tree.find('{') else {
+        let mut path = prefix.to_vec();
+        let head = tree.split(" as ").next().unwrap_or("");
+        path.extend(
+            head.split("::")
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(String::from),
+        );
+        out.push(path);
+        return;
+    };
+    let mut head = prefix.to_vec();
+    head.extend(
+        tree[..open]
+            .split("::")
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(String::from),
+    );
+    let body = &tree[open + 1..tree.rfind('}').unwrap_or(tree.len())];
+    let (mut depth, mut start) = (0, 0);
+    for (i, c) in body.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' => depth -= 1,
+            ',' if depth == 0 => {
+                expand_use(&body[start..i], &head, out);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    if !body[start..].trim().is_empty() {
+        expand_use(&body[start..], &head, out);
+    }
+}
+
+/// Every `crate::`, `super::` or `self::` path of `code`, in `use` trees and
+/// inline.
+fn paths_of(code: &str) -> Vec<Vec<String>> {
+    let mut out = Vec::new();
+    let mut rest = code;
+    while let Some(at) = rest.find("use ") {
+        let before = rest[..at].chars().last();
+        rest = &rest[at + 4..];
+        if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
+            continue;
+        }
+        if let Some(end) = rest.find(';') {
+            expand_use(&rest[..end], &[], &mut out);
+            rest = &rest[end..];
+        }
+    }
+    let bytes = code.as_bytes();
+    for start in ["crate::", "super::", "self::"] {
+        for (at, _) in code.match_indices(start) {
+            if at > 0 && (bytes[at - 1].is_ascii_alphanumeric() || bytes[at - 1] == b'_') {
+                continue;
+            }
+            let path: Vec<String> = code[at..]
+                .split(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
+                .next()
+                .unwrap_or("")
+                .split("::")
+                .filter(|s| !s.is_empty())
+                .map(String::from)
+                .collect();
+            out.push(path);
+        }
+    }
+    out
+}
+
+/// The module (a key of `modules`) that `path`, written in module `from`,
+/// refers to: the longest module prefix of the absolute path.
+fn resolve(
+    modules: &BTreeMap<Vec<String>, PathBuf>,
+    from: &[String],
+    path: &[String],
+) -> Option<Vec<String>> {
+    let (mut base, mut rest): (Vec<String>, &[String]) = match path.first()?.as_str() {
+        "crate" => (Vec::new(), &path[1..]),
+        "super" => (from[..from.len().saturating_sub(1)].to_vec(), &path[1..]),
+        "self" => (from.to_vec(), &path[1..]),
+        _ => return None,
+    };
+    while rest.first().is_some_and(|s| s == "super") {
+        base.pop();
+        rest = &rest[1..];
+    }
+    base.extend(rest.iter().cloned());
+    (0..=base.len())
+        .rev()
+        .map(|k| base[..k].to_vec())
+        .find(|m| modules.contains_key(m))
+}
+
+/// The strongly connected components with more than one node (Tarjan).
+fn cycles(edges: &BTreeMap<String, BTreeSet<String>>) -> Vec<Vec<String>> {
+    struct State<'a> {
+        edges: &'a BTreeMap<String, BTreeSet<String>>,
+        index: BTreeMap<&'a str, usize>,
+        low: BTreeMap<&'a str, usize>,
+        stack: Vec<&'a str>,
+        out: Vec<Vec<String>>,
+    }
+    fn visit<'a>(s: &mut State<'a>, v: &'a str) {
+        let i = s.index.len();
+        s.index.insert(v, i);
+        s.low.insert(v, i);
+        s.stack.push(v);
+        for w in s.edges.get(v).into_iter().flatten() {
+            if !s.index.contains_key(w.as_str()) {
+                visit(s, w);
+                let lw = s.low[w.as_str()];
+                let lv = s.low.get_mut(v).expect("visited");
+                *lv = (*lv).min(lw);
+            } else if s.stack.contains(&w.as_str()) {
+                let iw = s.index[w.as_str()];
+                let lv = s.low.get_mut(v).expect("visited");
+                *lv = (*lv).min(iw);
+            }
+        }
+        if s.low[v] == s.index[v] {
+            let mut comp = Vec::new();
+            while let Some(w) = s.stack.pop() {
+                comp.push(w.to_owned());
+                if w == v {
+                    break;
+                }
+            }
+            if comp.len() > 1 {
+                comp.sort();
+                s.out.push(comp);
+            }
+        }
+    }
+    let mut s = State {
+        edges,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        out: Vec::new(),
+    };
+    for v in edges.keys() {
+        if !s.index.contains_key(v.as_str()) {
+            visit(&mut s, v);
+        }
+    }
+    s.out
+}
+
+/// The file-level and folder-level import cycles of the crate at `src`. An
+/// edge is a file naming an item of another file's module; a module's own
+/// submodules (its `mod` declarations and the re-exports of a facade) are
+/// not edges, and test modules (`tests.rs`, `#[cfg(test)]`) are left out.
+fn import_cycles(src: &Path) -> (Vec<Vec<String>>, Vec<Vec<String>>, usize) {
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    let modules: BTreeMap<Vec<String>, PathBuf> = files
+        .into_iter()
+        // the binary's main.rs is a crate of its own, over the library's API
+        .filter(|f| {
+            f.file_name()
+                .is_some_and(|n| n != "tests.rs" && n != "main.rs")
+        })
+        .map(|f| (module_of(f.strip_prefix(src).expect("under src")), f))
+        .collect();
+    let name = |m: &[String]| {
+        if m.is_empty() {
+            "lib".to_owned()
+        } else {
+            m.join("/")
+        }
+    };
+    let mut file_edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let mut folder_edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let mut n_edges = 0;
+    for (module, file) in &modules {
+        let code = code_of(&std::fs::read_to_string(file).expect("a source file"));
+        let entry = file_edges.entry(name(module)).or_default();
+        for path in paths_of(&code) {
+            let Some(target) = resolve(&modules, module, &path) else {
+                continue;
+            };
+            if target.starts_with(module) {
+                continue; // itself or its own submodules
+            }
+            n_edges += 1;
+            entry.insert(name(&target));
+            if let (Some(a), Some(b)) = (module.first(), target.first()) {
+                if a != b {
+                    folder_edges.entry(a.clone()).or_default().insert(b.clone());
+                }
+            }
+        }
+    }
+    (cycles(&file_edges), cycles(&folder_edges), n_edges)
+}
+
+#[test]
+fn no_import_cycles_between_files_or_folders() {
+    let root = repo_root();
+    let mut found = Vec::new();
+    for krate in ["ssm-engine/src", "ssm-api/src", "model-files/src"] {
+        let (files, folders, n_edges) = import_cycles(&root.join(krate));
+        assert!(n_edges > 10, "{krate}: only {n_edges} imports seen");
+        found.extend(
+            files
+                .iter()
+                .map(|c| format!("{krate}: files {}", c.join(" -> "))),
+        );
+        found.extend(
+            folders
+                .iter()
+                .map(|c| format!("{krate}: folders {}", c.join(" -> "))),
+        );
+    }
+    assert!(
+        found.is_empty(),
+        "import cycles (move what both sides need into a file of its own):\n{}",
+        found.join("\n")
+    );
+}
+
+/// The checker sees a planted loop: two files naming each other's items,
+/// through a `use` tree and an inline path, and two folders doing the same.
+#[test]
+fn the_cycle_check_sees_a_planted_loop() {
+    let dir = ssm_tests::tmp_dir("planted-cycle");
+    let src = dir.join("src");
+    std::fs::create_dir_all(src.join("a")).expect("a folder");
+    std::fs::create_dir_all(src.join("b")).expect("b folder");
+    std::fs::write(src.join("lib.rs"), "pub mod a;\npub mod b;\n").expect("lib.rs");
+    std::fs::write(src.join("a/mod.rs"), "pub mod x;\npub mod y;\n").expect("a/mod.rs");
+    std::fs::write(
+        src.join("a/x.rs"),
+        "use super::{y::{Y, Z as W}};\n// use crate::b::q::Q; (a comment)\npub struct X;\n",
+    )
+    .expect("a/x.rs");
+    std::fs::write(
+        src.join("a/y.rs"),
+        "pub struct Y;\npub struct Z;\nfn f() -> crate::a::x::X { crate::a::x::X }\n",
+    )
+    .expect("a/y.rs");
+    std::fs::write(src.join("b/mod.rs"), "pub mod q;\n").expect("b/mod.rs");
+    std::fs::write(
+        src.join("b/q.rs"),
+        "pub struct Q;\nconst S: &str = \"crate::a::x\";\nuse crate::a::y::Y;\n",
+    )
+    .expect("b/q.rs");
+    let (files, folders, _) = import_cycles(&src);
+    assert_eq!(files, vec![vec!["a/x".to_owned(), "a/y".to_owned()]]);
+    assert!(folders.is_empty(), "{folders:?}");
+    // b's file now names a, and a names b back: a loop of folders
+    std::fs::write(
+        src.join("a/mod.rs"),
+        "pub mod x;\npub mod y;\nuse crate::b::q::Q;\n",
+    )
+    .expect("a/mod.rs");
+    let (_, folders, _) = import_cycles(&src);
+    assert_eq!(folders, vec![vec!["a".to_owned(), "b".to_owned()]]);
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -21,9 +21,8 @@
 use crate::continuation::{solve_at_parameter, NoLedger, Settings};
 use crate::model::system::{OutputMap, System};
 
-use super::frc::{
-    check_flow, classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit,
-};
+use super::branch::{classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit};
+use super::frc::check_flow;
 use super::runs::Runs;
 use super::{HarmonicBalance, Parameter};
 

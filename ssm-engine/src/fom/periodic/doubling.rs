@@ -23,7 +23,7 @@
 use crate::continuation::{correct, local_parameter, Point, Problem, Settings};
 use crate::model::system::System;
 
-use super::frc::{
+use super::branch::{
     classify, drop_rejoining_step, orbits_at, Reader, ReferenceBranch, ReferenceError,
     ReferenceOrbit, ReferenceSettings,
 };

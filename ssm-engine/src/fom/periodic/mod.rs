@@ -54,11 +54,13 @@
 //! contact problems, J. Sound Vib. 241 (2001) 223-233.
 
 pub mod amplitude;
+mod branch;
 mod doubling;
 pub mod floquet;
 pub mod frc;
 mod gauge;
 pub mod monodromy;
+mod multipliers;
 mod problem;
 pub mod runs;
 pub mod seed;

@@ -39,7 +39,7 @@ use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Conj, Mat, Par};
 use rayon::prelude::*;
 
-use super::floquet::{Floquet, FloquetError, UNIT_CIRCLE_TOL};
+use super::multipliers::{Floquet, FloquetError, UNIT_CIRCLE_TOL};
 use super::HarmonicBalance;
 use crate::fom::radau::{RADAU_A, RADAU_C};
 use crate::C64;
@@ -252,7 +252,7 @@ pub fn monodromy_matrix(
     if n > MAX_MONODROMY_STATES {
         return Err(FloquetError::TooLarge {
             coefficients: hb.n_coefficients(),
-            limit: super::floquet::MAX_HILL_COEFFICIENTS,
+            limit: super::multipliers::MAX_HILL_COEFFICIENTS,
         });
     }
     let period = PeriodSteps::factor(hb, c, omega, steps)?;
@@ -354,9 +354,9 @@ const SUBSPACE_PASSES: usize = 12;
 /// block `X` (a deterministic pseudo-random start in the gauges'
 /// complement, which `Phi` keeps), the Ritz values of `X^T Y`, and `X` the
 /// orthonormal basis of `Y` for the next pass. A block is enough when its
-/// smallest Ritz value is below [`SUBSPACE_FLOOR`] (else it doubles), and
+/// smallest Ritz value is below `SUBSPACE_FLOOR` (else it doubles), and
 /// the iteration stops when every Ritz pair above [`DOMINANT_FLOOR`] has a
-/// residual below [`SUBSPACE_TOL`]; those are the multipliers returned. Each pass costs `k` solves per step
+/// residual below `SUBSPACE_TOL`; those are the multipliers returned. Each pass costs `k` solves per step
 /// of the stored LUs, against `N` for the matrix: the lightly damped modes
 /// are few, and the multipliers of the rest fall below `1e-6` per period
 /// (measured on the chain of pendulums), so a pass gains six digits.

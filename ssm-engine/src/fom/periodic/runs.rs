@@ -15,7 +15,7 @@
 
 use crate::continuation::{self, Branch, Ledger, Point, Settings, Stop};
 
-use super::frc::{Reader, ReferenceError, ReferenceOrbit};
+use super::branch::{Reader, ReferenceError, ReferenceOrbit};
 use super::{HarmonicBalance, OrbitInfo};
 
 /// A restored run's start may differ from the start computed again by this

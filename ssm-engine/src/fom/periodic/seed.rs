@@ -20,7 +20,8 @@
 use crate::continuation::{self, dot, solve_at_parameter, Point, Settings, Stop};
 use crate::model::system::System;
 
-use super::frc::{
+pub use super::branch::Seed;
+use super::branch::{
     classify, drop_rejoining_step, orbits_at, Reader, ReferenceBranch, ReferenceError,
     ReferenceOrbit, ReferenceSettings,
 };
@@ -35,62 +36,6 @@ use super::{HarmonicBalance, OrbitInfo};
 /// distinct orbits at one frequency differ by much more outside the
 /// immediate neighbourhood of a fold or branch point (where they meet).
 pub const SAME_BRANCH: f64 = 0.05;
-
-/// A predicted orbit to start a reference branch from.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Seed {
-    /// Forcing frequency.
-    pub omega: f64,
-    /// The orbit's period as a multiple `m` of the forcing period.
-    pub period_multiple: usize,
-    /// The full state at `S` equally spaced times `t_s = s m T / S` over one
-    /// period, from `t = 0` (the forcing's phase origin); `S` must exceed
-    /// twice the harmonics of the orbit.
-    pub states: Vec<Vec<f64>>,
-    /// Where the prediction comes from (for notes), e.g. `"O(7) branch 2"`.
-    pub origin: String,
-}
-
-impl Seed {
-    /// Fourier coefficients `(c_0, c_1^c, c_1^s, ...)` per state (state-major,
-    /// `2h + 1` each) of the sampled orbit: the discrete projection, exact for
-    /// a trigonometric polynomial of degree below `S / 2`.
-    pub fn coefficients(&self, n: usize, h: usize) -> Result<Vec<f64>, String> {
-        let s = self.states.len();
-        if s <= 2 * h {
-            return Err(format!(
-                "{} samples cannot resolve {h} harmonics (need more than {})",
-                s,
-                2 * h
-            ));
-        }
-        if let Some(bad) = self.states.iter().position(|z| z.len() != n) {
-            return Err(format!(
-                "sample {bad} has {} states, the model {n}",
-                self.states[bad].len()
-            ));
-        }
-        if self.states.iter().flatten().any(|v| !v.is_finite()) {
-            return Err("the predicted orbit is not finite".into());
-        }
-        let kk = 2 * h + 1;
-        let mut c = vec![0.0; n * kk];
-        let inv = 1.0 / s as f64;
-        for (j, z) in self.states.iter().enumerate() {
-            let psi = 2.0 * std::f64::consts::PI * j as f64 * inv;
-            for (i, zi) in z.iter().enumerate() {
-                let ci = &mut c[i * kk..(i + 1) * kk];
-                ci[0] += inv * zi;
-                for k in 1..=h {
-                    let (sn, cs) = (k as f64 * psi).sin_cos();
-                    ci[2 * k - 1] += 2.0 * inv * zi * cs;
-                    ci[2 * k] += 2.0 * inv * zi * sn;
-                }
-            }
-        }
-        Ok(c)
-    }
-}
 
 /// A traced branch's polyline in scaled unknowns, with its period multiple.
 #[derive(Debug, Clone)]

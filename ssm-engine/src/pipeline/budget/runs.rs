@@ -145,8 +145,8 @@ fn reduction_parts(
 
 /// Refuses a `[pod]` study that would not finish within `limits`, before
 /// any of it runs: the full model's HHT runs (`t_end / step` steps each,
-/// see [`hht_step`]) and their stored states; the POD reductions
-/// ([`reduction_parts`]); each POD model's run on every load (bounded by
+/// see `hht_step`) and their stored states; the POD reductions
+/// (`reduction_parts`); each POD model's run on every load (bounded by
 /// the full model's step, plus the lift to the full states, which are
 /// stored); the SSM models of `ssm_pairs` and their runs, lifted through
 /// `W` at every step end.
@@ -292,7 +292,7 @@ fn key_in(scene: &SceneFile, table: Range<usize>, key: &str) -> Range<usize> {
 
 /// Refuses the engine's `pod` reducer (`[reduce] reducer = "pod"`) when its
 /// training run of `system` (`t_end / step` HHT steps, the states stored)
-/// and its POD reduction ([`reduction_parts`]) would not finish within
+/// and its POD reduction (`reduction_parts`) would not finish within
 /// `limits`; `params` is the span of `[reduce.params]`.
 pub fn check_pod_reducer(
     scene: &SceneFile,

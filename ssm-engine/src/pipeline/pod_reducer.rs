@@ -6,15 +6,15 @@
 use serde::Deserialize;
 use ssm_api::Diagnostic;
 
-use super::pod::Truncation;
-use super::pod_model::{pod_reduce, PodSettings};
-use super::scene::ReduceError;
-use super::{lift_outputs, Reduction};
+use super::budget::{check_pod_reducer, Limits};
+use super::error::ReduceError;
 use crate::fom::hht::{integrate, HhtOptions};
 use crate::fom::{given_start, DaeProblem};
 use crate::model::system::System;
 use crate::number::short;
-use crate::pipeline::budget::{check_pod_reducer, Limits};
+use crate::reduce::pod::Truncation;
+use crate::reduce::pod_model::{pod_reduce, PodSettings};
+use crate::reduce::{lift_outputs, Reduction};
 use crate::scene::{load_sampling, ReduceSection, SceneFile};
 
 /// The reducers the engine offers itself.

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use toml::Spanned;
 
-use super::plugin::{is_path, Plugin, PluginLoadError, Registry};
+use crate::model::plugin::{is_path, Plugin, PluginLoadError, Registry};
 use crate::scene::{line_of, ModelSection, SceneError, SceneFile};
 
 /// Why a plugin's model could not be had.

@@ -2,31 +2,12 @@
 //! against the scene, its input assembled from `[model]` and `[data]`, and
 //! the reduced model validated with its outputs lifted.
 
-use super::{lift_outputs, read_signals, Reduction, SignalsError};
+use super::error::ReduceError;
+use super::source::{params_toml, plugin_error, resolve, SourceError};
 use crate::model::plugin::{PluginLoadError, Registry};
-use crate::model::source::{params_toml, plugin_error, resolve, SourceError};
-use crate::model::system::{ModelError, System};
-use crate::scene::{ReduceSection, SceneError, SceneFile};
-
-/// Why a reduced model could not be had.
-#[derive(Debug, thiserror::Error)]
-pub enum ReduceError {
-    /// The scene or the reducer's plugin failed.
-    #[error(transparent)]
-    Source(#[from] SourceError),
-    /// A `[data]` file cannot be used.
-    #[error("data: {0}")]
-    Signals(#[from] SignalsError),
-    /// The reduced model is inconsistent.
-    #[error(transparent)]
-    Model(#[from] ModelError),
-}
-
-impl From<SceneError> for ReduceError {
-    fn from(e: SceneError) -> Self {
-        Self::Source(SourceError::Scene(e))
-    }
-}
+use crate::model::system::System;
+use crate::reduce::{lift_outputs, read_signals, Reduction};
+use crate::scene::{ReduceSection, SceneFile};
 
 /// The model the reducer of `[reduce]` makes from the full model `full`
 /// (plugin name and model of `[model]`, if any) and/or the `[data]` signals,
@@ -39,7 +20,7 @@ pub fn reduce_scene(
 ) -> Result<(System, Reduction), ReduceError> {
     let sc = &scene.scene;
     let Some(plugin_key) = &red.plugin else {
-        return super::engine::engine_reduce(scene, red, full);
+        return super::pod_reducer::engine_reduce(scene, red, full);
     };
     let plugin = resolve(scene, registry, plugin_key, "reduce.plugin")?;
     let listed = match plugin.reducers() {
