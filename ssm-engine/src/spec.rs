@@ -6,6 +6,21 @@
 
 use serde::{Deserialize, Serialize};
 
+/// A spec that cannot be computed: the key (as the scene spells it) and
+/// what is wrong with its value.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{key}: {problem}")]
+pub struct SpecError {
+    /// The key, e.g. `forcing.omega_range`.
+    pub key: &'static str,
+    /// What is wrong.
+    pub problem: String,
+}
+
+fn spec_error(key: &'static str, problem: String) -> SpecError {
+    SpecError { key, problem }
+}
+
 /// Backbone curves `omega(rho)` of the master pair, one per expansion order
 /// (`[outputs.backbone]`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -158,6 +173,72 @@ impl FrcSpec {
             rho_max: None,
             nonautonomous_order: None,
         }
+    }
+
+    /// Checks the spec against an SSM of `pairs` master pairs computed to
+    /// `ssm_order` (what a scene's `[forcing]` is checked for, with the
+    /// same messages; a spec built in code meets these checks at
+    /// [`crate::rom::forced_response::forced_response`]).
+    pub fn check(&self, pairs: usize, ssm_order: usize) -> Result<(), SpecError> {
+        if self.epsilon.is_empty() || self.epsilon.iter().any(|e| !(e.is_finite() && *e > 0.0)) {
+            return Err(spec_error(
+                "forcing.epsilon",
+                format!(
+                    "needs at least one forcing amplitude, each positive, found {:?}",
+                    self.epsilon
+                ),
+            ));
+        }
+        let [a, b] = self.omega_range;
+        if !(a.is_finite() && b.is_finite() && 0.0 < a && a < b) {
+            return Err(spec_error(
+                "forcing.omega_range",
+                format!(
+                    "must be [Omega_min, Omega_max] with 0 < Omega_min < Omega_max, found {:?}",
+                    self.omega_range
+                ),
+            ));
+        }
+        if let Some(orders) = &self.orders {
+            if orders.is_empty() || orders.iter().any(|&o| o == 0 || o > ssm_order) {
+                return Err(spec_error(
+                    "forcing.orders",
+                    format!("needs at least one order, each from 1 to the SSM's order {ssm_order}, found {orders:?}"),
+                ));
+            }
+        }
+        if let Some(r) = &self.resonance {
+            if r.len() != pairs || r.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+                return Err(spec_error(
+                    "forcing.resonance",
+                    format!("needs one positive ratio per master pair ({pairs}), found {r:?}"),
+                ));
+            }
+        }
+        if self.points < 2 {
+            return Err(spec_error(
+                "forcing.points",
+                format!("must be at least 2, found {}", self.points),
+            ));
+        }
+        if let Some(r) = self.rho_max {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(spec_error(
+                    "forcing.rho_max",
+                    format!("must be a positive number, found {r}"),
+                ));
+            }
+        }
+        if let Some(k) = self.nonautonomous_order {
+            let max = ssm_order.saturating_sub(1);
+            if k > max {
+                return Err(spec_error(
+                    "forcing.nonautonomous_order",
+                    format!("must be at most the SSM's order - 1 = {max}, found {k}"),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The same curves at the single order `order`.

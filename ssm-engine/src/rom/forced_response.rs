@@ -69,6 +69,7 @@ pub fn forced_response(
             "the model is a map; [forcing] needs a flow".into(),
         ));
     }
+    sec.check(masters.len(), ssm.order)?;
     let ratios = resonance_ratios(sec, masters);
     if masters.len() > 1 {
         return crate::rom::forced_multi::forced_response_multi(

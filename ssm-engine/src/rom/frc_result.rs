@@ -33,6 +33,9 @@ pub enum FrcError {
     /// The continuation could not start.
     #[error("FRC: {0}")]
     Continuation(#[from] crate::rom::continuation::ContinuationError),
+    /// The spec asks for what cannot be computed.
+    #[error("FRC: {0}")]
+    Spec(#[from] crate::spec::SpecError),
 }
 
 /// One point of a forced response curve.

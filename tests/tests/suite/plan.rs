@@ -91,3 +91,86 @@ fn unknown_spec_fields_are_refused() {
         .expect_err("a misspelt key");
     assert!(e.to_string().contains("rhomax"), "{e}");
 }
+
+/// A forced-response spec built in code meets the checks a scene's
+/// `[forcing]` meets: each bad value is a typed error naming its key, never
+/// a panic, a misleading numerical failure or an empty answer (before the
+/// check: a NaN range failed in the homological equation, an empty
+/// `resonance` panicked, empty `epsilon` or `orders` returned no curve, an
+/// order above the SSM's and a negative `rho_max` were ignored).
+#[test]
+fn hand_built_frc_specs_are_checked_like_scenes() {
+    use ssm_engine::rom::forced_response::{forced_response, FrcError};
+    let sys = ssm_tests::system("duffing", "", "");
+    let sp = ssm_engine::spectrum::compute(
+        sys.a.as_ref(),
+        sys.b.as_ref(),
+        &ssm_tests::spectrum_options(None, 0),
+    )
+    .expect("spectrum");
+    let masters =
+        ssm_engine::spectrum::master_modes(&sys, &sp, &[1], Default::default()).expect("masters");
+    let ssm = ssm_tests::ssm_of(&sys, &sp, &[1], 3, Default::default());
+    let x = sys.output("x").expect("output x").clone();
+    let base = FrcSpec::new(vec![0.01], [0.9, 1.1]);
+    let cases = [
+        (
+            "forcing.omega_range",
+            FrcSpec::new(vec![0.01], [f64::NAN, 1.1]),
+        ),
+        ("forcing.omega_range", FrcSpec::new(vec![0.01], [1.1, 0.9])),
+        ("forcing.epsilon", FrcSpec::new(vec![], [0.9, 1.1])),
+        ("forcing.epsilon", FrcSpec::new(vec![f64::NAN], [0.9, 1.1])),
+        (
+            "forcing.points",
+            FrcSpec {
+                points: 0,
+                ..base.clone()
+            },
+        ),
+        (
+            "forcing.rho_max",
+            FrcSpec {
+                rho_max: Some(-1.0),
+                ..base.clone()
+            },
+        ),
+        (
+            "forcing.orders",
+            FrcSpec {
+                orders: Some(vec![]),
+                ..base.clone()
+            },
+        ),
+        (
+            "forcing.orders",
+            FrcSpec {
+                orders: Some(vec![99]),
+                ..base.clone()
+            },
+        ),
+        (
+            "forcing.resonance",
+            FrcSpec {
+                resonance: Some(vec![]),
+                ..base.clone()
+            },
+        ),
+        (
+            "forcing.nonautonomous_order",
+            FrcSpec {
+                nonautonomous_order: Some(3),
+                ..base.clone()
+            },
+        ),
+    ];
+    for (key, spec) in cases {
+        match forced_response(&ssm, &sys, &masters, &spec, &[&x], 0.01) {
+            Err(FrcError::Spec(e)) => assert_eq!(e.key, key, "{spec:?}: {e}"),
+            other => panic!("{spec:?}: expected a typed error at {key}, got {other:?}"),
+        }
+    }
+    // the sound spec still answers
+    let ok = forced_response(&ssm, &sys, &masters, &base, &[&x], 0.01).expect("the base spec");
+    assert!(!ok.rows.is_empty());
+}
