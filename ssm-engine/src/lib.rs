@@ -20,6 +20,8 @@
 //!   forced response curves (one pair; several pairs by continuation);
 //! - [`fom`]: the full-order model: Radau IIA integration of the DAE,
 //!   consistent initial values, steady states by criterion (47);
+//! - [`analyses`]: analyses added as vertical slices (one folder each:
+//!   spec, run, writer; one registration line), e.g. the damping curve;
 //! - [`compare`]: full against reduced (transients, distance to the SSM,
 //!   steady-state references) and the speed-against-error report;
 //! - [`output`]: writers of `summary.json`, CSV and SVG from typed results
@@ -32,6 +34,7 @@
 //! the stages' result types, and no two files or folders import each other
 //! (checked by the suite's `layers::no_import_cycles_between_files_or_folders`).
 
+pub mod analyses;
 pub mod chebyshev;
 pub mod compare;
 pub mod continuation;

@@ -74,6 +74,21 @@ fn tick(v: f64) -> String {
     }
 }
 
+/// One panel of a [`stacked_plot`].
+#[derive(Debug, Clone, Copy)]
+pub struct Panel<'a> {
+    /// Panel title.
+    pub title: &'a str,
+    /// Name of the x axis.
+    pub x_label: &'a str,
+    /// Name of the y axis.
+    pub y_label: &'a str,
+    /// The curves drawn.
+    pub curves: &'a [Curve],
+    /// Axis scaling.
+    pub scale: Scale,
+}
+
 /// Draws `curves` into an SVG document (800 x 560) with axis names and a legend.
 pub fn line_plot(
     title: &str,
@@ -82,6 +97,48 @@ pub fn line_plot(
     curves: &[Curve],
     scale: Scale,
 ) -> Result<String, PlotError> {
+    let panel = Panel {
+        title,
+        x_label,
+        y_label,
+        curves,
+        scale,
+    };
+    stacked_plot(&[panel], 560)
+}
+
+/// Draws `panels` one above the other into an SVG document 800 wide and
+/// `height` per panel high, each with its axis names and legend.
+pub fn stacked_plot(panels: &[Panel<'_>], height: u32) -> Result<String, PlotError> {
+    let fail = |e: &dyn std::fmt::Display| PlotError {
+        title: panels.first().map_or("", |p| p.title).to_owned(),
+        message: e.to_string(),
+    };
+    let mut svg = String::new();
+    {
+        let n = panels.len().max(1) as u32;
+        let root = SVGBackend::with_string(&mut svg, (800, height * n)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        for (area, panel) in root.split_evenly((panels.len(), 1)).iter().zip(panels) {
+            draw_panel(area, panel)?;
+        }
+        root.present().map_err(|e| fail(&e))?;
+    }
+    Ok(svg)
+}
+
+/// Draws one panel into `root`.
+fn draw_panel(
+    root: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+    panel: &Panel<'_>,
+) -> Result<(), PlotError> {
+    let Panel {
+        title,
+        x_label,
+        y_label,
+        curves,
+        scale,
+    } = *panel;
     let fail = |e: &dyn std::fmt::Display| PlotError {
         title: title.to_owned(),
         message: e.to_string(),
@@ -101,11 +158,8 @@ pub fn line_plot(
             .flat_map(|c| c.points.iter().chain(&c.markers).filter(keep).map(|p| p.1)),
         log,
     );
-    let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (800, 560)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| fail(&e))?;
-        let mut builder = ChartBuilder::on(&root);
+        let mut builder = ChartBuilder::on(root);
         builder
             .caption(title, ("sans-serif", 22))
             .margin(16)
@@ -162,9 +216,8 @@ pub fn line_plot(
                 .build_cartesian_2d(xs.0..xs.1, ys.0..ys.1)
                 .map_err(|e| fail(&e))?);
         }
-        root.present().map_err(|e| fail(&e))?;
     }
-    Ok(svg)
+    Ok(())
 }
 
 #[cfg(test)]

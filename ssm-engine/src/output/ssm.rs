@@ -112,7 +112,7 @@ pub fn backbone_csv(curves: &[BackboneCurve], outputs: &[String]) -> String {
 }
 
 /// A curve's legend: its order, estimate and, above the target, a warning.
-fn estimate_label(order: usize, estimate: Option<f64>, untrusted: bool) -> String {
+pub fn estimate_label(order: usize, estimate: Option<f64>, untrusted: bool) -> String {
     let mut label = format!("O({order})");
     if let Some(e) = estimate {
         label.push_str(&format!(", estimated error {}", percent(e)));

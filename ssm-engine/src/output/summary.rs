@@ -82,6 +82,8 @@ pub struct Summary<'a> {
     pub pod: Option<&'a PodStudy>,
     /// The `[reference]` forced responses of the full system.
     pub reference: Option<&'a ReferenceFrc>,
+    /// The results of the analyses of `[analysis]`, by name.
+    pub analyses: &'a [(&'a str, Value)],
     /// The accuracy target, the order and every answer's estimate.
     pub accuracy: &'a Accuracy,
     /// Warnings of the run.
@@ -95,7 +97,7 @@ pub fn summary_json(s: &Summary<'_>) -> String {
     let sys = s.system;
     let t = &s.timing;
     let lin = &s.ssm.timing.linear;
-    let value = json!({
+    let mut value = json!({
         "plugins": plugins_json(s.plugins),
         "model": {
             "plugin": sys.plugin,
@@ -160,6 +162,14 @@ pub fn summary_json(s: &Summary<'_>) -> String {
             "solves": lin.solves,
         },
     });
+    if !s.analyses.is_empty() {
+        value["analyses"] = s
+            .analyses
+            .iter()
+            .map(|(name, v)| ((*name).to_owned(), v.clone()))
+            .collect::<serde_json::Map<_, _>>()
+            .into();
+    }
     serde_json::to_string_pretty(&value).expect("JSON values are serializable")
 }
 

@@ -67,6 +67,9 @@ pub enum JobError {
     /// A plot could not be drawn.
     #[error(transparent)]
     Plot(#[from] PlotError),
+    /// An analysis of `[analysis]` could not be planned or run.
+    #[error(transparent)]
+    Analysis(#[from] crate::analyses::AnalysisError),
 }
 
 impl From<SourceError> for JobError {

@@ -26,6 +26,7 @@ use std::time::Instant;
 pub use error::JobError;
 pub use spectral::Spectral;
 
+use crate::analyses::{self, Context, Finished};
 use crate::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
 use crate::compare::pod::PodStudy;
 use crate::compare::report::{report, Report, ReportInputs};
@@ -118,6 +119,7 @@ struct Autonomous {
 struct Reduced {
     expansion: SsmExpansion,
     answers: Autonomous,
+    analyses: Vec<Box<dyn Finished>>,
     frc: Option<ForcedResponse>,
     estimates: Vec<AnswerEstimate>,
     ssm_s: f64,
@@ -134,6 +136,8 @@ struct Stage<'a> {
     others: &'a [C64],
     coordinates: &'a [&'a OutputMap],
     progress: &'a dyn Progress,
+    /// The highest order the analyses of `[analysis]` name.
+    analysis_orders: usize,
 }
 
 impl Stage<'_> {
@@ -179,6 +183,18 @@ impl Stage<'_> {
                 })
                 .transpose()?,
         };
+        let cx = Context {
+            system: sys,
+            masters,
+            ssm: &expansion,
+            outputs: self.coordinates,
+            tolerance,
+        };
+        let analyses = specs
+            .analyses
+            .iter()
+            .map(|a| analyses::find(&a.name)?.run(&a.spec, &cx))
+            .collect::<Result<Vec<_>, _>>()?;
         let results_s = t.elapsed().as_secs_f64();
 
         let t = Instant::now();
@@ -196,10 +212,12 @@ impl Stage<'_> {
             .as_ref()
             .and_then(|t| t.order)
             .unwrap_or(order);
-        let estimates = estimates(&answers, transient_order, frc.as_ref());
+        let mut estimates = estimates(&answers, transient_order, frc.as_ref());
+        estimates.extend(analyses.iter().flat_map(|a| a.estimates()));
         Ok(Reduced {
             expansion,
             answers,
+            analyses,
             frc,
             estimates,
             ssm_s,
@@ -219,7 +237,8 @@ impl Stage<'_> {
         warnings: &mut Vec<String>,
     ) -> Result<(Reduced, OrdersTried), JobError> {
         let tolerance = *self.scene.scene.ssm.tolerance.get_ref();
-        let mut order = self.scene.highest_named_order().max(3).min(ceiling);
+        let named = self.scene.highest_named_order().max(self.analysis_orders);
+        let mut order = named.max(3).min(ceiling);
         let mut tried = Vec::new();
         let mut best: Option<(f64, Reduced)> = None;
         let mut spent = [0.0; 3];
@@ -354,7 +373,7 @@ fn measured_errors(v: &Validation) -> Vec<MeasuredError> {
 fn untrusted_warnings(estimates: &[AnswerEstimate], tolerance: f64) -> Vec<String> {
     estimates
         .iter()
-        .filter(|a| a.untrusted && a.answer != "frc")
+        .filter(|a| a.untrusted && matches!(a.answer, "backbone" | "transient"))
         .map(|a| {
             format!(
                 "{} O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance){}; do not trust it: {}",
@@ -402,6 +421,17 @@ pub fn run(
 ) -> Result<JobResult, JobError> {
     let t0 = Instant::now();
     let sc = &scene.scene;
+    // the scene resolved to specs first: a mistake in an analysis's table
+    // is reported before any model is built
+    let specs = plan::answers(scene)?;
+    let analysis_orders = specs
+        .analyses
+        .iter()
+        .map(|a| analyses::find(&a.name)?.orders(&a.spec))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .flatten()
+        .fold(1, usize::max);
     let mut timing = Timing::default();
     progress.stage("building model");
     registry.take_used();
@@ -450,9 +480,16 @@ pub fn run(
     timing.resonance_check = sp.resonance_s;
     budget::check(scene, &system, &sp.masters, ceiling, &limits)?;
     budget::check_reference(scene, &system, &limits)?;
+    budget::check_analyses(
+        scene,
+        &specs.analyses,
+        &sp.masters,
+        ceiling,
+        &coordinates,
+        &limits,
+    )?;
 
     let others: Vec<C64> = ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
-    let specs = plan::answers(scene);
     let stage = Stage {
         scene,
         specs: &specs,
@@ -461,6 +498,7 @@ pub fn run(
         others: &others,
         coordinates: &coordinates,
         progress,
+        analysis_orders,
     };
     warnings.extend(sp.warnings.iter().cloned());
     if let Some(r) = &reduction {
@@ -479,6 +517,7 @@ pub fn run(
     let Reduced {
         expansion,
         answers,
+        analyses,
         frc,
         estimates,
         ..
@@ -585,6 +624,7 @@ pub fn run(
         warnings.extend(f.warnings.iter().cloned());
     }
     warnings.extend(untrusted_warnings(&accuracy.answers, tolerance));
+    warnings.extend(analyses.iter().flat_map(|a| a.warnings()));
     // the signals' own backbones, those decaying near the master pair's frequency
     let data_backbones = match (&reduction, answers.backbone.as_deref()) {
         (Some(r), Some([first, ..])) => r
@@ -606,7 +646,9 @@ pub fn run(
     let pairs = sc.ssm.master_pairs.get_ref();
     timing.total = t0.elapsed().as_secs_f64();
     let modal = sp.spectrum.modal_figures();
-    let outputs = result_files(&Products {
+    let analysis_summaries: Vec<(&str, serde_json::Value)> =
+        analyses.iter().map(|a| (a.name(), a.summary())).collect();
+    let mut outputs = result_files(&Products {
         coordinates: &names,
         modal: &modal,
         backbone: answers.backbone.as_deref(),
@@ -631,11 +673,17 @@ pub fn run(
             simulation: simulation.as_ref(),
             pod: pod.as_ref(),
             reference: full_frc.as_ref(),
+            analyses: &analysis_summaries,
             accuracy: &accuracy,
             warnings: &warnings,
             timing,
         },
     })?;
+    for a in &analyses {
+        for (name, contents) in a.files(&names)? {
+            outputs.add(&name, contents);
+        }
+    }
     Ok(JobResult {
         system,
         spectrum: Some(sp.spectrum),

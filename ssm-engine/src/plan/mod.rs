@@ -6,6 +6,10 @@
 //! The scene's checks against its model have run before (they name file,
 //! line and key); these conversions only drop the spans.
 
+mod analyses;
+
+pub use analyses::{analyses, key_span, needs, PlannedAnalysis};
+
 use crate::scene::{
     BackboneSection, ForcingSection, InvarianceErrorSection, SceneFile, SteadyStateSection,
     TransientSection, ValidateSection,
@@ -122,16 +126,19 @@ pub struct AnswerSpecs {
     pub frc: Option<FrcSpec>,
     /// `[validate]`.
     pub validation: Option<ValidationSpec>,
+    /// `[analysis.<name>]`: the analyses of [`crate::analyses::REGISTRY`].
+    pub analyses: Vec<PlannedAnalysis>,
 }
 
 /// Every answer `scene` asks of the reduced model, as specs.
-pub fn answers(scene: &SceneFile) -> AnswerSpecs {
+pub fn answers(scene: &SceneFile) -> Result<AnswerSpecs, crate::scene::SceneError> {
     let sc = &scene.scene;
-    AnswerSpecs {
+    Ok(AnswerSpecs {
         invariance: sc.outputs.invariance_error.as_ref().map(invariance),
         backbone: sc.outputs.backbone.as_ref().map(backbone),
         transient: sc.outputs.transient.as_ref().map(transient),
         frc: sc.forcing.as_ref().map(frc),
         validation: sc.validate.as_ref().map(validation),
-    }
+        analyses: analyses(scene)?,
+    })
 }

@@ -179,6 +179,10 @@ pub struct Scene {
     /// The full system's forced response by harmonic balance.
     #[serde(default)]
     pub reference: Option<ReferenceSection>,
+    /// Analyses added as slices, `[analysis.<name>]` (see
+    /// [`crate::analyses`]); read and checked by [`crate::plan`].
+    #[serde(default)]
+    pub analysis: std::collections::BTreeMap<String, Spanned<toml::Table>>,
 }
 
 /// `[forcing]`: forced response curves of the periodic SSM. The load's shape is

@@ -163,6 +163,7 @@ impl SceneFile {
             || sc.report.is_some()
             || sc.simulate.is_some()
             || sc.reference.is_some()
+            || !sc.analysis.is_empty()
     }
 
     pub(super) fn check_pod(&self) -> Result<(), SceneError> {

@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 use ssm_tests::repo_root;
 
 /// Folders and files of the engine that make up the core and the numerics.
-const CORE: [&str; 11] = [
+const CORE: [&str; 12] = [
+    "analyses",
     "rom",
     "ssm",
     "fom",

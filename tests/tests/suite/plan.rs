@@ -22,7 +22,7 @@ const SCENE: &str = "[model]\nplugin = \"duffing\"\n\
 fn resolved() -> plan::AnswerSpecs {
     let scene = SceneFile::parse(std::path::Path::new("scene.toml"), SCENE.to_owned())
         .expect("the scene parses");
-    plan::answers(&scene)
+    plan::answers(&scene).expect("the scene resolves")
 }
 
 #[test]

@@ -71,6 +71,38 @@ impl Limits {
     }
 }
 
+/// The work of each analysis of `[analysis]` on an SSM of the masters'
+/// pairs to `order` within `limits`; a refusal names the key that sets the
+/// size, at its line of the scene.
+pub fn check_analyses(
+    scene: &SceneFile,
+    planned: &[crate::plan::PlannedAnalysis],
+    masters: &[MasterMode],
+    order: usize,
+    outputs: &[&crate::model::system::OutputMap],
+    limits: &Limits,
+) -> Result<(), JobError> {
+    let sizes = crate::analyses::Sizes {
+        multi_indices: multi_indices(2 * masters.len().max(1), order),
+        outputs: outputs.len(),
+    };
+    for a in planned {
+        let work = crate::analyses::find(&a.name)?.work(&a.spec, &sizes)?;
+        let cost = Cost {
+            ops: work.ops,
+            bytes: work.bytes,
+        };
+        let table = scene
+            .scene
+            .analysis
+            .get(&a.name)
+            .map_or(0..0, toml::Spanned::span);
+        let span = crate::plan::key_span(scene, table, work.key);
+        ensure(scene, span, work.key, work.what, &cost, limits, work.advice)?;
+    }
+    Ok(())
+}
+
 /// The cost of one request.
 struct Cost {
     ops: f64,

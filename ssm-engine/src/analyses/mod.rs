@@ -1,0 +1,292 @@
+//! Analyses as vertical slices: each folder holds one analysis whole (its
+//! spec, its run on the core, its writer), and [`REGISTRY`] lists them, one
+//! line each. A scene asks for one with a table `[analysis.<name>]`; its
+//! spec is read from that table (or from JSON, by a study or a binding),
+//! checked, costed by the run's one gate, and run on the SSM the run chose
+//! (computed once and shared with the other answers). Its results land in
+//! `summary.json` under `analyses.<name>` and in the files its writer names.
+//!
+//! Adding an analysis: a folder with a type implementing [`Analysis`], and a
+//! line in [`REGISTRY`] (and its section in `docs/scene.md`).
+
+pub mod damping;
+
+use std::fmt::Debug;
+use std::marker::PhantomData;
+
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+
+use crate::model::system::{OutputMap, System};
+use crate::output::plot::PlotError;
+use crate::rom::accuracy::AnswerEstimate;
+use crate::spec::SpecError;
+use crate::spectrum::MasterMode;
+use crate::ssm::SsmExpansion;
+
+/// The analyses the engine offers, one line each.
+pub static REGISTRY: &[&dyn Entry] = &[&Slice::<damping::Damping>(PhantomData)];
+
+/// The analysis of `name` in [`REGISTRY`].
+pub fn find(name: &str) -> Result<&'static dyn Entry, AnalysisError> {
+    REGISTRY
+        .iter()
+        .copied()
+        .find(|e| e.name() == name)
+        .ok_or_else(|| AnalysisError::Unknown {
+            name: name.to_owned(),
+            offered: REGISTRY
+                .iter()
+                .map(|e| e.name())
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}
+
+/// What an analysis reads: the model, its master modes and the SSM at the
+/// order the run chose.
+#[derive(Debug, Clone, Copy)]
+pub struct Context<'a> {
+    /// The model.
+    pub system: &'a System,
+    /// The master modes of the SSM.
+    pub masters: &'a [MasterMode],
+    /// The SSM (shared with every other answer of the run).
+    pub ssm: &'a SsmExpansion,
+    /// The outputs of `[outputs] coordinates`.
+    pub outputs: &'a [&'a OutputMap],
+    /// The accuracy target (`[ssm] tolerance`, relative).
+    pub tolerance: f64,
+}
+
+/// What an analysis's spec is checked against before anything runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Needs {
+    /// Master pairs of the SSM.
+    pub pairs: usize,
+    /// The highest expansion order the run may compute.
+    pub max_order: usize,
+}
+
+/// The work and memory of an analysis, for the run's one gate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Work {
+    /// Floating-point operations, roughly.
+    pub ops: f64,
+    /// Bytes held at once.
+    pub bytes: f64,
+    /// The key that sets the size (relative to the analysis's table).
+    pub key: &'static str,
+    /// The request in words (e.g. "a damping curve of 1e9 points").
+    pub what: String,
+    /// How to make it smaller.
+    pub advice: &'static str,
+}
+
+/// What sizes the cost of an analysis run on an SSM.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sizes {
+    /// Multi-indices of the expansion up to its order.
+    pub multi_indices: f64,
+    /// Outputs of `[outputs] coordinates`.
+    pub outputs: usize,
+}
+
+/// One analysis: its spec, its run and its writer.
+pub trait Analysis {
+    /// `[analysis.<NAME>]`, and the key of its results in `summary.json`.
+    const NAME: &'static str;
+    /// What is asked (serde: from the scene's table or from JSON; unknown
+    /// keys are refused, defaults documented on the fields).
+    type Spec: Serialize + DeserializeOwned;
+    /// What it computed (serialized into `summary.json`).
+    type Output: Serialize + Debug + Send;
+    /// Why it failed.
+    type Error: std::error::Error + Send + Sync + 'static;
+
+    /// Checks `spec` against what the run offers.
+    fn check(spec: &Self::Spec, needs: &Needs) -> Result<(), SpecError>;
+    /// The expansion orders the spec names (the run computes at least the
+    /// highest).
+    fn orders(spec: &Self::Spec) -> Vec<usize>;
+    /// Its work and memory.
+    fn work(spec: &Self::Spec, sizes: &Sizes) -> Work;
+    /// Runs it.
+    fn run(spec: &Self::Spec, cx: &Context<'_>) -> Result<Self::Output, Self::Error>;
+    /// The error estimates of its answers (they take part in choosing the
+    /// expansion order).
+    fn estimates(output: &Self::Output) -> Vec<AnswerEstimate>;
+    /// Its warnings (e.g. an answer whose estimate exceeds the tolerance).
+    fn warnings(_output: &Self::Output) -> Vec<String> {
+        Vec::new()
+    }
+    /// Its files `(name, contents)`; `outputs` are the names of
+    /// `[outputs] coordinates`.
+    fn files(
+        output: &Self::Output,
+        outputs: &[String],
+    ) -> Result<Vec<(String, Vec<u8>)>, PlotError>;
+}
+
+/// An analysis whose spec and results are seen through JSON: what the
+/// pipeline and [`REGISTRY`] hold.
+pub trait Entry: Sync {
+    /// Its name.
+    fn name(&self) -> &'static str;
+    /// Reads `json` into its spec and checks it; the spec with every default
+    /// filled in.
+    fn spec(
+        &self,
+        json: serde_json::Value,
+        needs: &Needs,
+    ) -> Result<serde_json::Value, AnalysisError>;
+    /// The expansion orders a spec names.
+    fn orders(&self, spec: &serde_json::Value) -> Result<Vec<usize>, AnalysisError>;
+    /// The work and memory of a spec.
+    fn work(&self, spec: &serde_json::Value, sizes: &Sizes) -> Result<Work, AnalysisError>;
+    /// Runs a (read) spec.
+    fn run(
+        &self,
+        spec: &serde_json::Value,
+        cx: &Context<'_>,
+    ) -> Result<Box<dyn Finished>, AnalysisError>;
+}
+
+/// The results of an analysis, for the run's summary, accuracy and files.
+pub trait Finished: Debug + Send {
+    /// The analysis's name.
+    fn name(&self) -> &'static str;
+    /// Its results as JSON (`summary.json`, `analyses.<name>`).
+    fn summary(&self) -> serde_json::Value;
+    /// Its error estimates.
+    fn estimates(&self) -> Vec<AnswerEstimate>;
+    /// Its warnings.
+    fn warnings(&self) -> Vec<String>;
+    /// Its files.
+    fn files(&self, outputs: &[String]) -> Result<Vec<(String, Vec<u8>)>, PlotError>;
+}
+
+/// Why an analysis could not be planned or run.
+#[derive(Debug, thiserror::Error)]
+pub enum AnalysisError {
+    /// No analysis of that name.
+    #[error("no analysis named '{name}'; the engine offers: {offered}")]
+    Unknown {
+        /// The name asked for.
+        name: String,
+        /// The names offered.
+        offered: String,
+    },
+    /// The spec could not be read (a missing or mistyped key).
+    #[error("analysis '{analysis}': {message}")]
+    Unreadable {
+        /// The analysis.
+        analysis: &'static str,
+        /// The reader's message.
+        message: String,
+    },
+    /// The spec was read but asks for something the run cannot do.
+    #[error("analysis '{analysis}': {source}")]
+    Spec {
+        /// The analysis.
+        analysis: &'static str,
+        /// The key and what is wrong.
+        source: SpecError,
+    },
+    /// The analysis ran and failed.
+    #[error("analysis '{analysis}': {source}")]
+    Failed {
+        /// The analysis.
+        analysis: &'static str,
+        /// Its error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+}
+
+/// [`Entry`] for an [`Analysis`] `A`.
+struct Slice<A>(PhantomData<fn() -> A>);
+
+/// [`Finished`] for an [`Analysis`] `A`.
+struct Done<A: Analysis>(A::Output);
+
+impl<A: Analysis> Debug for Done<A> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl<A: Analysis> Slice<A> {
+    fn read(json: serde_json::Value) -> Result<A::Spec, AnalysisError> {
+        serde_json::from_value(json).map_err(|e| AnalysisError::Unreadable {
+            analysis: A::NAME,
+            message: e.to_string(),
+        })
+    }
+}
+
+impl<A: Analysis + 'static> Entry for Slice<A> {
+    fn name(&self) -> &'static str {
+        A::NAME
+    }
+
+    fn spec(
+        &self,
+        json: serde_json::Value,
+        needs: &Needs,
+    ) -> Result<serde_json::Value, AnalysisError> {
+        let spec = Self::read(json)?;
+        A::check(&spec, needs).map_err(|source| AnalysisError::Spec {
+            analysis: A::NAME,
+            source,
+        })?;
+        serde_json::to_value(&spec).map_err(|e| AnalysisError::Unreadable {
+            analysis: A::NAME,
+            message: e.to_string(),
+        })
+    }
+
+    fn orders(&self, spec: &serde_json::Value) -> Result<Vec<usize>, AnalysisError> {
+        Ok(A::orders(&Self::read(spec.clone())?))
+    }
+
+    fn work(&self, spec: &serde_json::Value, sizes: &Sizes) -> Result<Work, AnalysisError> {
+        Ok(A::work(&Self::read(spec.clone())?, sizes))
+    }
+
+    fn run(
+        &self,
+        spec: &serde_json::Value,
+        cx: &Context<'_>,
+    ) -> Result<Box<dyn Finished>, AnalysisError> {
+        let spec = Self::read(spec.clone())?;
+        let out = A::run(&spec, cx).map_err(|e| AnalysisError::Failed {
+            analysis: A::NAME,
+            source: Box::new(e),
+        })?;
+        Ok(Box::new(Done::<A>(out)))
+    }
+}
+
+impl<A: Analysis + 'static> Finished for Done<A> {
+    fn name(&self) -> &'static str {
+        A::NAME
+    }
+
+    fn summary(&self) -> serde_json::Value {
+        // plain data of numbers and strings: serializing cannot fail (a
+        // non-finite float becomes null)
+        serde_json::to_value(&self.0).unwrap_or(serde_json::Value::Null)
+    }
+
+    fn estimates(&self) -> Vec<AnswerEstimate> {
+        A::estimates(&self.0)
+    }
+
+    fn warnings(&self) -> Vec<String> {
+        A::warnings(&self.0)
+    }
+
+    fn files(&self, outputs: &[String]) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
+        A::files(&self.0, outputs)
+    }
+}
