@@ -30,92 +30,61 @@
 mod curve;
 mod write;
 
-use serde::{Deserialize, Serialize};
-
 pub use curve::{damping_curves, DampingCurve, DampingCurves, DampingError, DampingPoint};
 
 use super::{Analysis, Context, Needs, Sizes, Work};
 use crate::output::plot::PlotError;
 use crate::rom::accuracy::{percent, AnswerEstimate};
-use crate::spec::SpecError;
+use crate::spec::{BackboneSpec, SpecError};
 
 /// `[analysis.damping]`: damping curves `zeta(rho)` of the master pair, one
-/// per expansion order.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DampingSpec {
-    /// Largest polar amplitude `rho` of the curves.
-    pub rho_max: f64,
-    /// Amplitudes on each curve, uniformly in `[0, rho_max]` (default 101).
-    #[serde(default = "DampingSpec::default_points")]
-    pub points: usize,
-    /// Expansion orders, one curve each (`None`: the SSM's order).
-    #[serde(default)]
-    pub orders: Option<Vec<usize>>,
-}
+/// per expansion order, on the amplitudes of a backbone (`rho_max`,
+/// `points`, `orders`, with the backbone's defaults).
+pub type DampingSpec = BackboneSpec;
 
-impl DampingSpec {
-    /// Amplitudes on a curve when none are asked for.
-    pub const DEFAULT_POINTS: usize = 101;
-
-    fn default_points() -> usize {
-        Self::DEFAULT_POINTS
+/// Checks `spec` against `needs` (one master pair, orders the run can
+/// compute).
+pub fn check(spec: &DampingSpec, needs: &Needs) -> Result<(), SpecError> {
+    let fail = |key, problem: String| Err(SpecError { key, problem });
+    if needs.pairs != 1 {
+        return fail(
+            "analysis.damping",
+            format!(
+                "the damping curve of a master pair needs exactly one master pair, found {}",
+                needs.pairs
+            ),
+        );
     }
-
-    /// Curves up to `rho_max` with the default number of points, at the
-    /// SSM's order.
-    pub fn up_to(rho_max: f64) -> Self {
-        Self {
-            rho_max,
-            points: Self::DEFAULT_POINTS,
-            orders: None,
-        }
+    if !(spec.rho_max.is_finite() && spec.rho_max > 0.0) {
+        return fail(
+            "analysis.damping.rho_max",
+            format!("must be positive and finite, found {}", spec.rho_max),
+        );
     }
-
-    /// Checks the spec against `needs` (one master pair, orders the run can
-    /// compute).
-    pub fn check(&self, needs: &Needs) -> Result<(), SpecError> {
-        let fail = |key, problem: String| Err(SpecError { key, problem });
-        if needs.pairs != 1 {
+    if spec.points < 2 {
+        return fail(
+            "analysis.damping.points",
+            format!("must be at least 2, found {}", spec.points),
+        );
+    }
+    if let Some(orders) = &spec.orders {
+        if orders.is_empty() {
             return fail(
-                "analysis.damping",
+                "analysis.damping.orders",
+                "at least one order is needed".into(),
+            );
+        }
+        if let Some(bad) = orders.iter().find(|&&o| o < 1 || o > needs.max_order) {
+            return fail(
+                "analysis.damping.orders",
                 format!(
-                    "the damping curve of a master pair needs exactly one master pair, found {}",
-                    needs.pairs
+                    "order {bad} is outside 1..={} ([ssm] order)",
+                    needs.max_order
                 ),
             );
         }
-        if !(self.rho_max.is_finite() && self.rho_max > 0.0) {
-            return fail(
-                "analysis.damping.rho_max",
-                format!("must be positive and finite, found {}", self.rho_max),
-            );
-        }
-        if self.points < 2 {
-            return fail(
-                "analysis.damping.points",
-                format!("must be at least 2, found {}", self.points),
-            );
-        }
-        if let Some(orders) = &self.orders {
-            if orders.is_empty() {
-                return fail(
-                    "analysis.damping.orders",
-                    "at least one order is needed".into(),
-                );
-            }
-            if let Some(bad) = orders.iter().find(|&&o| o < 1 || o > needs.max_order) {
-                return fail(
-                    "analysis.damping.orders",
-                    format!(
-                        "order {bad} is outside 1..={} ([ssm] order)",
-                        needs.max_order
-                    ),
-                );
-            }
-        }
-        Ok(())
     }
+    Ok(())
 }
 
 /// The damping analysis (see the module's documentation).
@@ -129,7 +98,7 @@ impl Analysis for Damping {
     type Error = DampingError;
 
     fn check(spec: &DampingSpec, needs: &Needs) -> Result<(), SpecError> {
-        spec.check(needs)
+        check(spec, needs)
     }
 
     fn orders(spec: &DampingSpec) -> Vec<usize> {
