@@ -4,14 +4,16 @@
 //! the full-system comparisons and the speed-against-error report. Each stage
 //! returns typed results; [`crate::output`] turns them into files.
 //!
-//! Adding an analysis: its numerics in its module (returning a typed result),
-//! its scene section in [`crate::scene`], its writer in [`crate::output`], and
-//! one call in [`run`].
+//! Adding an analysis: one folder under [`crate::analyses`] holding its spec,
+//! run and writer, and one line in its registry; the scene's
+//! `[analysis.<name>]` table reaches it through the plan and the one gate,
+//! and [`run`] needs no change.
 
 pub mod budget;
 mod checks;
 mod error;
 pub mod export;
+mod full_system;
 mod pod;
 mod pod_reducer;
 mod reduce;
@@ -29,8 +31,8 @@ pub use spectral::Spectral;
 use crate::analyses::{self, Context, Finished};
 use crate::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
 use crate::compare::pod::PodStudy;
-use crate::compare::report::{report, Report, ReportInputs};
-use crate::compare::validation::{validation, Validation};
+use crate::compare::report::Report;
+use crate::compare::validation::Validation;
 use crate::continuation::Ledger;
 use crate::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
 use crate::fom::periodic::OrbitInfo;
@@ -40,11 +42,10 @@ use crate::output::summary::{Summary, Timing};
 use crate::output::{pod_only_files, result_files, OutputSet, Products};
 use crate::plan::{self, AnswerSpecs};
 use crate::reduce::Reduction;
-use crate::rom::accuracy::{percent, Accuracy, AnswerEstimate, MeasuredError, OrdersTried};
+use crate::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
 use crate::rom::autonomous::{self, BackboneCurve, InvarianceEntry, LiftedTransient};
 use crate::rom::forced_response::{forced_response, ForcedResponse};
 use crate::scene::SceneFile;
-use crate::spec::ValidationSpec;
 use crate::spectrum::{MasterMode, Spectrum};
 use crate::ssm::analysis::polar;
 use crate::ssm::{self, Dynamics, SsmExpansion, SsmOptions};
@@ -106,6 +107,32 @@ pub struct JobResult {
     pub plugins: Vec<PluginOrigin>,
     /// Files to write.
     pub outputs: OutputSet,
+}
+
+impl JobResult {
+    /// The results of a `[pod]` scene that asks for no SSM answer.
+    fn pod_only(
+        system: System,
+        pod: Option<PodStudy>,
+        warnings: Vec<String>,
+        plugins: Vec<PluginOrigin>,
+        outputs: OutputSet,
+    ) -> Self {
+        Self {
+            system,
+            spectrum: None,
+            masters: Vec::new(),
+            ssm: None,
+            pod,
+            frc: None,
+            reference: None,
+            validation: None,
+            report: None,
+            warnings,
+            plugins,
+            outputs,
+        }
+    }
 }
 
 /// The answers read off the autonomous reduced model.
@@ -226,6 +253,34 @@ impl Stage<'_> {
         })
     }
 
+    /// The SSM at the `[ssm] order` (`ceiling`), or at the order chosen by
+    /// [`Self::choose`], its answers, and the accuracy table of their
+    /// estimates; the seconds spent go into `timing`.
+    fn reduce(
+        &self,
+        ceiling: usize,
+        warnings: &mut Vec<String>,
+        timing: &mut Timing,
+    ) -> Result<(Reduced, Accuracy), JobError> {
+        let ssm = &self.scene.scene.ssm;
+        let (mut reduced, tried) = match &ssm.order {
+            Some(_) => (self.at(ceiling)?, Vec::new()),
+            None => self.choose(ceiling, warnings)?,
+        };
+        timing.ssm = reduced.ssm_s;
+        timing.results = reduced.results_s;
+        timing.frc = reduced.frc_s;
+        let accuracy = Accuracy {
+            tolerance: *ssm.tolerance.get_ref(),
+            order: reduced.expansion.order,
+            chosen: ssm.order.is_none(),
+            tried,
+            answers: std::mem::take(&mut reduced.estimates),
+            measured: Vec::new(),
+        };
+        Ok((reduced, accuracy))
+    }
+
     /// Without an `[ssm] order`: the lowest odd order from the highest the
     /// answers name (at least 3) up to `ceiling` whose answers meet the
     /// tolerance; raising stops where two orders in a row bring no better
@@ -336,38 +391,6 @@ fn estimates(
     list
 }
 
-/// The errors `[validate]` measured against the full system: the
-/// transient's and each forced response curve's against the steady states.
-fn measured_errors(v: &Validation) -> Vec<MeasuredError> {
-    let mut list: Vec<MeasuredError> = v
-        .transient
-        .iter()
-        .map(|t| MeasuredError {
-            answer: "transient",
-            order: t.order,
-            epsilon: None,
-            relative_error: Some(t.max_relative_error),
-            output: t.relative_errors[..t.n_compared]
-                .iter()
-                .enumerate()
-                .max_by(|a, b| a.1.total_cmp(b.1))
-                .map(|(k, _)| t.outputs[k].clone()),
-            against: "full_transient",
-        })
-        .collect();
-    for e in v.steady.iter().flat_map(|s| s.frc_errors.iter().flatten()) {
-        list.push(MeasuredError {
-            answer: "frc",
-            order: e.order,
-            epsilon: Some(e.epsilon),
-            relative_error: e.max_relative_error,
-            output: e.output.clone(),
-            against: "steady_state",
-        });
-    }
-    list
-}
-
 /// Loud warnings for the autonomous answers whose estimate exceeds the
 /// tolerance (forced responses warn where they are computed).
 fn untrusted_warnings(estimates: &[AnswerEstimate], tolerance: f64) -> Vec<String> {
@@ -393,26 +416,6 @@ fn untrusted_warnings(estimates: &[AnswerEstimate], tolerance: f64) -> Vec<Strin
         .collect()
 }
 
-/// The orders of the report: those of `[report]`, else the odd orders from 3
-/// up to the expansion order `max`, which is always included.
-fn report_orders(scene: &SceneFile, max: usize) -> Vec<usize> {
-    scene
-        .scene
-        .report
-        .as_ref()
-        .and_then(|r| r.orders.as_ref())
-        .map_or_else(
-            || {
-                let mut o: Vec<usize> = (1..=max).filter(|k| k % 2 == 1 && *k >= 3).collect();
-                if o.last() != Some(&max) {
-                    o.push(max);
-                }
-                o
-            },
-            |o| o.get_ref().clone(),
-        )
-}
-
 /// Runs a scene and assembles its outputs (nothing is written here).
 pub fn run(
     scene: &SceneFile,
@@ -424,14 +427,7 @@ pub fn run(
     // the scene resolved to specs first: a mistake in an analysis's table
     // is reported before any model is built
     let specs = plan::answers(scene)?;
-    let analysis_orders = specs
-        .analyses
-        .iter()
-        .map(|a| analyses::find(&a.name)?.orders(&a.spec))
-        .collect::<Result<Vec<_>, _>>()?
-        .into_iter()
-        .flatten()
-        .fold(1, usize::max);
+    let analysis_orders = highest_analysis_order(&specs)?;
     let mut timing = Timing::default();
     progress.stage("building model");
     registry.take_used();
@@ -441,35 +437,17 @@ pub fn run(
     // one gate: every request is costed against the same limits before it
     // runs ([pod] first, since it runs before the spectrum)
     let limits = budget::Limits::of_machine();
-    let pod = match (&sc.pod, &full_model) {
-        (Some(sec), Some(model)) => {
-            budget::check_pod(scene, &system, &limits)?;
-            let t = Instant::now();
-            let (study, w) = pod::pod_stage(scene, sec, model, &system, progress)?;
-            warnings.extend(w);
-            timing.pod = t.elapsed().as_secs_f64();
-            Some(study)
-        }
-        _ => None,
-    };
+    let pod = pod_study(scene, &system, full_model.as_ref(), &limits, progress)?;
+    let pod = pod.map(|(study, w, seconds)| {
+        warnings.extend(w);
+        timing.pod = seconds;
+        study
+    });
     if !scene.wants_ssm() {
         progress.stage("writing outputs");
         timing.total = t0.elapsed().as_secs_f64();
         let outputs = pod_only_files(&system, &plugins, pod.as_ref(), &warnings, timing)?;
-        return Ok(JobResult {
-            system,
-            spectrum: None,
-            masters: Vec::new(),
-            ssm: None,
-            pod,
-            frc: None,
-            reference: None,
-            validation: None,
-            report: None,
-            warnings,
-            plugins,
-            outputs,
-        });
+        return Ok(JobResult::pod_only(system, pod, warnings, plugins, outputs));
     }
     let coordinates = checks::coordinates(scene, &system)?;
 
@@ -479,7 +457,6 @@ pub fn run(
     timing.spectrum = sp.spectrum_s;
     timing.resonance_check = sp.resonance_s;
     budget::check(scene, &system, &sp.masters, ceiling, &limits)?;
-    budget::check_reference(scene, &system, &limits)?;
     budget::check_analyses(
         scene,
         &specs.analyses,
@@ -501,143 +478,36 @@ pub fn run(
         analysis_orders,
     };
     warnings.extend(sp.warnings.iter().cloned());
-    if let Some(r) = &reduction {
-        warnings.extend(
-            r.diagnostics
-                .iter()
-                .filter(|d| d.name.starts_with("warning"))
-                .map(|d| format!("reducer '{}': {}", r.reducer, d.text)),
-        );
-    }
+    warnings.extend(reduction.iter().flat_map(reducer_warnings));
     let tolerance = *sc.ssm.tolerance.get_ref();
-    let (reduced, tried) = match &sc.ssm.order {
-        Some(_) => (stage.at(ceiling)?, Vec::new()),
-        None => stage.choose(ceiling, &mut warnings)?,
-    };
+    let (reduced, mut accuracy) = stage.reduce(ceiling, &mut warnings, &mut timing)?;
     let Reduced {
         expansion,
         answers,
         analyses,
         frc,
-        estimates,
         ..
     } = reduced;
-    timing.ssm = reduced.ssm_s;
-    timing.results = reduced.results_s;
-    timing.frc = reduced.frc_s;
-    let mut accuracy = Accuracy {
-        tolerance,
-        order: expansion.order,
-        chosen: sc.ssm.order.is_none(),
-        tried,
-        answers: estimates,
-        measured: Vec::new(),
-    };
 
-    let full_frc = match &sc.reference {
-        Some(sec) => {
-            let (r, w) = reference::reference_stage(
-                scene,
-                sec,
-                &system,
-                &coordinates,
-                frc.as_ref().map(|f| (&expansion, f)),
-                tolerance,
-                progress,
-            )?;
-            warnings.extend(w);
-            timing.reference = r.seconds;
-            Some(r)
-        }
-        None => None,
-    };
-
-    let t = Instant::now();
-    let mut compared = coordinates.clone();
-    let checked = match (&sc.validate, &specs.validation) {
-        (Some(vsec), Some(vspec)) => {
-            progress.stage("full-system validation");
-            compared = checks::validation_outputs(scene, &system, vsec, &coordinates)?;
-            Some(validation(
-                &expansion,
-                &system,
-                vspec,
-                &compared,
-                &coordinates,
-                &sp.masters,
-                frc.as_ref().map(|f| f.rows.as_slice()),
-            )?)
-        }
-        _ => None,
-    };
-    accuracy.measured = checked.as_ref().map_or_else(Vec::new, measured_errors);
-    if let (Some(f), Some(r)) = (&frc, &full_frc) {
-        accuracy.measured.extend(reference::reference_errors(f, r));
-    }
-    timing.validation = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let speed = match &sc.report {
-        Some(_) => {
-            progress.stage("speed-against-error report");
-            let orders = report_orders(scene, expansion.order);
-            let inputs = ReportInputs {
-                orders: &orders,
-                masters: &sp.masters,
-                others: &others,
-                resonance_tol: *sc.ssm.resonance_tol.get_ref(),
-                outputs: &compared,
-                forcing: specs.frc.as_ref(),
-                validation: checked.as_ref(),
-                p0: checked
-                    .as_ref()
-                    .and_then(|v| v.transient.as_ref())
-                    .map(|t| t.result.p0.clone()),
-                rtol: specs
-                    .validation
-                    .as_ref()
-                    .map_or(ValidationSpec::DEFAULT_RTOL, |v| v.rtol),
-                tolerance: *sc.ssm.tolerance.get_ref(),
-                reference: full_frc.as_ref(),
-            };
-            Some(report(&system, &inputs)?)
-        }
-        None => None,
-    };
-    timing.report = t.elapsed().as_secs_f64();
-
-    let simulation = match &sc.simulate {
-        Some(sec) => {
-            progress.stage("sampling full-system runs");
-            Some(simulate::simulate(
-                scene,
-                sec,
-                &system,
-                &expansion,
-                &coordinates,
-            )?)
-        }
-        None => None,
-    };
+    let full = full_system::full_system(
+        &stage,
+        &expansion,
+        frc.as_ref(),
+        &mut accuracy,
+        &mut timing,
+        &mut warnings,
+    )?;
 
     if let Some(f) = &frc {
         warnings.extend(f.warnings.iter().cloned());
     }
     warnings.extend(untrusted_warnings(&accuracy.answers, tolerance));
     warnings.extend(analyses.iter().flat_map(|a| a.warnings()));
-    // the signals' own backbones, those decaying near the master pair's frequency
-    let data_backbones = match (&reduction, answers.backbone.as_deref()) {
-        (Some(r), Some([first, ..])) => r
-            .signals
-            .as_ref()
-            .map(|sig| {
-                let all = signal_backbones(sig, coordinates.first().map(|o| o.name.as_str()));
-                let omega0 = first.points.first().map_or(0.0, |p| p.omega);
-                near_frequency(all, omega0, 0.25)
-            })
-            .unwrap_or_default(),
-        _ => Vec::new(),
-    };
+    let data_backbones = data_backbones_near(
+        reduction.as_ref(),
+        answers.backbone.as_deref(),
+        &coordinates,
+    );
     progress.stage("writing outputs");
     let polar_form = (expansion.dynamics == Dynamics::Flow)
         .then(|| polar(&expansion).ok())
@@ -668,22 +538,18 @@ pub fn run(
             invariance: answers.invariance.as_deref(),
             rom_steps: answers.transient.as_ref().map(|t| t.steps),
             frc: frc.as_ref(),
-            validation: checked.as_ref(),
-            report: speed.as_ref(),
-            simulation: simulation.as_ref(),
+            validation: full.validation.as_ref(),
+            report: full.report.as_ref(),
+            simulation: full.simulation.as_ref(),
             pod: pod.as_ref(),
-            reference: full_frc.as_ref(),
+            reference: full.reference.as_ref(),
             analyses: &analysis_summaries,
             accuracy: &accuracy,
             warnings: &warnings,
             timing,
         },
     })?;
-    for a in &analyses {
-        for (name, contents) in a.files(&names)? {
-            outputs.add(&name, contents);
-        }
-    }
+    add_analysis_files(&mut outputs, &analyses, &names)?;
     Ok(JobResult {
         system,
         spectrum: Some(sp.spectrum),
@@ -691,13 +557,82 @@ pub fn run(
         ssm: Some(expansion),
         pod,
         frc,
-        reference: full_frc,
-        validation: checked,
-        report: speed,
+        reference: full.reference,
+        validation: full.validation,
+        report: full.report,
         warnings,
         plugins,
         outputs,
     })
+}
+
+/// The highest expansion order the analyses of `[analysis]` name (1
+/// without any).
+fn highest_analysis_order(specs: &AnswerSpecs) -> Result<usize, JobError> {
+    let mut highest = 1;
+    for a in &specs.analyses {
+        let orders = analyses::find(&a.name)?.orders(&a.spec)?;
+        highest = orders.into_iter().fold(highest, usize::max);
+    }
+    Ok(highest)
+}
+
+/// The files of the analyses of `[analysis]`, added to `out`; `names` are
+/// those of `[outputs] coordinates`.
+fn add_analysis_files(
+    out: &mut OutputSet,
+    analyses: &[Box<dyn Finished>],
+    names: &[String],
+) -> Result<(), JobError> {
+    for a in analyses {
+        for (name, contents) in a.files(names)? {
+            out.add(&name, contents);
+        }
+    }
+    Ok(())
+}
+
+/// The `[pod]` study of the plugin's `model` (costed first), its warnings
+/// and seconds.
+fn pod_study(
+    scene: &SceneFile,
+    system: &System,
+    model: Option<&ssm_api::Model>,
+    limits: &budget::Limits,
+    progress: &dyn Progress,
+) -> Result<Option<(PodStudy, Vec<String>, f64)>, JobError> {
+    let (Some(sec), Some(model)) = (&scene.scene.pod, model) else {
+        return Ok(None);
+    };
+    budget::check_pod(scene, system, limits)?;
+    let t = Instant::now();
+    let (study, w) = pod::pod_stage(scene, sec, model, system, progress)?;
+    Ok(Some((study, w, t.elapsed().as_secs_f64())))
+}
+
+/// The warnings among a reducer's diagnostics.
+fn reducer_warnings(r: &Reduction) -> Vec<String> {
+    r.diagnostics
+        .iter()
+        .filter(|d| d.name.starts_with("warning"))
+        .map(|d| format!("reducer '{}': {}", r.reducer, d.text))
+        .collect()
+}
+
+/// The `[data]` signals' own backbones (of the first output), those
+/// decaying near the frequency of the SSM's `backbone`.
+fn data_backbones_near(
+    reduction: Option<&Reduction>,
+    backbone: Option<&[BackboneCurve]>,
+    coordinates: &[&OutputMap],
+) -> Vec<DataBackbone> {
+    let (Some(sig), Some([first, ..])) = (reduction.and_then(|r| r.signals.as_ref()), backbone)
+    else {
+        return Vec::new();
+    };
+    let all = signal_backbones(sig, coordinates.first().map(|o| o.name.as_str()));
+    let omega0 = first.points.first().map_or(0.0, |p| p.omega);
+    near_frequency(all, omega0, 0.25)
 }
 
 /// The zero-crossing and Hilbert backbones of each `[data]` signal of the

@@ -151,51 +151,15 @@ pub fn reference_stage(
             warnings.extend(multiplier_warning(b, &at));
         }
     }
-    let mut amplitude = Vec::new();
-    let eps_range = sec.amplitude_range();
-    for (k, &omega) in sec.amplitude_frequencies().iter().enumerate() {
-        progress.stage(&format!(
-            "full-system amplitude response, Omega = {omega}",
-            omega = crate::number::short(omega)
-        ));
-        let settings = AmplitudeSettings {
-            omega,
-            epsilon_range: eps_range,
-            harmonics: h,
-            step: *sec.step.get_ref(),
-            tol: *sec.tol.get_ref(),
-            max_steps: *sec.max_steps.get_ref(),
-            outputs: outputs.clone(),
-            points_at: Vec::new(),
-            stability: *sec.stability.get_ref(),
-        };
-        let mut count = 0usize;
-        let mut runs = Runs::new(ledger, |o: &ReferenceOrbit| {
-            progress.reference_orbit(&names, o);
-            count += 1;
-            progress.detail(&format!(
-                "full-system amplitude response, Omega = {omega}: orbit {count}, eps = {:.4e}",
-                o.epsilon,
-                omega = crate::number::short(omega)
-            ));
-            true
-        });
-        let branch = reference_amplitude_resumable(system, &settings, k + 1, &mut runs)?;
-        samples = branch.samples;
-        let at = format!(
-            "[reference] amplitude response at Omega = {omega}",
-            omega = crate::number::short(omega)
-        );
-        warnings.extend(branch_warnings(
-            &branch,
-            &at,
-            ("eps", eps_range.1 - eps_range.0),
-            tolerance,
-        ));
-        warnings.extend(branch.notes.iter().map(|n| format!("{at}: {n}")));
-        warnings.extend(multiplier_warning(&branch, &at));
-        amplitude.push(branch);
-    }
+    let responses = AmplitudeResponses {
+        sec,
+        system,
+        outputs: &outputs,
+        names: &names,
+        tolerance,
+        progress,
+    };
+    let amplitude = responses.trace(&mut samples, &mut warnings)?;
     Ok((
         ReferenceFrc {
             outputs: names,
@@ -207,6 +171,77 @@ pub fn reference_stage(
         },
         warnings,
     ))
+}
+
+/// The amplitude responses of `[reference] amplitude_at`: what they share.
+struct AmplitudeResponses<'a> {
+    sec: &'a ReferenceSection,
+    system: &'a System,
+    outputs: &'a [OutputMap],
+    names: &'a [String],
+    tolerance: f64,
+    progress: &'a dyn Progress,
+}
+
+impl AmplitudeResponses<'_> {
+    /// One branch over `eps` per frequency of `amplitude_at`, with its
+    /// warnings; `samples` is set to the Fourier samples of the last.
+    fn trace(
+        &self,
+        samples: &mut usize,
+        warnings: &mut Vec<String>,
+    ) -> Result<Vec<ReferenceBranch>, JobError> {
+        let (sec, system, outputs, names) = (self.sec, self.system, self.outputs, self.names);
+        let (tolerance, progress) = (self.tolerance, self.progress);
+        let ledger = progress.checkpoint().unwrap_or(&NoLedger);
+        let h = *sec.harmonics.get_ref();
+        let mut amplitude = Vec::new();
+        let eps_range = sec.amplitude_range();
+        for (k, &omega) in sec.amplitude_frequencies().iter().enumerate() {
+            progress.stage(&format!(
+                "full-system amplitude response, Omega = {omega}",
+                omega = crate::number::short(omega)
+            ));
+            let settings = AmplitudeSettings {
+                omega,
+                epsilon_range: eps_range,
+                harmonics: h,
+                step: *sec.step.get_ref(),
+                tol: *sec.tol.get_ref(),
+                max_steps: *sec.max_steps.get_ref(),
+                outputs: outputs.to_vec(),
+                points_at: Vec::new(),
+                stability: *sec.stability.get_ref(),
+            };
+            let mut count = 0usize;
+            let mut runs = Runs::new(ledger, |o: &ReferenceOrbit| {
+                progress.reference_orbit(names, o);
+                count += 1;
+                progress.detail(&format!(
+                    "full-system amplitude response, Omega = {omega}: orbit {count}, eps = {:.4e}",
+                    o.epsilon,
+                    omega = crate::number::short(omega)
+                ));
+                true
+            });
+            let branch = reference_amplitude_resumable(system, &settings, k + 1, &mut runs)?;
+            *samples = branch.samples;
+            let at = format!(
+                "[reference] amplitude response at Omega = {omega}",
+                omega = crate::number::short(omega)
+            );
+            warnings.extend(branch_warnings(
+                &branch,
+                &at,
+                ("eps", eps_range.1 - eps_range.0),
+                tolerance,
+            ));
+            warnings.extend(branch.notes.iter().map(|n| format!("{at}: {n}")));
+            warnings.extend(multiplier_warning(&branch, &at));
+            amplitude.push(branch);
+        }
+        Ok(amplitude)
+    }
 }
 
 /// The warning of a branch whose multipliers' check differs by more than

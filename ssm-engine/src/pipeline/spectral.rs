@@ -73,42 +73,7 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
     };
     let dynamics = Dynamics::from(system.time);
     let (pencil_a, pencil_b) = system.spectral_pencil();
-    let mut spectrum = match spectrum::compute(pencil_a, pencil_b, &opts) {
-        // a stiff pencil (e.g. light pendulums on a heavy slider) can defeat the
-        // dense path's rank decisions; the sparse path needs only the slow modes
-        Err(e @ (SpectrumError::SingularPencil { .. } | SpectrumError::NoConvergence { .. }))
-            if opts.method.is_none() =>
-        {
-            let sparse = SpectrumOptions {
-                method: Some(Method::Sparse),
-                ..opts.clone()
-            };
-            let sp = spectrum::compute(pencil_a, pencil_b, &sparse).map_err(|_| e.clone())?;
-            warnings.push(format!(
-                "dense spectrum failed ({e}); the sparse path was used instead (set [spectrum] method = \"sparse\" to skip the attempt)"
-            ));
-            sp
-        }
-        // asked for explicitly: say whether the sparse path would have worked
-        Err(e @ (SpectrumError::SingularPencil { .. } | SpectrumError::NoConvergence { .. })) => {
-            let sparse = SpectrumOptions {
-                method: Some(Method::Sparse),
-                ..opts.clone()
-            };
-            return Err(JobError::Spectrum(
-                match spectrum::compute(pencil_a, pencil_b, &sparse) {
-                    Ok(_) => SpectrumError::DenseTooStiff {
-                        detail: match &e {
-                            SpectrumError::SingularPencil { detail } => detail.clone(),
-                            other => other.to_string(),
-                        },
-                    },
-                    Err(_) => e,
-                },
-            ));
-        }
-        r => r?,
-    };
+    let mut spectrum = compute_with_fallback(pencil_a, pencil_b, &opts, &mut warnings)?;
     if let Dynamics::Map { .. } = dynamics {
         spectrum::sort_multipliers(&mut spectrum.eigenvalues);
     }
@@ -185,26 +150,7 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
     let resonance_s = t_res.elapsed().as_secs_f64();
     warnings.extend(resonances.warnings.iter().cloned());
     if !spectrum.complete {
-        warnings.push(match coverage {
-            Some(c) if c.radius >= c.needed => format!(
-                "sparse path: the {} finite modes with |lambda - sigma| <= {:.4e} (sigma = {}) were computed; they hold every eigenvalue that the non-resonance conditions of eq. (53) up to order {order} can involve (|lambda| <= {:.4e}); the real-part conditions of eq. (57) and the spectral quotients count only them",
-                spectrum.eigenvalues.len(),
-                c.radius + opts.shift.abs(),
-                opts.shift,
-                c.needed
-            ),
-            Some(c) => format!(
-                "sparse path: the {} finite modes computed hold the eigenvalues with |lambda| <= {:.4e} only, but the non-resonance conditions of eq. (53) up to order {order} can involve |lambda| up to {:.4e}: the resonance checks and spectral quotients are incomplete; raise [spectrum] modes (or leave it out to let the engine choose) or set method = \"dense\"",
-                spectrum.eigenvalues.len(),
-                c.radius,
-                c.needed
-            ),
-            None => format!(
-                "sparse path: {} finite modes nearest sigma = {} were computed; resonance checks and spectral quotients cover only those",
-                spectrum.eigenvalues.len(),
-                opts.shift
-            ),
-        });
+        warnings.push(coverage_warning(&spectrum, coverage.as_ref(), &opts, order));
     }
     Ok(Spectral {
         spectrum,
@@ -233,6 +179,84 @@ struct Coverage {
     /// Resonances up to the expansion order involve `|lambda| <= needed`:
     /// `order max |lambda_master|` with the resonance tolerance.
     needed: f64,
+}
+
+/// The spectrum of the pencil by `opts`; without a method asked for, a
+/// dense path defeated by a stiff pencil falls back to the sparse path (with
+/// a warning); asked for explicitly, the error says whether the sparse path
+/// would have worked.
+fn compute_with_fallback(
+    pencil_a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    pencil_b: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    opts: &SpectrumOptions,
+    warnings: &mut Vec<String>,
+) -> Result<Spectrum, JobError> {
+    match spectrum::compute(pencil_a, pencil_b, opts) {
+        // a stiff pencil (e.g. light pendulums on a heavy slider) can defeat the
+        // dense path's rank decisions; the sparse path needs only the slow modes
+        Err(e @ (SpectrumError::SingularPencil { .. } | SpectrumError::NoConvergence { .. }))
+            if opts.method.is_none() =>
+        {
+            let sparse = SpectrumOptions {
+                method: Some(Method::Sparse),
+                ..opts.clone()
+            };
+            let sp = spectrum::compute(pencil_a, pencil_b, &sparse).map_err(|_| e.clone())?;
+            warnings.push(format!(
+                "dense spectrum failed ({e}); the sparse path was used instead (set [spectrum] method = \"sparse\" to skip the attempt)"
+            ));
+            Ok(sp)
+        }
+        // asked for explicitly: say whether the sparse path would have worked
+        Err(e @ (SpectrumError::SingularPencil { .. } | SpectrumError::NoConvergence { .. })) => {
+            let sparse = SpectrumOptions {
+                method: Some(Method::Sparse),
+                ..opts.clone()
+            };
+            Err(JobError::Spectrum(
+                match spectrum::compute(pencil_a, pencil_b, &sparse) {
+                    Ok(_) => SpectrumError::DenseTooStiff {
+                        detail: match &e {
+                            SpectrumError::SingularPencil { detail } => detail.clone(),
+                            other => other.to_string(),
+                        },
+                    },
+                    Err(_) => e,
+                },
+            ))
+        }
+        r => Ok(r?),
+    }
+}
+
+/// What an incomplete (sparse) spectrum covers against what the checks up
+/// to `order` need, for the warnings.
+fn coverage_warning(
+    spectrum: &Spectrum,
+    coverage: Option<&Coverage>,
+    opts: &SpectrumOptions,
+    order: usize,
+) -> String {
+    match coverage {
+        Some(c) if c.radius >= c.needed => format!(
+            "sparse path: the {} finite modes with |lambda - sigma| <= {:.4e} (sigma = {}) were computed; they hold every eigenvalue that the non-resonance conditions of eq. (53) up to order {order} can involve (|lambda| <= {:.4e}); the real-part conditions of eq. (57) and the spectral quotients count only them",
+            spectrum.eigenvalues.len(),
+            c.radius + opts.shift.abs(),
+            opts.shift,
+            c.needed
+        ),
+        Some(c) => format!(
+            "sparse path: the {} finite modes computed hold the eigenvalues with |lambda| <= {:.4e} only, but the non-resonance conditions of eq. (53) up to order {order} can involve |lambda| up to {:.4e}: the resonance checks and spectral quotients are incomplete; raise [spectrum] modes (or leave it out to let the engine choose) or set method = \"dense\"",
+            spectrum.eigenvalues.len(),
+            c.radius,
+            c.needed
+        ),
+        None => format!(
+            "sparse path: {} finite modes nearest sigma = {} were computed; resonance checks and spectral quotients cover only those",
+            spectrum.eigenvalues.len(),
+            opts.shift
+        ),
+    }
 }
 
 /// Widens a sparse spectrum until it holds every eigenvalue that the

@@ -22,7 +22,7 @@ pub use runs::{check_pod, check_pod_reducer};
 use super::error::JobError;
 use crate::model::system::System;
 use crate::number::short;
-use crate::scene::{SceneError, SceneFile, AUTO_MAX_ORDER};
+use crate::scene::{SceneError, SceneFile, ValidateSection, AUTO_MAX_ORDER};
 use crate::spectrum::{MasterMode, DENSE_LIMIT};
 use crate::ssm::Dynamics;
 
@@ -370,6 +370,7 @@ pub fn check(
     limits: &Limits,
 ) -> Result<(), JobError> {
     let sc = &scene.scene;
+    check_reference(scene, system, limits)?;
     let sizes = Sizes::of(system);
     let pairs = masters.len().max(1);
     let nvar = 2 * pairs;
@@ -468,67 +469,102 @@ pub fn check(
         check_forcing(scene, f, masters, n_idx, coords, limits)?;
     }
     if let Some(v) = &sc.validate {
-        let coords = v
-            .outputs
+        let scale = Scale {
+            n_idx,
+            nvar,
+            coords,
+        };
+        check_validate(scene, v, &sizes, &scale, &steps, &periods, limits)?;
+    }
+    Ok(())
+}
+
+/// The sizes of the SSM that costs of its answers depend on.
+#[derive(Clone, Copy)]
+struct Scale {
+    /// Multi-indices up to the expansion order.
+    n_idx: f64,
+    /// Reduced variables (twice the master pairs).
+    nvar: usize,
+    /// Outputs of `[outputs] coordinates`.
+    coords: f64,
+}
+
+/// The full-system transient and steady states of `[validate]` (`steps`
+/// and `periods` of a time span on the model).
+fn check_validate(
+    scene: &SceneFile,
+    v: &ValidateSection,
+    sizes: &Sizes,
+    scale: &Scale,
+    steps: &dyn Fn(f64) -> f64,
+    periods: &dyn Fn(f64) -> f64,
+    limits: &Limits,
+) -> Result<(), JobError> {
+    let Scale {
+        n_idx,
+        nvar,
+        coords,
+    } = *scale;
+    let coords = v
+        .outputs
+        .as_ref()
+        .map_or(coords, |o| o.get_ref().len() as f64);
+    let step = sizes.sparse_solve();
+    if let Some(t_end) = &v.t_end {
+        let n = steps(*t_end.get_ref());
+        let samples = *v.samples.get_ref() as f64;
+        // each sample: the integrator stops there (dense output at worst a
+        // step), the reduced model is lifted through W, and the distance
+        // to the SSM is a Newton projection (about ten evaluations of W
+        // and its Jacobian)
+        let per_sample = 10.0 * n_idx * sizes.states * (nvar as f64 + 1.0);
+        let cost = Cost {
+            ops: n.max(samples) * step + samples * per_sample,
+            bytes: samples * 8.0 * (3.0 * sizes.states + 4.0 * coords),
+        };
+        let (span, key) = if n * step > samples * per_sample {
+            (t_end.span(), "validate.t_end")
+        } else {
+            (v.samples.span(), "validate.samples")
+        };
+        ensure(
+            scene,
+            span,
+            key,
+            format!(
+                "the full-system transient over {:.1e} periods with {samples:.1e} samples",
+                periods(*t_end.get_ref())
+            ),
+            &cost,
+            limits,
+            "shorten [validate] t_end or take fewer samples",
+        )?;
+    }
+    if let Some(ss) = &v.steady_state {
+        let freqs = ss
+            .omega
             .as_ref()
-            .map_or(coords, |o| o.get_ref().len() as f64);
-        let step = sizes.sparse_solve();
-        if let Some(t_end) = &v.t_end {
-            let n = steps(*t_end.get_ref());
-            let samples = *v.samples.get_ref() as f64;
-            // each sample: the integrator stops there (dense output at worst a
-            // step), the reduced model is lifted through W, and the distance
-            // to the SSM is a Newton projection (about ten evaluations of W
-            // and its Jacobian)
-            let per_sample = 10.0 * n_idx * sizes.states * (nvar as f64 + 1.0);
-            let cost = Cost {
-                ops: n.max(samples) * step + samples * per_sample,
-                bytes: samples * 8.0 * (3.0 * sizes.states + 4.0 * coords),
-            };
-            let (span, key) = if n * step > samples * per_sample {
-                (t_end.span(), "validate.t_end")
-            } else {
-                (v.samples.span(), "validate.samples")
-            };
-            ensure(
-                scene,
-                span,
-                key,
-                format!(
-                    "the full-system transient over {:.1e} periods with {samples:.1e} samples",
-                    periods(*t_end.get_ref())
-                ),
-                &cost,
-                limits,
-                "shorten [validate] t_end or take fewer samples",
-            )?;
-        }
-        if let Some(ss) = &v.steady_state {
-            let freqs = ss
-                .omega
-                .as_ref()
-                .map_or(*ss.points.get_ref(), |o| o.get_ref().len()) as f64;
-            let periods =
-                *ss.max_periods.get_ref() as f64 * *ss.max_period_multiple.get_ref() as f64;
-            let per_period = STEPS_PER_PERIOD.max(*ss.samples_per_period.get_ref() as f64);
-            // frequencies run in parallel on the machine's cores
-            let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
-            let cost = Cost {
-                ops: freqs * periods * per_period * step / cores,
-                bytes: freqs * (8.0 * sizes.states * per_period + 1e3),
-            };
-            ensure(
-                scene,
-                ss.max_periods.span(),
-                "validate.steady_state.max_periods",
-                format!(
-                    "steady states at {freqs:.0} frequencies over up to {periods:.1e} periods each"
-                ),
-                &cost,
-                limits,
-                "lower max_periods (or the number of frequencies)",
-            )?;
-        }
+            .map_or(*ss.points.get_ref(), |o| o.get_ref().len()) as f64;
+        let periods = *ss.max_periods.get_ref() as f64 * *ss.max_period_multiple.get_ref() as f64;
+        let per_period = STEPS_PER_PERIOD.max(*ss.samples_per_period.get_ref() as f64);
+        // frequencies run in parallel on the machine's cores
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+        let cost = Cost {
+            ops: freqs * periods * per_period * step / cores,
+            bytes: freqs * (8.0 * sizes.states * per_period + 1e3),
+        };
+        ensure(
+            scene,
+            ss.max_periods.span(),
+            "validate.steady_state.max_periods",
+            format!(
+                "steady states at {freqs:.0} frequencies over up to {periods:.1e} periods each"
+            ),
+            &cost,
+            limits,
+            "lower max_periods (or the number of frequencies)",
+        )?;
     }
     Ok(())
 }

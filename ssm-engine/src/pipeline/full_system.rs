@@ -1,0 +1,197 @@
+//! The full system against the reduced answers: the forced response of
+//! `[reference]`, the transient and steady states of `[validate]`, the
+//! speed-against-error report of `[report]` and the sampled runs of
+//! `[simulate]`; the errors they measure join the run's accuracy table.
+
+use std::time::Instant;
+
+use super::error::JobError;
+use super::{checks, reference, simulate, Stage};
+use crate::compare::report::{report, Report, ReportInputs};
+use crate::compare::validation::{validation, Validation};
+use crate::fom::periodic::frc::ReferenceFrc;
+use crate::fom::sample::Simulation;
+use crate::output::summary::Timing;
+use crate::rom::accuracy::{Accuracy, MeasuredError};
+use crate::rom::forced_response::ForcedResponse;
+use crate::scene::SceneFile;
+use crate::spec::ValidationSpec;
+use crate::ssm::SsmExpansion;
+
+/// What the full system answered.
+pub(super) struct FullSystem {
+    /// The forced response of `[reference]`.
+    pub reference: Option<ReferenceFrc>,
+    /// The comparisons of `[validate]`.
+    pub validation: Option<Validation>,
+    /// The speed-against-error report.
+    pub report: Option<Report>,
+    /// The sampled runs of `[simulate]`.
+    pub simulation: Option<Simulation>,
+}
+
+/// The full-system stages the scene of `stage` asks for, on the reduced
+/// answers at `expansion` (its forced response `frc`); their measured errors
+/// go into `accuracy`, their seconds into `timing`.
+pub(super) fn full_system(
+    stage: &Stage<'_>,
+    expansion: &SsmExpansion,
+    frc: Option<&ForcedResponse>,
+    accuracy: &mut Accuracy,
+    timing: &mut Timing,
+    warnings: &mut Vec<String>,
+) -> Result<FullSystem, JobError> {
+    let (scene, sc, specs, system, sp) = (
+        stage.scene,
+        &stage.scene.scene,
+        stage.specs,
+        stage.system,
+        stage.sp,
+    );
+    let (coordinates, progress) = (stage.coordinates, stage.progress);
+    let tolerance = accuracy.tolerance;
+    let full_frc = match &sc.reference {
+        Some(sec) => {
+            let (r, w) = reference::reference_stage(
+                scene,
+                sec,
+                system,
+                coordinates,
+                frc.map(|f| (expansion, f)),
+                tolerance,
+                progress,
+            )?;
+            warnings.extend(w);
+            timing.reference = r.seconds;
+            Some(r)
+        }
+        None => None,
+    };
+
+    let t = Instant::now();
+    let mut compared = coordinates.to_vec();
+    let checked = match (&sc.validate, &specs.validation) {
+        (Some(vsec), Some(vspec)) => {
+            progress.stage("full-system validation");
+            compared = checks::validation_outputs(scene, system, vsec, coordinates)?;
+            Some(validation(
+                expansion,
+                system,
+                vspec,
+                &compared,
+                coordinates,
+                &sp.masters,
+                frc.map(|f| f.rows.as_slice()),
+            )?)
+        }
+        _ => None,
+    };
+    accuracy.measured = checked.as_ref().map_or_else(Vec::new, measured_errors);
+    if let (Some(f), Some(r)) = (frc, &full_frc) {
+        accuracy.measured.extend(reference::reference_errors(f, r));
+    }
+    timing.validation = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let speed = match &sc.report {
+        Some(_) => {
+            progress.stage("speed-against-error report");
+            let orders = report_orders(scene, expansion.order);
+            let inputs = ReportInputs {
+                orders: &orders,
+                masters: &sp.masters,
+                others: stage.others,
+                resonance_tol: *sc.ssm.resonance_tol.get_ref(),
+                outputs: &compared,
+                forcing: specs.frc.as_ref(),
+                validation: checked.as_ref(),
+                p0: checked
+                    .as_ref()
+                    .and_then(|v| v.transient.as_ref())
+                    .map(|t| t.result.p0.clone()),
+                rtol: specs
+                    .validation
+                    .as_ref()
+                    .map_or(ValidationSpec::DEFAULT_RTOL, |v| v.rtol),
+                tolerance: *sc.ssm.tolerance.get_ref(),
+                reference: full_frc.as_ref(),
+            };
+            Some(report(system, &inputs)?)
+        }
+        None => None,
+    };
+    timing.report = t.elapsed().as_secs_f64();
+
+    let simulation = match &sc.simulate {
+        Some(sec) => {
+            progress.stage("sampling full-system runs");
+            Some(simulate::simulate(
+                scene,
+                sec,
+                system,
+                expansion,
+                coordinates,
+            )?)
+        }
+        None => None,
+    };
+
+    Ok(FullSystem {
+        reference: full_frc,
+        validation: checked,
+        report: speed,
+        simulation,
+    })
+}
+
+/// The errors `[validate]` measured against the full system: the
+/// transient's and each forced response curve's against the steady states.
+fn measured_errors(v: &Validation) -> Vec<MeasuredError> {
+    let mut list: Vec<MeasuredError> = v
+        .transient
+        .iter()
+        .map(|t| MeasuredError {
+            answer: "transient",
+            order: t.order,
+            epsilon: None,
+            relative_error: Some(t.max_relative_error),
+            output: t.relative_errors[..t.n_compared]
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1))
+                .map(|(k, _)| t.outputs[k].clone()),
+            against: "full_transient",
+        })
+        .collect();
+    for e in v.steady.iter().flat_map(|s| s.frc_errors.iter().flatten()) {
+        list.push(MeasuredError {
+            answer: "frc",
+            order: e.order,
+            epsilon: Some(e.epsilon),
+            relative_error: e.max_relative_error,
+            output: e.output.clone(),
+            against: "steady_state",
+        });
+    }
+    list
+}
+
+/// The orders of the report: those of `[report]`, else the odd orders from 3
+/// up to the expansion order `max`, which is always included.
+fn report_orders(scene: &SceneFile, max: usize) -> Vec<usize> {
+    scene
+        .scene
+        .report
+        .as_ref()
+        .and_then(|r| r.orders.as_ref())
+        .map_or_else(
+            || {
+                let mut o: Vec<usize> = (1..=max).filter(|k| k % 2 == 1 && *k >= 3).collect();
+                if o.last() != Some(&max) {
+                    o.push(max);
+                }
+                o
+            },
+            |o| o.get_ref().clone(),
+        )
+}
