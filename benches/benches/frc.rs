@@ -10,11 +10,11 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use ssm_engine::rom::frc::{one_pair_frc, response_amplitudes, OnePair};
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum;
-use ssm_engine::ssm::analysis::{invariance_error, polar};
-use ssm_engine::ssm::forced::ForcedSsm;
+use ssm_core::rom::frc::{one_pair_frc, response_amplitudes, OnePair};
+use ssm_core::spectrum;
+use ssm_core::spectrum::Normalization;
+use ssm_core::ssm::analysis::{invariance_error, polar};
+use ssm_core::ssm::forced::ForcedSsm;
 use ssm_tests::{oscillator_with_spectrum, pendulum_with_spectrum, ssm_of};
 
 fn frc(c: &mut Criterion) {

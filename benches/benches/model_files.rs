@@ -10,7 +10,7 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use ssm_engine::model::plugin::Plugin;
+use ssm_core::model::plugin::Plugin;
 use ssm_model_files::ModelFiles;
 use ssm_tests::{plugin_path, tmp_dir};
 

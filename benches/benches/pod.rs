@@ -15,10 +15,10 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use ssm_engine::fom::hht::HhtSolution;
-use ssm_engine::model::system::System;
-use ssm_engine::reduce::pod::Truncation;
-use ssm_engine::reduce::pod_model::{pod_reduce, PodSettings};
+use ssm_core::fom::hht::HhtSolution;
+use ssm_core::model::system::System;
+use ssm_core::reduce::pod::Truncation;
+use ssm_core::reduce::pod_model::{pod_reduce, PodSettings};
 use ssm_tests::{hht_from_rest, model_and_system, pod_coordinate_error};
 
 fn hht(sys: &System, eps: f64, omega: f64, t_end: f64) -> HhtSolution {

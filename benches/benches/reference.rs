@@ -14,9 +14,9 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use ssm_engine::fom::periodic::{reference_frc, ReferenceEventKind, ReferenceSettings};
-use ssm_engine::fom::{steady_state, DaeProblem, SteadyOptions};
-use ssm_engine::model::system::{OutputMap, System};
+use ssm_core::fom::periodic::{reference_frc, ReferenceEventKind, ReferenceSettings};
+use ssm_core::fom::{steady_state, DaeProblem, SteadyOptions};
+use ssm_core::model::system::{OutputMap, System};
 use ssm_tests::{duffing_fold, forced_duffing, system};
 
 fn settings(

@@ -13,10 +13,10 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use num_complex::Complex64 as C64;
-use ssm_engine::compare::steady_state_reference;
-use ssm_engine::fom::consistent::algebraic_residual;
-use ssm_engine::fom::{consistent_initial, DaeProblem, Radau, RadauOptions, SteadyOptions};
-use ssm_engine::scene::Normalization;
+use ssm_core::compare::steady_state_reference;
+use ssm_core::fom::consistent::algebraic_residual;
+use ssm_core::fom::{consistent_initial, DaeProblem, Radau, RadauOptions, SteadyOptions};
+use ssm_core::spectrum::Normalization;
 use ssm_tests::{pendulum_with_spectrum, ssm_of};
 
 fn simulate(c: &mut Criterion) {

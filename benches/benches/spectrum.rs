@@ -7,8 +7,8 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, Method};
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, Method};
 use ssm_tests::{
     chain_eigenvalues, chain_with_sparse_spectrum, oscillator_published_eigenvalues, CHAIN_DEFAULTS,
 };

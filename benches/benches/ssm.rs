@@ -8,10 +8,10 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum;
-use ssm_engine::ssm::analysis::{invariance_error, polar};
-use ssm_engine::ssm::{self, SsmOptions};
+use ssm_core::spectrum;
+use ssm_core::spectrum::Normalization;
+use ssm_core::ssm::analysis::{invariance_error, polar};
+use ssm_core::ssm::{self, SsmOptions};
 use ssm_tests::{
     chain_with_sparse_spectrum, oscillator_published_polar, oscillator_with_spectrum,
     pendulum_with_spectrum, ssm_of, system, OSCILLATOR_CONSTRAINTS,

@@ -12,16 +12,16 @@
 //! estimate.
 
 use ssm_api::{Harmonic, MechanicalSystem, PolyVector, SparseMatrix};
+use ssm_core::fom::periodic::frc::{reference_frc, ReferenceSettings};
+use ssm_core::model::system::System;
+use ssm_core::rom::autonomous::backbone;
+use ssm_core::rom::forced_response::forced_response;
+use ssm_core::spec::{BackboneSpec, FrcSpec};
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, SpectrumOptions};
+use ssm_core::ssm::{self, SsmOptions};
 use ssm_engine::analyses::damping::{damping_curves, DampingSpec};
 use ssm_engine::analyses::Context;
-use ssm_engine::fom::periodic::frc::{reference_frc, ReferenceSettings};
-use ssm_engine::model::system::System;
-use ssm_engine::rom::autonomous::backbone;
-use ssm_engine::rom::forced_response::forced_response;
-use ssm_engine::scene::Normalization;
-use ssm_engine::spec::{BackboneSpec, FrcSpec};
-use ssm_engine::spectrum::{self, SpectrumOptions};
-use ssm_engine::ssm::{self, SsmOptions};
 
 /// Damping ratio, cubic stiffness, forcing amplitude.
 const ZETA: f64 = 0.01;

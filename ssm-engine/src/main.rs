@@ -9,15 +9,15 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use ssm_engine::continuation::Ledger;
-use ssm_engine::fom::periodic::{OrbitInfo, ReferenceOrbit};
-use ssm_engine::model::plugin::Registry;
+use ssm_core::fom::periodic::{OrbitInfo, ReferenceOrbit};
+use ssm_core::model::plugin::Registry;
 use ssm_engine::output;
 use ssm_engine::output::check_not_input;
 use ssm_engine::output::checkpoint::{create_first, Checkpoint};
 use ssm_engine::pipeline::source::scene_inputs;
 use ssm_engine::pipeline::{self, export, Progress};
 use ssm_engine::scene::{ReportSection, SceneFile};
+use ssm_kernel::continuation::Ledger;
 
 const SCENE_HELP: &str = concat!(
     "SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):\n\n",

@@ -8,11 +8,11 @@
 use std::path::{Path, PathBuf};
 
 use num_complex::Complex64 as C64;
-use ssm_engine::model::plugin::Plugin;
-use ssm_engine::model::system::System;
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, Method, Spectrum, SpectrumOptions};
-use ssm_engine::ssm::{self as ssm_mod, SsmExpansion, SsmOptions};
+use ssm_core::model::plugin::Plugin;
+use ssm_core::model::system::System;
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, Method, Spectrum, SpectrumOptions};
+use ssm_core::ssm::{self as ssm_mod, SsmExpansion, SsmOptions};
 
 /// `target/<profile>` of the running test or bench executable.
 pub fn profile_dir() -> PathBuf {
@@ -75,8 +75,8 @@ pub fn model_and_system(crate_name: &str, model: &str, params: &str) -> (ssm_api
 }
 
 /// A registry with the repository's model plugins.
-pub fn registry() -> ssm_engine::model::plugin::Registry {
-    ssm_engine::model::plugin::Registry::discover(&[
+pub fn registry() -> ssm_core::model::plugin::Registry {
+    ssm_core::model::plugin::Registry::discover(&[
         plugin_path("spatial-oscillator"),
         plugin_path("oscillator-chain"),
         plugin_path("duffing"),
@@ -587,9 +587,9 @@ pub fn hht_from_rest(
     omega: f64,
     t_end: f64,
     h: f64,
-) -> ssm_engine::fom::hht::HhtSolution {
-    use ssm_engine::fom::hht::{integrate, HhtOptions};
-    let p = ssm_engine::fom::DaeProblem::new(sys, eps, omega);
+) -> ssm_core::fom::hht::HhtSolution {
+    use ssm_core::fom::hht::{integrate, HhtOptions};
+    let p = ssm_core::fom::DaeProblem::new(sys, eps, omega);
     let z0 = vec![0.0; sys.states.len()];
     integrate(&p, &z0, 0.0, t_end, &HhtOptions::new(-0.1, h)).expect("HHT run")
 }
@@ -598,8 +598,8 @@ pub fn hht_from_rest(
 /// reduced run from the full ones, relative to the largest full position
 /// (the reduced run interpolated at the full run's step ends).
 pub fn pod_coordinate_error(
-    full: &ssm_engine::fom::hht::HhtSolution,
-    reduced: &ssm_engine::fom::hht::HhtSolution,
+    full: &ssm_core::fom::hht::HhtSolution,
+    reduced: &ssm_core::fom::hht::HhtSolution,
     u: faer::MatRef<'_, f64>,
 ) -> f64 {
     let (n, r) = (u.nrows(), u.ncols());
@@ -741,12 +741,12 @@ pub fn linear_steady_state(
 /// the branch of period `2T` switched to, and orbits also at `points_at`.
 pub fn parametric_pump_reference(
     points_at: Vec<f64>,
-) -> ssm_engine::fom::periodic::ReferenceSettings {
-    let output = |name: &str, state: usize| ssm_engine::model::system::OutputMap {
+) -> ssm_core::fom::periodic::ReferenceSettings {
+    let output = |name: &str, state: usize| ssm_core::model::system::OutputMap {
         name: name.into(),
         weights: vec![(state, 1.0)],
     };
-    ssm_engine::fom::periodic::ReferenceSettings {
+    ssm_core::fom::periodic::ReferenceSettings {
         epsilon: 1.0,
         omega_range: (1.8, 2.2),
         harmonics: 6,

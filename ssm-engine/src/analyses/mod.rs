@@ -17,12 +17,12 @@ use std::marker::PhantomData;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use crate::model::system::{OutputMap, System};
 use crate::output::plot::PlotError;
-use crate::rom::accuracy::AnswerEstimate;
-use crate::spec::SpecError;
-use crate::spectrum::MasterMode;
-use crate::ssm::SsmExpansion;
+use ssm_core::model::system::{OutputMap, System};
+use ssm_core::rom::accuracy::AnswerEstimate;
+use ssm_core::spec::SpecError;
+use ssm_core::spectrum::MasterMode;
+use ssm_core::ssm::SsmExpansion;
 
 /// The analyses the engine offers, one line each.
 pub static REGISTRY: &[&dyn Entry] = &[&Slice::<damping::Damping>(PhantomData)];

@@ -28,8 +28,8 @@ use serde::{Deserialize, Serialize};
 
 use ssm_model_files::input::{escaped, excerpt, InputError, InputFile, Limit};
 
-use crate::continuation::{crossed, Event, Ledger, Point, Step, Stop, Trace};
-use crate::fom::periodic::OrbitInfo;
+use ssm_core::fom::periodic::OrbitInfo;
+use ssm_kernel::continuation::{crossed, Event, Ledger, Point, Step, Stop, Trace};
 
 /// Version of the file's layout.
 const FORMAT: u32 = 1;

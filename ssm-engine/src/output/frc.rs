@@ -2,15 +2,15 @@
 //! reference of `[validate]` drawn in) and the summary's `frc`. They format a
 //! [`ForcedResponse`] and compute nothing.
 
-use crate::number::short;
 use serde_json::{json, Value};
+use ssm_kernel::number::short;
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
 use super::reference::reference_curves;
-use crate::compare::validation::SteadyReference;
-use crate::fom::periodic::frc::ReferenceFrc;
-use crate::rom::accuracy::percent;
-use crate::rom::forced_response::{CurveDetails, ForcedResponse};
+use ssm_core::compare::validation::SteadyReference;
+use ssm_core::fom::periodic::frc::ReferenceFrc;
+use ssm_core::rom::accuracy::percent;
+use ssm_core::rom::forced_response::{CurveDetails, ForcedResponse};
 
 /// `frc.csv`: `order,epsilon,omega,stable,branch,<out>_linf...,rho_1..rho_m,<out>_h1...`.
 pub fn frc_csv(f: &ForcedResponse) -> String {

@@ -7,8 +7,8 @@ use serde_json::{json, Value};
 use ssm_api::TimeKind;
 
 use super::summary::diagnostics_json;
-use crate::model::system::System;
-use crate::reduce::Reduction;
+use ssm_core::model::system::System;
+use ssm_core::reduce::Reduction;
 
 /// `identified.json` of the model `sys` made by `r`.
 pub fn identified_json(r: &Reduction, sys: &System) -> String {

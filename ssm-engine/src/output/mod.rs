@@ -16,16 +16,16 @@ pub mod ssm;
 pub mod summary;
 pub mod validation;
 
-use crate::compare::instantaneous::DataBackbone;
-use crate::rom::autonomous::{BackboneCurve, LiftedTransient};
-use crate::spectrum::ModalFigures;
 pub use files::{check_not_input, InputInOutput, OutputError, OutputSet, MARKER};
 use plot::PlotError;
+use ssm_core::compare::instantaneous::DataBackbone;
+use ssm_core::rom::autonomous::{BackboneCurve, LiftedTransient};
+use ssm_core::spectrum::ModalFigures;
 use summary::{pod_only_summary_json, summary_json, Summary, Timing};
 
-use crate::compare::pod::PodStudy;
-use crate::model::plugin::PluginOrigin;
-use crate::model::system::System;
+use ssm_core::compare::pod::PodStudy;
+use ssm_core::model::plugin::PluginOrigin;
+use ssm_core::model::system::System;
 
 /// `spectrum.csv`: one finite eigenvalue a row with its frequency, damping
 /// ratio and master-pair membership (`(pair, index)` of each master).

@@ -4,12 +4,12 @@
 //! `pod_povs.svg` (the POV decay), `pod_constraints.csv` and the summary's
 //! `pod`. They format a [`PodStudy`] and compute nothing.
 
-use crate::number::short;
 use serde_json::{json, Value};
+use ssm_kernel::number::short;
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
-use crate::compare::pod::{CaseRun, PodStudy, RomRun};
-use crate::reduce::pod::Truncation;
+use ssm_core::compare::pod::{CaseRun, PodStudy, RomRun};
+use ssm_core::reduce::pod::Truncation;
 
 /// One reduced model as the tables name it.
 struct RomInfo<'a> {

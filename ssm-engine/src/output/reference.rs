@@ -6,8 +6,8 @@
 use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
-use crate::continuation::Stop;
-use crate::fom::periodic::frc::{ReferenceBranch, ReferenceFrc, ReferenceOrbit};
+use ssm_core::fom::periodic::frc::{ReferenceBranch, ReferenceFrc, ReferenceOrbit};
+use ssm_kernel::continuation::Stop;
 
 /// `reference_frc.csv`: `omega,epsilon,stable,branch,period_multiple,
 /// <out>_linf...,max_multiplier,tail`, one row per orbit (`stable` and
@@ -70,7 +70,7 @@ pub fn reference_curves(r: &ReferenceFrc) -> Vec<Curve> {
         format!(
             "full system (harmonic balance, H = {}), eps = {}",
             r.harmonics,
-            crate::number::short(o.epsilon)
+            ssm_kernel::number::short(o.epsilon)
         )
     };
     curves(r, &r.branches, |o| o.omega, label)

@@ -5,7 +5,7 @@
 use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
-use crate::compare::report::{FullKind, Report};
+use ssm_core::compare::report::{FullKind, Report};
 
 fn opt(v: Option<f64>) -> String {
     v.map_or_else(String::new, |x| format!("{x:.6e}"))

@@ -3,7 +3,7 @@
 
 use serde_json::{json, Value};
 
-use crate::fom::{SampledRun, Simulation};
+use ssm_core::fom::{SampledRun, Simulation};
 
 /// File name of run `k` (0-based).
 pub fn file_name(k: usize) -> String {

@@ -5,11 +5,11 @@
 use serde_json::{json, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
-use crate::compare::instantaneous::{DataBackbone, Method};
-use crate::rom::accuracy::percent;
-use crate::rom::autonomous::{BackboneCurve, InvarianceEntry, LiftedTransient};
-use crate::ssm::analysis::Polar;
-use crate::ssm::{Dynamics, RTerm, SsmExpansion};
+use ssm_core::compare::instantaneous::{DataBackbone, Method};
+use ssm_core::rom::accuracy::percent;
+use ssm_core::rom::autonomous::{BackboneCurve, InvarianceEntry, LiftedTransient};
+use ssm_core::ssm::analysis::Polar;
+use ssm_core::ssm::{Dynamics, RTerm, SsmExpansion};
 
 /// `"ssm"`: order, dimension, resonant terms and reduced dynamics
 /// (coordinates `p1, conj p1, ...`, 1-based equation numbers).

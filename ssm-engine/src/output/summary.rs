@@ -4,20 +4,20 @@
 use serde_json::{json, Value};
 
 use super::{frc, pod, reference, report, simulation, ssm, validation};
-use crate::compare::pod::PodStudy;
-use crate::compare::report::Report;
-use crate::compare::validation::Validation;
-use crate::fom::periodic::frc::ReferenceFrc;
-use crate::fom::Simulation;
-use crate::model::plugin::PluginOrigin;
-use crate::model::system::System;
-use crate::reduce::Reduction;
-use crate::rom::accuracy::Accuracy;
-use crate::rom::autonomous::InvarianceEntry;
-use crate::rom::forced_response::ForcedResponse;
-use crate::spectrum::{MasterMode, SpectralQuotients, Spectrum};
-use crate::ssm::analysis::Polar;
-use crate::ssm::SsmExpansion;
+use ssm_core::compare::pod::PodStudy;
+use ssm_core::compare::report::Report;
+use ssm_core::compare::validation::Validation;
+use ssm_core::fom::periodic::frc::ReferenceFrc;
+use ssm_core::fom::Simulation;
+use ssm_core::model::plugin::PluginOrigin;
+use ssm_core::model::system::System;
+use ssm_core::reduce::Reduction;
+use ssm_core::rom::accuracy::Accuracy;
+use ssm_core::rom::autonomous::InvarianceEntry;
+use ssm_core::rom::forced_response::ForcedResponse;
+use ssm_core::spectrum::{MasterMode, SpectralQuotients, Spectrum};
+use ssm_core::ssm::analysis::Polar;
+use ssm_core::ssm::SsmExpansion;
 
 /// Seconds spent per stage.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

@@ -5,7 +5,7 @@
 use serde_json::{json, Map, Value};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
-use crate::compare::validation::{
+use ssm_core::compare::validation::{
     SteadyReference, TransientComparison, TransientStart, Validation,
 };
 

@@ -5,8 +5,8 @@
 use toml::Spanned;
 
 use super::error::JobError;
-use crate::model::system::{OutputMap, System};
 use crate::scene::{SceneFile, ValidateSection};
+use ssm_core::model::system::{OutputMap, System};
 
 /// The outputs of `[outputs] coordinates`, each checked to exist.
 pub fn coordinates<'a>(

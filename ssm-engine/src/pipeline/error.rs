@@ -1,18 +1,18 @@
 //! What stops a run.
 
 use super::source::SourceError;
-use crate::compare::report::ReportError;
-use crate::compare::ValidateError;
-use crate::model::plugin::PluginLoadError;
-use crate::model::system::ModelError;
 use crate::output::plot::PlotError;
 use crate::output::OutputError;
-use crate::reduce::SignalsError;
-use crate::rom::autonomous::ResultError;
-use crate::rom::forced_response::FrcError;
 use crate::scene::SceneError;
-use crate::spectrum::SpectrumError;
-use crate::ssm::SsmError;
+use ssm_core::compare::report::ReportError;
+use ssm_core::compare::ValidateError;
+use ssm_core::model::plugin::PluginLoadError;
+use ssm_core::model::system::ModelError;
+use ssm_core::reduce::SignalsError;
+use ssm_core::rom::autonomous::ResultError;
+use ssm_core::rom::forced_response::FrcError;
+use ssm_core::spectrum::SpectrumError;
+use ssm_core::ssm::SsmError;
 
 /// Anything that stops a run; each variant says where.
 #[derive(Debug, thiserror::Error)]
@@ -53,17 +53,17 @@ pub enum JobError {
         /// 1-based run.
         run: usize,
         /// What failed.
-        source: crate::fom::SimError,
+        source: ssm_core::fom::SimError,
     },
     /// The speed-against-error report failed.
     #[error(transparent)]
     Report(#[from] ReportError),
     /// The `[pod]` study failed.
     #[error("[pod] {0}")]
-    Pod(#[from] crate::compare::pod::PodStudyError),
+    Pod(#[from] ssm_core::compare::pod::PodStudyError),
     /// The `[reference]` forced response failed.
     #[error(transparent)]
-    Reference(#[from] crate::fom::periodic::ReferenceError),
+    Reference(#[from] ssm_core::fom::periodic::ReferenceError),
     /// A plot could not be drawn.
     #[error(transparent)]
     Plot(#[from] PlotError),

@@ -5,10 +5,10 @@
 use ssm_model_files::{ExportError, ModelFiles};
 
 use super::source::{build_model, SourceError};
-use crate::model::plugin::Registry;
-use crate::model::system::{ModelError, System};
 use crate::output::OutputSet;
 use crate::scene::SceneFile;
+use ssm_core::model::plugin::Registry;
+use ssm_core::model::system::{ModelError, System};
 
 /// Why a scene's model could not be exported.
 #[derive(Debug, thiserror::Error)]

@@ -7,16 +7,16 @@ use std::time::Instant;
 
 use super::error::JobError;
 use super::{checks, reference, simulate, Stage};
-use crate::compare::report::{report, Report, ReportInputs};
-use crate::compare::validation::{validation, Validation};
-use crate::fom::periodic::frc::ReferenceFrc;
-use crate::fom::sample::Simulation;
 use crate::output::summary::Timing;
-use crate::rom::accuracy::{Accuracy, MeasuredError};
-use crate::rom::forced_response::ForcedResponse;
 use crate::scene::SceneFile;
-use crate::spec::ValidationSpec;
-use crate::ssm::SsmExpansion;
+use ssm_core::compare::report::{report, Report, ReportInputs};
+use ssm_core::compare::validation::{validation, Validation};
+use ssm_core::fom::periodic::frc::ReferenceFrc;
+use ssm_core::fom::sample::Simulation;
+use ssm_core::rom::accuracy::{Accuracy, MeasuredError};
+use ssm_core::rom::forced_response::ForcedResponse;
+use ssm_core::spec::ValidationSpec;
+use ssm_core::ssm::SsmExpansion;
 
 /// What the full system answered.
 pub(super) struct FullSystem {

@@ -29,29 +29,29 @@ pub use error::JobError;
 pub use spectral::Spectral;
 
 use crate::analyses::{self, Context, Finished};
-use crate::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
-use crate::compare::pod::PodStudy;
-use crate::compare::report::Report;
-use crate::compare::validation::Validation;
-use crate::continuation::Ledger;
-use crate::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
-use crate::fom::periodic::OrbitInfo;
-use crate::model::plugin::{PluginOrigin, Registry};
-use crate::model::system::{OutputMap, System};
 use crate::output::summary::{Summary, Timing};
 use crate::output::{pod_only_files, result_files, OutputSet, Products};
 use crate::plan::{self, AnswerSpecs};
-use crate::reduce::Reduction;
-use crate::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
-use crate::rom::autonomous::{self, BackboneCurve, InvarianceEntry, LiftedTransient};
-use crate::rom::forced_response::{forced_response, ForcedResponse};
 use crate::scene::SceneFile;
-use crate::spectrum::{MasterMode, Spectrum};
-use crate::ssm::analysis::polar;
-use crate::ssm::{self, Dynamics, SsmExpansion, SsmOptions};
 use crate::C64;
 use reduce::reduce_scene;
 use source::build_model;
+use ssm_core::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
+use ssm_core::compare::pod::PodStudy;
+use ssm_core::compare::report::Report;
+use ssm_core::compare::validation::Validation;
+use ssm_core::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
+use ssm_core::fom::periodic::OrbitInfo;
+use ssm_core::model::plugin::{PluginOrigin, Registry};
+use ssm_core::model::system::{OutputMap, System};
+use ssm_core::reduce::Reduction;
+use ssm_core::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
+use ssm_core::rom::autonomous::{self, BackboneCurve, InvarianceEntry, LiftedTransient};
+use ssm_core::rom::forced_response::{forced_response, ForcedResponse};
+use ssm_core::spectrum::{MasterMode, Spectrum};
+use ssm_core::ssm::analysis::polar;
+use ssm_core::ssm::{self, Dynamics, SsmExpansion, SsmOptions};
+use ssm_kernel::continuation::Ledger;
 
 /// Stages reported to a progress display.
 pub trait Progress {

@@ -1,6 +1,6 @@
 //! The `[pod]` stage: the training run, the POD models of each truncation,
 //! the SSM models of `ssm_pairs`, and every model run on every load
-//! ([`crate::compare::pod`]).
+//! ([`ssm_core::compare::pod`]).
 
 use std::time::Instant;
 
@@ -10,15 +10,15 @@ use super::checks::named_outputs;
 use super::error::JobError;
 use super::spectral::spectral;
 use super::Progress;
-use crate::compare::pod::SsmRom;
-use crate::compare::pod::{
+use crate::scene::{load_sampling, PodRun, PodSection, SceneFile};
+use ssm_core::compare::pod::SsmRom;
+use ssm_core::compare::pod::{
     full_run, pod_case_run, pod_roms, CaseRun, LoadCase, PodStudy, StudySettings,
 };
-use crate::compare::ssm_run::ssm_case_run;
-use crate::model::system::{OutputMap, System};
-use crate::reduce::pod::Truncation;
-use crate::scene::{load_sampling, PodRun, PodSection, SceneFile};
-use crate::ssm::{self, SsmOptions};
+use ssm_core::compare::ssm_run::ssm_case_run;
+use ssm_core::model::system::{OutputMap, System};
+use ssm_core::reduce::pod::Truncation;
+use ssm_core::ssm::{self, SsmOptions};
 
 /// The outputs `[pod]` compares (its `outputs`, else `[outputs]
 /// coordinates`), each checked to exist.

@@ -8,14 +8,14 @@ use ssm_api::Diagnostic;
 
 use super::budget::{check_pod_reducer, Limits};
 use super::error::ReduceError;
-use crate::fom::hht::{integrate, HhtOptions};
-use crate::fom::{given_start, DaeProblem};
-use crate::model::system::System;
-use crate::number::short;
-use crate::reduce::pod::Truncation;
-use crate::reduce::pod_model::{pod_reduce, PodSettings};
-use crate::reduce::{lift_outputs, Reduction};
 use crate::scene::{load_sampling, ReduceSection, SceneFile};
+use ssm_core::fom::hht::{integrate, HhtOptions};
+use ssm_core::fom::{given_start, DaeProblem};
+use ssm_core::model::system::System;
+use ssm_core::reduce::pod::Truncation;
+use ssm_core::reduce::pod_model::{pod_reduce, PodSettings};
+use ssm_core::reduce::{lift_outputs, Reduction};
+use ssm_kernel::number::short;
 
 /// The reducers the engine offers itself.
 pub const ENGINE_REDUCERS: [&str; 1] = ["pod"];

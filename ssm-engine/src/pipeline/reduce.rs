@@ -4,10 +4,10 @@
 
 use super::error::ReduceError;
 use super::source::{params_toml, plugin_error, resolve, SourceError};
-use crate::model::plugin::{PluginLoadError, Registry};
-use crate::model::system::System;
-use crate::reduce::{lift_outputs, read_signals, Reduction};
 use crate::scene::{ReduceSection, SceneFile};
+use ssm_core::model::plugin::{PluginLoadError, Registry};
+use ssm_core::model::system::System;
+use ssm_core::reduce::{lift_outputs, read_signals, Reduction};
 
 /// The model the reducer of `[reduce]` makes from the full model `full`
 /// (plugin name and model of `[model]`, if any) and/or the `[data]` signals,

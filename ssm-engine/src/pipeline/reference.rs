@@ -9,20 +9,20 @@ use std::time::Instant;
 use super::checks::named_outputs;
 use super::error::JobError;
 use super::Progress;
-use crate::compare::seeds::ssm_seeds;
-use crate::compare::validation::{frc_error_at, reference_points};
-use crate::continuation::{NoLedger, Stop};
-use crate::fom::periodic::floquet::CHECK_WARNING;
-use crate::fom::periodic::frc::{ReferenceBranch, ReferenceFrc};
-use crate::fom::periodic::{
+use crate::scene::{ReferenceSection, SceneFile, MAX_REFERENCE_COEFFICIENTS};
+use ssm_core::compare::seeds::ssm_seeds;
+use ssm_core::compare::validation::{frc_error_at, reference_points};
+use ssm_core::fom::periodic::floquet::CHECK_WARNING;
+use ssm_core::fom::periodic::frc::{ReferenceBranch, ReferenceFrc};
+use ssm_core::fom::periodic::{
     reference_amplitude_resumable, reference_frc_resumable, AmplitudeSettings, ReferenceOrbit,
     ReferenceSettings, Runs,
 };
-use crate::model::system::{OutputMap, System};
-use crate::rom::accuracy::MeasuredError;
-use crate::rom::forced_response::ForcedResponse;
-use crate::scene::{ReferenceSection, SceneFile, MAX_REFERENCE_COEFFICIENTS};
-use crate::ssm::SsmExpansion;
+use ssm_core::model::system::{OutputMap, System};
+use ssm_core::rom::accuracy::MeasuredError;
+use ssm_core::rom::forced_response::ForcedResponse;
+use ssm_core::ssm::SsmExpansion;
+use ssm_kernel::continuation::{NoLedger, Stop};
 
 /// Runs `[reference]`, with seeds from the reduced model's forced response
 /// `reduced` where it starts from the SSM; returns the curves and the
@@ -87,7 +87,7 @@ pub fn reference_stage(
         };
         if sec.from_ssm(scene) && seeds.is_empty() {
             warnings.push(format!(
-                "[reference] eps = {eps}: no forced response of the reduced model at this amplitude to start from; the reference starts from rest only (add eps to [forcing] epsilon)", eps = crate::number::short(eps)
+                "[reference] eps = {eps}: no forced response of the reduced model at this amplitude to start from; the reference starts from rest only (add eps to [forcing] epsilon)", eps = ssm_kernel::number::short(eps)
             ));
         }
         let settings = ReferenceSettings {
@@ -119,14 +119,17 @@ pub fn reference_stage(
         samples = branch.samples;
         warnings.extend(branch_warnings(
             &branch,
-            &format!("[reference] eps = {eps}", eps = crate::number::short(eps)),
+            &format!(
+                "[reference] eps = {eps}",
+                eps = ssm_kernel::number::short(eps)
+            ),
             ("Omega", range.1 - range.0),
             tolerance,
         ));
         warnings.extend(branch.notes.iter().map(|n| {
             format!(
                 "[reference] eps = {eps}: a start from the reduced model was dropped: {n}",
-                eps = crate::number::short(eps)
+                eps = ssm_kernel::number::short(eps)
             )
         }));
         warnings.extend(branch.failed.iter().map(|f| {
@@ -146,7 +149,7 @@ pub fn reference_stage(
             let number = b.orbits.first().map_or(0, |o| o.branch);
             let at = format!(
                 "[reference] eps = {eps}, branch {number}",
-                eps = crate::number::short(eps)
+                eps = ssm_kernel::number::short(eps)
             );
             warnings.extend(multiplier_warning(b, &at));
         }
@@ -200,7 +203,7 @@ impl AmplitudeResponses<'_> {
         for (k, &omega) in sec.amplitude_frequencies().iter().enumerate() {
             progress.stage(&format!(
                 "full-system amplitude response, Omega = {omega}",
-                omega = crate::number::short(omega)
+                omega = ssm_kernel::number::short(omega)
             ));
             let settings = AmplitudeSettings {
                 omega,
@@ -220,7 +223,7 @@ impl AmplitudeResponses<'_> {
                 progress.detail(&format!(
                     "full-system amplitude response, Omega = {omega}: orbit {count}, eps = {:.4e}",
                     o.epsilon,
-                    omega = crate::number::short(omega)
+                    omega = ssm_kernel::number::short(omega)
                 ));
                 true
             });
@@ -228,7 +231,7 @@ impl AmplitudeResponses<'_> {
             *samples = branch.samples;
             let at = format!(
                 "[reference] amplitude response at Omega = {omega}",
-                omega = crate::number::short(omega)
+                omega = ssm_kernel::number::short(omega)
             );
             warnings.extend(branch_warnings(
                 &branch,
@@ -330,7 +333,7 @@ pub fn reference_errors(f: &ForcedResponse, r: &ReferenceFrc) -> Vec<MeasuredErr
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fom::periodic::floquet::{FloquetError, MultiplierCheck};
+    use ssm_core::fom::periodic::floquet::{FloquetError, MultiplierCheck};
 
     fn branch(check: Option<Result<MultiplierCheck, FloquetError>>) -> ReferenceBranch {
         ReferenceBranch {

@@ -6,11 +6,11 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::JobError;
-use crate::fom::{add_noise, sample_run, Integrator, RadauOptions, Simulation};
-use crate::model::system::{OutputMap, System};
-use crate::rom::autonomous::polar_point;
 use crate::scene::{SceneFile, SimulateSection};
-use crate::ssm::SsmExpansion;
+use ssm_core::fom::{add_noise, sample_run, Integrator, RadauOptions, Simulation};
+use ssm_core::model::system::{OutputMap, System};
+use ssm_core::rom::autonomous::polar_point;
+use ssm_core::ssm::SsmExpansion;
 
 /// Most sampled values per run (samples times outputs; 40 MB of doubles,
 /// some 150 MB of CSV text).

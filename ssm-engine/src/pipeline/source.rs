@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use toml::Spanned;
 
-use crate::model::plugin::{is_path, Plugin, PluginLoadError, Registry};
 use crate::scene::{line_of, ModelSection, SceneError, SceneFile};
+use ssm_core::model::plugin::{is_path, Plugin, PluginLoadError, Registry};
 
 /// Why a plugin's model could not be had.
 #[derive(Debug, thiserror::Error)]

@@ -5,14 +5,14 @@
 use std::time::Instant;
 
 use super::error::JobError;
-use crate::model::system::System;
 use crate::scene::{SceneFile, SpectrumMethod};
-use crate::spectrum::{
+use crate::C64;
+use ssm_core::model::system::System;
+use ssm_core::spectrum::{
     self, check_resonances, MasterMode, Method, ResonanceReport, Spectrum, SpectrumError,
     SpectrumOptions,
 };
-use crate::ssm::Dynamics;
-use crate::C64;
+use ssm_core::ssm::Dynamics;
 
 /// What the spectral stage found.
 #[derive(Debug, Clone)]

@@ -1,6 +1,6 @@
 //! The scene resolved to what the numerics are asked to compute: each
 //! section of a validated [`SceneFile`] becomes its span-free
-//! [`crate::spec`]. Nothing below this layer reads TOML or its spans; code
+//! [`ssm_core::spec`]. Nothing below this layer reads TOML or its spans; code
 //! that has no scene (a binding, a study, a test) builds the specs itself.
 //!
 //! The scene's checks against its model have run before (they name file,
@@ -14,7 +14,7 @@ use crate::scene::{
     BackboneSection, ForcingSection, InvarianceErrorSection, SceneFile, SteadyStateSection,
     TransientSection, ValidateSection,
 };
-use crate::spec::{
+use ssm_core::spec::{
     BackboneSpec, FrcSpec, InvarianceSpec, SteadyStart, SteadyStateSpec, TransientSpec,
     ValidationSpec, ValidationStart, ValidationTransientSpec,
 };

@@ -6,7 +6,7 @@
 //! by `ssm-engine --help` and in `docs/scenes.md`; a test keeps them equal):
 #![doc = concat!("```toml\n", include_str!("format.toml"), "```")]
 
-use crate::number::short;
+use ssm_kernel::number::short;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -14,7 +14,7 @@ use serde::Deserialize;
 use ssm_model_files::input::{self, InputError, InputFile};
 use toml::Spanned;
 
-use crate::spec::{BackboneSpec, FrcSpec, InvarianceSpec, TransientSpec};
+use ssm_core::spec::{BackboneSpec, FrcSpec, InvarianceSpec, TransientSpec};
 
 mod names;
 mod pod;
@@ -23,7 +23,6 @@ mod reference;
 mod simulate;
 mod validate;
 
-pub use crate::spectrum::Normalization;
 pub use pod::{
     load_sampling, PodRun, PodSection, MAX_POD_ROMS, MAX_POD_TESTS, MIN_STEPS_PER_PERIOD,
 };
@@ -33,6 +32,7 @@ pub use reference::{
     MAX_REFERENCE_STEPS,
 };
 pub use simulate::{SimulateRun, SimulateSection, MAX_SAMPLES};
+use ssm_core::spectrum::Normalization;
 pub use validate::{ReportSection, SteadyStateSection, ValidateSection};
 
 /// The annotated scene format, every section and key with its default: the
@@ -301,7 +301,7 @@ impl SsmSection {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum SpectrumMethod {
-    /// Dense path up to [`crate::spectrum::DENSE_LIMIT`] states, sparse above.
+    /// Dense path up to [`ssm_core::spectrum::DENSE_LIMIT`] states, sparse above.
     #[default]
     Auto,
     /// Dense eigensolver of the whole shift-inverted pencil.

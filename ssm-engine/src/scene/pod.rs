@@ -4,8 +4,8 @@
 //! HHT on the training load and on the `[[pod.test]]` loads, optionally
 //! beside SSM reduced models of the same model.
 
-use crate::number::short;
 use serde::Deserialize;
+use ssm_kernel::number::short;
 use toml::Spanned;
 
 use super::{SceneError, SceneFile, AUTO_MAX_ORDER};

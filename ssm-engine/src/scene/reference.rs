@@ -1,9 +1,9 @@
 //! `[reference]`: the full system's forced response by harmonic balance and
-//! continuation ([`crate::fom::periodic`]), the reference for the reduced
+//! continuation ([`ssm_core::fom::periodic`]), the reference for the reduced
 //! model's forced response curves.
 
-use crate::number::{list, short};
 use serde::Deserialize;
+use ssm_kernel::number::{list, short};
 use toml::Spanned;
 
 use super::{number_or_list, SceneError, SceneFile};

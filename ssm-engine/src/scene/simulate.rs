@@ -1,8 +1,8 @@
 //! `[simulate]`: sampled full-system runs written as `[data]` CSV files, the
 //! input of data-driven reducers (e.g. the NAR identifier).
 
-use crate::number::short;
 use serde::Deserialize;
+use ssm_kernel::number::short;
 use toml::Spanned;
 
 use super::{SceneError, SceneFile};

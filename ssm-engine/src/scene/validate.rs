@@ -1,12 +1,12 @@
 //! `[validate]`, `[validate.steady_state]` and `[report]`: full-system
 //! references and the speed-against-error report.
 
-use crate::number::short;
 use serde::Deserialize;
+use ssm_kernel::number::short;
 use toml::Spanned;
 
 use super::{SceneError, SceneFile};
-use crate::spec::{SteadyStateSpec, ValidationSpec, ValidationTransientSpec};
+use ssm_core::spec::{SteadyStateSpec, ValidationSpec, ValidationTransientSpec};
 
 /// `[validate]`: the full system against the reduced model.
 #[derive(Debug, Clone, Deserialize)]

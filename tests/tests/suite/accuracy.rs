@@ -3,11 +3,11 @@
 //! conservative pendulum, the transient estimate against full-system
 //! integrations, and the order the engine chooses from `[ssm] tolerance`.
 
-use ssm_engine::rom::accuracy::backbone_error;
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum;
-use ssm_engine::ssm::analysis::{amplitude, backbone_frequency, polar};
-use ssm_engine::ssm::modal_residual::ModalResidual;
+use ssm_core::rom::accuracy::backbone_error;
+use ssm_core::spectrum;
+use ssm_core::spectrum::Normalization;
+use ssm_core::ssm::analysis::{amplitude, backbone_frequency, polar};
+use ssm_core::ssm::modal_residual::ModalResidual;
 use ssm_tests::{conservative_frequency, pendulum_with_spectrum, run_scene_text, ssm_of};
 
 /// Reference: the exact frequency of the conservative pendulum at the

@@ -3,9 +3,9 @@
 //! closed form from its averaged (quadratic) equations.
 
 use num_complex::Complex64 as C64;
-use ssm_engine::rom::continuation::{LocatedKind, PolarTerm, RotatingFrame, Settings};
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum;
+use ssm_core::rom::continuation::{LocatedKind, PolarTerm, RotatingFrame, Settings};
+use ssm_core::spectrum;
+use ssm_core::spectrum::Normalization;
 use ssm_tests::{one_to_two_resonant, spectrum_options, ssm_of};
 
 /// Reference: the averaged equations of the 1:2 resonant pair with the second
@@ -148,7 +148,7 @@ fn one_to_two_branch_points_match_the_closed_form() {
     let coupled = switched
         .iter()
         .max_by(|a, b| {
-            let m = |br: &ssm_engine::rom::continuation::Branch| {
+            let m = |br: &ssm_core::rom::continuation::Branch| {
                 br.points.iter().map(|p| p.q[0].norm()).fold(0.0, f64::max)
             };
             m(a).total_cmp(&m(b))

@@ -369,7 +369,7 @@ fn simulate_samples_that_drive_the_cost_are_named() {
 /// exponent form (`{}` wrote `t_end = 1e300` as 301 digits).
 #[test]
 fn integration_errors_echo_huge_times_in_exponent_form() {
-    use ssm_engine::fom::SimError;
+    use ssm_core::fom::SimError;
     let e = SimError::TooManySteps {
         t: 2.5,
         steps: 10,

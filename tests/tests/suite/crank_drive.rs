@@ -19,10 +19,10 @@ use std::collections::BTreeSet;
 
 use faer::Mat;
 use ssm_api::MotionKind;
-use ssm_engine::fom::hht::HhtSolution;
-use ssm_engine::model::system::System;
-use ssm_engine::reduce::pod::Truncation;
-use ssm_engine::reduce::pod_model::{constraint_jacobian, pod_reduce, PodReduction, PodSettings};
+use ssm_core::fom::hht::HhtSolution;
+use ssm_core::model::system::System;
+use ssm_core::reduce::pod::Truncation;
+use ssm_core::reduce::pod_model::{constraint_jacobian, pod_reduce, PodReduction, PodSettings};
 use ssm_tests::{hht_from_rest, model_and_system, pod_coordinate_error};
 
 const STEP: f64 = 1e-3;

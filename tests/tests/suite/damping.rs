@@ -3,15 +3,15 @@
 //! against the Hilbert-transform damping of a full-system free decay; and
 //! the analysis as a scene sees it (files, summary, errors at their line).
 
+use ssm_core::compare::instantaneous::hilbert_cycles;
+use ssm_core::fom::radau::RadauOptions;
+use ssm_core::fom::sample::{sample_run, Integrator};
+use ssm_core::model::system::System;
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, MasterMode};
+use ssm_core::ssm::{self as ssm_mod, SsmExpansion, SsmOptions};
 use ssm_engine::analyses::damping::{damping_curves, DampingCurves, DampingSpec};
 use ssm_engine::analyses::Context;
-use ssm_engine::compare::instantaneous::hilbert_cycles;
-use ssm_engine::fom::radau::RadauOptions;
-use ssm_engine::fom::sample::{sample_run, Integrator};
-use ssm_engine::model::system::System;
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, MasterMode};
-use ssm_engine::ssm::{self as ssm_mod, SsmExpansion, SsmOptions};
 use ssm_tests::{run_scene_text, scene_error, system};
 
 /// The Duffing plugin's `x'' + 2 zeta w x' + w^2 x + kappa x^3 = 0`, its

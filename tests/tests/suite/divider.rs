@@ -3,8 +3,8 @@
 //! rho1 = 0 (below eq. 52), the forced response of Figs. 18-19 against full-
 //! system steady states, and the spectrum under mesh refinement.
 
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, Method};
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, Method};
 use ssm_tests::{run_zoo_in, spectrum_options, ssm_of, system};
 
 fn divider_spectrum(params: &str, modes: usize) -> Vec<num_complex::Complex64> {
@@ -265,7 +265,7 @@ fn fig22_transient_from_ic1_matches_the_full_system() {
 /// beyond which the eigenvalues lose their digits in double precision).
 #[test]
 fn more_than_4000_elements_per_beam_are_refused() {
-    let plugin = ssm_engine::model::plugin::Plugin::load(&ssm_tests::plugin_path("divider"))
+    let plugin = ssm_core::model::plugin::Plugin::load(&ssm_tests::plugin_path("divider"))
         .expect("divider plugin");
     for params in ["n1 = 4001", "n2 = 4001"] {
         let e = plugin.build_model("", params).unwrap_err().to_string();

@@ -4,13 +4,13 @@
 //! dynamics around unstable fixed points.
 
 use num_complex::Complex64 as C64;
-use ssm_engine::model::system::System;
-use ssm_engine::rom::frc::{one_pair_frc, response_amplitudes, BifurcationKind, Frc, OnePair};
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, MasterMode};
-use ssm_engine::ssm::analysis::polar;
-use ssm_engine::ssm::forced::ForcedSsm;
-use ssm_engine::ssm::SsmExpansion;
+use ssm_core::model::system::System;
+use ssm_core::rom::frc::{one_pair_frc, response_amplitudes, BifurcationKind, Frc, OnePair};
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, MasterMode};
+use ssm_core::ssm::analysis::polar;
+use ssm_core::ssm::forced::ForcedSsm;
+use ssm_core::ssm::SsmExpansion;
 use ssm_tests::{spectrum_options, ssm_of, system};
 
 const ZETA: f64 = 0.002;
@@ -263,7 +263,7 @@ fn fig6_residual_of_the_leading_order_periodic_ssm() {
             .min_by(|x, y| (x.0 - omega).abs().total_cmp(&(y.0 - omega).abs()))
             .unwrap()
             .1;
-        let worst = |na: &ssm_engine::ssm::nonautonomous::NonAutonomous| {
+        let worst = |na: &ssm_core::ssm::nonautonomous::NonAutonomous| {
             (0..200)
                 .map(|k| {
                     let phi = 2.0 * std::f64::consts::PI * k as f64 / 200.0;
@@ -353,7 +353,7 @@ fn duffing_steady_state(zeta: f64, eps: f64, omega: f64) -> f64 {
 /// 0.98; the simulation's own error is about 1e-6).
 #[test]
 fn higher_order_nonautonomous_terms_improve_the_frc() {
-    use ssm_engine::rom::frc::ForcedCoefficients;
+    use ssm_core::rom::frc::ForcedCoefficients;
     let zeta = 0.01;
     let sys = system(
         "duffing",
@@ -393,7 +393,7 @@ fn higher_order_nonautonomous_terms_improve_the_frc() {
         let k = (1..pts.len())
             .find(|&k| (pts[k - 1].omega - w) * (pts[k].omega - w) <= 0.0)
             .expect("frequency on the curve");
-        let mut amp = |q: &ssm_engine::rom::frc::FrcPoint| {
+        let mut amp = |q: &ssm_core::rom::frc::FrcPoint| {
             let x0 = forced.at(q.omega).unwrap();
             response_amplitudes(&ssm, &series, order, q, &|_, phi| {
                 eps * x0.output_at(&weights, phi)

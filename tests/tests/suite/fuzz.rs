@@ -21,10 +21,11 @@
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 use ssm_api::{ExprOp, Model};
-use ssm_engine::model::plugin::Plugin;
-use ssm_engine::model::system::System;
-use ssm_engine::spectrum::{self, Method};
-use ssm_engine::{scene::Normalization, ssm as ssm_mod};
+use ssm_core::model::plugin::Plugin;
+use ssm_core::model::system::System;
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, Method};
+use ssm_core::ssm as ssm_mod;
 use ssm_tests::{plugin_path, repo_root, run_scene_text};
 
 /// The seed when `PROPTEST_RNG_SEED` is not set.

@@ -5,7 +5,7 @@
 //! cases run forked with the time limit and seed of `fuzz.rs`.
 
 use proptest::prelude::*;
-use ssm_engine::fom::periodic::{reference_frc_resumable, ReferenceBranch, Runs};
+use ssm_core::fom::periodic::{reference_frc_resumable, ReferenceBranch, Runs};
 use ssm_engine::output::checkpoint::Checkpoint;
 
 use crate::fuzz::config_with;

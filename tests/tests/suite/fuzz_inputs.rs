@@ -450,7 +450,7 @@ proptest! {
     ) {
         let dir = case_dir("params");
         let (lib, name) = [("divider", "divider"), ("divider", "beam"), ("crank-drive", "")][model];
-        let plugin = ssm_engine::model::plugin::Plugin::load(&plugin_path(lib)).expect("plugin loads");
+        let plugin = ssm_core::model::plugin::Plugin::load(&plugin_path(lib)).expect("plugin loads");
         let info = plugin.models().expect("listing");
         let spec = info
             .iter()

@@ -6,9 +6,9 @@
 //! nonlinear index-3 model.
 
 use ssm_api::{MechanicalSystem, SparseMatrix};
-use ssm_engine::fom::hht::{integrate, HhtOptions};
-use ssm_engine::fom::{DaeProblem, Radau, RadauOptions, SimError};
-use ssm_engine::model::system::System;
+use ssm_core::fom::hht::{integrate, HhtOptions};
+use ssm_core::fom::{DaeProblem, Radau, RadauOptions, SimError};
+use ssm_core::model::system::System;
 use ssm_tests::{linear_constrained_oscillator, system};
 
 /// The undamped oscillator `x'' + w^2 x = 0` as a mechanical model.
@@ -22,9 +22,7 @@ fn undamped(w: f64) -> System {
 /// The reference end state of Radau IIA at `(rtol, atol)` from the
 /// consistent start nearest `guess` over `[0, t_end]`.
 fn radau_reference(p: &DaeProblem, guess: &[f64], t_end: f64, rtol: f64, atol: f64) -> Vec<f64> {
-    let z0 = ssm_engine::fom::consistent_initial(p, 0.0, guess)
-        .unwrap()
-        .z;
+    let z0 = ssm_core::fom::consistent_initial(p, 0.0, guess).unwrap().z;
     let opts = RadauOptions {
         rtol,
         atol,

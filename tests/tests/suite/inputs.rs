@@ -9,8 +9,8 @@ use std::process::{Command, Output, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
+use ssm_core::reduce::{read_signals, SignalsError};
 use ssm_engine::output::checkpoint::{Checkpoint, CheckpointError};
-use ssm_engine::reduce::{read_signals, SignalsError};
 use ssm_engine::scene::{SceneError, SceneFile};
 use ssm_model_files::input::{InputError, EXCERPT_CHARS};
 use ssm_model_files::{FileError, ModelFiles};

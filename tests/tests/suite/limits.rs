@@ -6,8 +6,8 @@
 //! error estimate checked against the accuracy target.
 
 use ssm_api::VarPower;
-use ssm_engine::model::system::{ModelError, System, MAX_DEGREE};
-use ssm_engine::rom::forced_response::CurveDetails;
+use ssm_core::model::system::{ModelError, System, MAX_DEGREE};
+use ssm_core::rom::forced_response::CurveDetails;
 use ssm_tests::{cubic_map_model, repo_root, run_scene_text, scene_error};
 
 const OSCILLATOR: &str =

@@ -10,12 +10,12 @@ use std::path::Path;
 use std::process::Command;
 
 use num_complex::Complex64 as C64;
-use ssm_engine::model::plugin::Plugin;
-use ssm_engine::model::system::System;
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, Method, Spectrum};
-use ssm_engine::ssm::analysis::polar;
-use ssm_engine::ssm::SsmExpansion;
+use ssm_core::model::plugin::Plugin;
+use ssm_core::model::system::System;
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, Method, Spectrum};
+use ssm_core::ssm::analysis::polar;
+use ssm_core::ssm::SsmExpansion;
 use ssm_tests::{engine_binary, plugin_path, repo_root, spectrum_options, ssm_of, system, tmp_dir};
 
 /// The model of the folder `dir`, built by the plugin `matrix-model`.

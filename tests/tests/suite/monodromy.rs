@@ -5,11 +5,11 @@
 //! model with a gauge.
 
 use num_complex::Complex64 as C64;
-use ssm_engine::continuation::{solve_at_parameter, Settings};
-use ssm_engine::fom::periodic::floquet::floquet;
-use ssm_engine::fom::periodic::monodromy::floquet_by_monodromy;
-use ssm_engine::fom::periodic::HarmonicBalance;
-use ssm_engine::model::system::System;
+use ssm_core::fom::periodic::floquet::floquet;
+use ssm_core::fom::periodic::monodromy::floquet_by_monodromy;
+use ssm_core::fom::periodic::HarmonicBalance;
+use ssm_core::model::system::System;
+use ssm_kernel::continuation::{solve_at_parameter, Settings};
 use ssm_tests::{duffing_orbits, forced_duffing};
 
 /// The orbits of `hb` at the frequencies `omegas` in turn, each by Newton
@@ -182,7 +182,7 @@ fn above(m: &[C64], floor: f64) -> Vec<C64> {
 /// 15's branch is stable there).
 #[test]
 fn chain_dominant_multipliers_are_the_monodromy_matrix_ones() {
-    use ssm_engine::fom::periodic::monodromy::{check_multipliers, default_steps, PeriodSteps};
+    use ssm_core::fom::periodic::monodromy::{check_multipliers, default_steps, PeriodSteps};
     let sys = ssm_tests::system("pendulum", "chain", "");
     let mut hb = HarmonicBalance::new(&sys, 0.6, 9, 1).expect("setup");
     let omegas = [1.8, 1.85, 1.9, 1.95, 2.0, 2.05];

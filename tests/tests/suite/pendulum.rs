@@ -4,11 +4,11 @@
 //! pendulum; invariance errors and resonant terms of the slider and the chain.
 
 use num_complex::Complex64 as C64;
-use ssm_engine::model::system::System;
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, Method, Spectrum};
-use ssm_engine::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar};
-use ssm_engine::ssm::SsmExpansion;
+use ssm_core::model::system::System;
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, Method, Spectrum};
+use ssm_core::ssm::analysis::{amplitude, backbone_frequency, invariance_error, polar};
+use ssm_core::ssm::SsmExpansion;
 use ssm_tests::{conservative_frequency, spectrum_options, ssm_of, system};
 
 fn pendulum(model: &str, params: &str) -> System {

@@ -2,12 +2,12 @@
 //! against closed forms and independent time integration.
 
 use num_complex::Complex64 as C64;
-use ssm_engine::continuation::{solve_at_parameter, Settings};
-use ssm_engine::fom::periodic::{
+use ssm_core::fom::periodic::{
     floquet::floquet, reference_frc, HarmonicBalance, ReferenceBranch, ReferenceEventKind,
     ReferenceSettings,
 };
-use ssm_engine::model::system::OutputMap;
+use ssm_core::model::system::OutputMap;
+use ssm_kernel::continuation::{solve_at_parameter, Settings};
 use ssm_tests::{duffing_fold, forced_duffing, linear_steady_state};
 
 /// The orbit of `hb` at fixed `omega` by Newton from the coefficients `c`.
@@ -520,7 +520,7 @@ coordinates = ["x1"]
 /// errors, at once.
 #[test]
 fn reference_of_an_unforced_model_or_a_map_is_refused() {
-    use ssm_engine::fom::periodic::ReferenceError;
+    use ssm_core::fom::periodic::ReferenceError;
     let settings = duffing_settings(3);
     let free = ssm_tests::one_to_two_resonant(0.01);
     let e = reference_frc(&free, &settings, |_| true).unwrap_err();
@@ -549,7 +549,7 @@ fn reference_of_an_unforced_model_or_a_map_is_refused() {
 /// above 200 states), as the convergence of the integrations says.
 #[test]
 fn chain_reference_agrees_with_steady_states_by_integration() {
-    use ssm_engine::fom::{steady_state, DaeProblem, SteadyOptions};
+    use ssm_core::fom::{steady_state, DaeProblem, SteadyOptions};
     let sys = ssm_tests::system("pendulum", "chain", "");
     let outputs: Vec<OutputMap> = ["phi_n", "x1"]
         .iter()
@@ -737,7 +737,7 @@ fn period_doublings_of_a_parametric_pump_and_the_doubled_branch() {
     assert_eq!(b.doubled.len(), 1, "one branch joins the two doublings");
     assert_eq!(
         b.doubled[0].stop,
-        ssm_engine::continuation::Stop::Bound,
+        ssm_kernel::continuation::Stop::Bound,
         "it rejoins"
     );
     let d = &b.doubled[0];

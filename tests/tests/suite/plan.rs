@@ -1,13 +1,13 @@
 //! The plan layer: a scene's sections resolve to the span-free specs of
-//! `ssm_engine::spec`, whose JSON form takes the same documented defaults
+//! `ssm_core::spec`, whose JSON form takes the same documented defaults
 //! (one source for each default) and survives a round trip.
 
-use ssm_engine::plan;
-use ssm_engine::scene::SceneFile;
-use ssm_engine::spec::{
+use ssm_core::spec::{
     BackboneSpec, FrcSpec, InvarianceSpec, SteadyStart, SteadyStateSpec, TransientSpec,
     ValidationSpec, ValidationStart,
 };
+use ssm_engine::plan;
+use ssm_engine::scene::SceneFile;
 
 /// A scene that asks every answer with only the keys it must give.
 const SCENE: &str = "[model]\nplugin = \"duffing\"\n\
@@ -100,16 +100,16 @@ fn unknown_spec_fields_are_refused() {
 /// order above the SSM's and a negative `rho_max` were ignored).
 #[test]
 fn hand_built_frc_specs_are_checked_like_scenes() {
-    use ssm_engine::rom::forced_response::{forced_response, FrcError};
+    use ssm_core::rom::forced_response::{forced_response, FrcError};
     let sys = ssm_tests::system("duffing", "", "");
-    let sp = ssm_engine::spectrum::compute(
+    let sp = ssm_core::spectrum::compute(
         sys.a.as_ref(),
         sys.b.as_ref(),
         &ssm_tests::spectrum_options(None, 0),
     )
     .expect("spectrum");
     let masters =
-        ssm_engine::spectrum::master_modes(&sys, &sp, &[1], Default::default()).expect("masters");
+        ssm_core::spectrum::master_modes(&sys, &sp, &[1], Default::default()).expect("masters");
     let ssm = ssm_tests::ssm_of(&sys, &sp, &[1], 3, Default::default());
     let x = sys.output("x").expect("output x").clone();
     let base = FrcSpec::new(vec![0.01], [0.9, 1.1]);

@@ -2,7 +2,7 @@
 //! in one process, version refusal, panics and errors reported with names.
 
 use ssm_api::ErrorKind;
-use ssm_engine::model::plugin::{Plugin, PluginLoadError};
+use ssm_core::model::plugin::{Plugin, PluginLoadError};
 use ssm_tests::plugin_path;
 
 #[test]

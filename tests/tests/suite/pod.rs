@@ -5,10 +5,10 @@
 
 use faer::Mat;
 use ssm_api::{Constraints, MechanicalSystem, PolyVector, SparseMatrix};
-use ssm_engine::fom::hht::{integrate, HhtOptions};
-use ssm_engine::fom::DaeProblem;
-use ssm_engine::model::system::System;
-use ssm_engine::reduce::pod::{
+use ssm_core::fom::hht::{integrate, HhtOptions};
+use ssm_core::fom::DaeProblem;
+use ssm_core::model::system::System;
+use ssm_core::reduce::pod::{
     global_projection, pod, reduce_constraints, residual_term, PodError, Truncation,
 };
 
@@ -158,7 +158,7 @@ fn bad_snapshots_and_settings_are_refused() {
 #[test]
 fn galerkin_projection_equals_projected_evaluation() {
     use ssm_api::MotionKind;
-    use ssm_engine::reduce::galerkin::{project_mechanical, ReducedCoordinates};
+    use ssm_core::reduce::galerkin::{project_mechanical, ReducedCoordinates};
     let (raw, sys) =
         ssm_tests::model_and_system("spatial-oscillator", "", "constraint = \"cubic\"");
     // orthonormal columns (1, 2, 2)/3 and (2, 1, -2)/3
@@ -213,7 +213,7 @@ fn galerkin_projection_equals_projected_evaluation() {
 #[test]
 fn galerkin_projection_refuses_bad_bases() {
     use ssm_api::MotionKind;
-    use ssm_engine::reduce::galerkin::{project_mechanical, GalerkinError, ReducedCoordinates};
+    use ssm_core::reduce::galerkin::{project_mechanical, GalerkinError, ReducedCoordinates};
     let (sys, _) = ssm_tests::model_and_system("spatial-oscillator", "", "constraint = \"cubic\"");
     let coords = |r: usize| ReducedCoordinates {
         names: (0..r).map(|k| format!("c{k}")).collect(),
@@ -270,7 +270,7 @@ fn galerkin_projection_refuses_bad_bases() {
 #[test]
 fn galerkin_projection_keeps_expressions_and_the_equilibrium() {
     use ssm_api::MotionKind;
-    use ssm_engine::reduce::galerkin::{project_mechanical, ReducedCoordinates};
+    use ssm_core::reduce::galerkin::{project_mechanical, ReducedCoordinates};
     let (raw, full) = ssm_tests::model_and_system("pendulum", "chain", "n = 4");
     let (n, nc) = (11, 7);
     assert_eq!(raw.states.len(), 2 * n + nc);

@@ -15,10 +15,10 @@
 //! Reference: the full HHT run (alpha = -0.1, the same fixed steps), from
 //! rest, on the training load and on a load not used for training.
 
-use ssm_engine::fom::hht::HhtSolution;
-use ssm_engine::model::system::System;
-use ssm_engine::reduce::pod::Truncation;
-use ssm_engine::reduce::pod_model::{pod_reduce, PodReduceError, PodSettings};
+use ssm_core::fom::hht::HhtSolution;
+use ssm_core::model::system::System;
+use ssm_core::reduce::pod::Truncation;
+use ssm_core::reduce::pod_model::{pod_reduce, PodReduceError, PodSettings};
 use ssm_tests::{hht_from_rest, model_and_system, pod_coordinate_error};
 
 const STEP: f64 = 0.01;
@@ -48,7 +48,7 @@ fn chain_pod_error_falls_with_the_truncation() {
     let check = run(&full, 1.85);
     let mut errors = Vec::new();
     let nnz = |s: &System| {
-        ssm_engine::fom::DaeProblem::new(s, EPS, 2.0)
+        ssm_core::fom::DaeProblem::new(s, EPS, 2.0)
             .pattern()
             .row_idx()
             .len()

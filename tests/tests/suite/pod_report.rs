@@ -11,8 +11,8 @@
 
 use std::path::Path;
 
-use ssm_engine::fom::{DaeProblem, Radau, RadauOptions};
-use ssm_engine::model::system::{OutputMap, System};
+use ssm_core::fom::{DaeProblem, Radau, RadauOptions};
+use ssm_core::model::system::{OutputMap, System};
 use ssm_tests::{hht_from_rest, model_and_system, run_zoo_in, scene_error};
 
 /// A CSV file: its header and its rows of fields.

@@ -6,12 +6,12 @@
 
 use ssm_api::{Constraints, Equilibrium, Expr, MechanicalSystem, SparseMatrix};
 
-use ssm_engine::model::recast::{AuxKind, RecastError};
-use ssm_engine::model::system::{ModelError, System};
-use ssm_engine::poly::eval_poly;
-use ssm_engine::spectrum::dense::finite_eigenvalues;
-use ssm_engine::spectrum::modes::spmv;
+use ssm_core::model::recast::{AuxKind, RecastError};
+use ssm_core::model::system::{ModelError, System};
+use ssm_core::spectrum::dense::finite_eigenvalues;
+use ssm_core::spectrum::modes::spmv;
 use ssm_engine::C64;
+use ssm_kernel::poly::eval_poly;
 
 /// Two dofs and one constraint using every supported function, nested ones
 /// and a velocity inside a reciprocal; every term vanishes at the origin.

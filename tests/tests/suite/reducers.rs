@@ -5,10 +5,10 @@
 //! refused; `[data]` files are read with typed errors.
 
 use ssm_api::{ErrorKind, Model, StateKind};
-use ssm_engine::model::plugin::{Plugin, PluginLoadError};
-use ssm_engine::model::system::{ModelError, System};
+use ssm_core::model::plugin::{Plugin, PluginLoadError};
+use ssm_core::model::system::{ModelError, System};
+use ssm_core::reduce::{read_signals, SignalsError};
 use ssm_engine::pipeline::JobError;
-use ssm_engine::reduce::{read_signals, SignalsError};
 use ssm_engine::C64;
 use ssm_tests::{oscillator_with_spectrum, plugin_path, run_scene_text, spectrum_options, tmp_dir};
 
@@ -172,8 +172,8 @@ fn declared_layout_in_another_order_is_read_correctly() {
     let opts = spectrum_options(None, 6);
     let (a0, b0) = reference.spectral_pencil();
     let (a1, b1) = sys.spectral_pencil();
-    let s0 = ssm_engine::spectrum::compute(a0, b0, &opts).unwrap();
-    let s1 = ssm_engine::spectrum::compute(a1, b1, &opts).unwrap();
+    let s0 = ssm_core::spectrum::compute(a0, b0, &opts).unwrap();
+    let s1 = ssm_core::spectrum::compute(a1, b1, &opts).unwrap();
     assert_eq!(s0.eigenvalues.len(), 4);
     assert_eq!(s0.eigenvalues.len(), s1.eigenvalues.len());
     for (x, y) in s0.eigenvalues.iter().zip(&s1.eigenvalues) {

@@ -3,12 +3,12 @@
 //! rest cannot reach inside the range, and amplitude responses (continuation
 //! in `eps` at a fixed `Omega`).
 
-use ssm_engine::continuation::Stop;
-use ssm_engine::fom::periodic::{
+use ssm_core::fom::periodic::{
     reference_amplitude, reference_frc, AmplitudeSettings, ReferenceError, ReferenceEventKind,
     ReferenceSettings, Seed,
 };
-use ssm_engine::model::system::OutputMap;
+use ssm_core::model::system::OutputMap;
+use ssm_kernel::continuation::Stop;
 use ssm_tests::{duffing_fold, duffing_orbits, forced_duffing};
 
 const ZETA: f64 = 0.005;

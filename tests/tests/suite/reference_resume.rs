@@ -4,10 +4,10 @@
 
 use std::path::{Path, PathBuf};
 
-use ssm_engine::fom::periodic::{
+use ssm_core::fom::periodic::{
     reference_frc_resumable, ReferenceBranch, ReferenceError, ReferenceSettings, Runs, Seed,
 };
-use ssm_engine::model::system::{OutputMap, System};
+use ssm_core::model::system::{OutputMap, System};
 use ssm_engine::output::checkpoint::{Checkpoint, CheckpointError};
 use ssm_model_files::input::InputError;
 use ssm_tests::{duffing_orbits, forced_duffing, parametric_pump};

@@ -4,8 +4,8 @@
 
 use std::process::{Command, Stdio};
 
+use ssm_core::rom::forced_response::FrcError;
 use ssm_engine::pipeline::JobError;
-use ssm_engine::rom::forced_response::FrcError;
 use ssm_tests::{engine_binary, run_scene_text, scene_error};
 
 fn duffing_frc(zeta: &str, epsilon: &str) -> String {
@@ -166,7 +166,7 @@ fn parameter_errors_name_their_line_in_nested_and_inline_tables() {
 /// state or output name is refused at the model boundary, naming the name.
 #[test]
 fn names_that_would_break_csv_columns_are_refused() {
-    use ssm_engine::model::system::{ModelError, System};
+    use ssm_core::model::system::{ModelError, System};
     for bad in ["x,y", "say \"x\"", "x\ny", " "] {
         let mut m = ssm_tests::cubic_map_model();
         m.outputs[1].name = bad.into();

@@ -12,12 +12,9 @@ use ssm_tests::{run_scene_text, spectrum_options, system};
 fn spectrum_matches_the_closed_form() {
     for (c, k0) in [(0.003f64, 1.0f64), (0.2, 2.5)] {
         let sys = system("shaw-pierre", "", &format!("c = {c}\nk0 = {k0}"));
-        let sp = ssm_engine::spectrum::compute(
-            sys.a.as_ref(),
-            sys.b.as_ref(),
-            &spectrum_options(None, 0),
-        )
-        .unwrap();
+        let sp =
+            ssm_core::spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &spectrum_options(None, 0))
+                .unwrap();
         let upper = ssm_tests::upper_half(&sp.eigenvalues);
         let exact = [
             C64::new(-c / 2.0, (k0 * (1.0 - c * c / (4.0 * k0))).sqrt()),

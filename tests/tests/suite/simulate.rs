@@ -2,7 +2,7 @@
 //! closed-form solutions, an independently integrated minimal-coordinate ODE,
 //! conservation of energy, and constraint residuals over long runs.
 
-use ssm_engine::fom::{consistent_initial, DaeProblem, Radau, RadauOptions};
+use ssm_core::fom::{consistent_initial, DaeProblem, Radau, RadauOptions};
 use ssm_tests::{linear_constrained_oscillator, system};
 
 /// Integrates to `t_end` with a fixed step and returns the final state.
@@ -190,9 +190,9 @@ fn conservative_pendulum_keeps_its_energy_over_100_periods() {
 #[test]
 fn trajectory_started_on_the_o13_oscillator_ssm_stays_on_it() {
     use num_complex::Complex64 as C64;
-    use ssm_engine::compare::{transient, TransientSettings};
-    use ssm_engine::scene::Normalization;
-    use ssm_engine::ssm::analysis::invariance_error;
+    use ssm_core::compare::{transient, TransientSettings};
+    use ssm_core::spectrum::Normalization;
+    use ssm_core::ssm::analysis::invariance_error;
     use ssm_tests::{oscillator_with_spectrum, ssm_of};
     // Fig. 4: rho0 = 0.35 (0.24 spherical), theta0 = 0.5, in the published
     // normalization (eigenvector 2-norm 0.8306)
@@ -248,7 +248,7 @@ fn trajectory_started_on_the_o13_oscillator_ssm_stays_on_it() {
 
 #[test]
 fn chain_constraints_hold_over_100_periods_from_given_displacements() {
-    use ssm_engine::fom::consistent::algebraic_residual;
+    use ssm_core::fom::consistent::algebraic_residual;
     let sys = system("pendulum", "chain", "");
     let p = DaeProblem::new(&sys, 0.0, 0.0);
     // given displacements: the whole chain moved sideways by 0.3 (consistent)
@@ -305,8 +305,8 @@ fn chain_constraints_hold_over_100_periods_from_given_displacements() {
 #[test]
 fn bad_inputs_give_errors_naming_time_and_cause() {
     use ssm_api::{Constraints, MechanicalSystem, PolyVector, SparseMatrix};
-    use ssm_engine::fom::SimError;
-    use ssm_engine::model::system::System;
+    use ssm_core::fom::SimError;
+    use ssm_core::model::system::System;
     use ssm_tests::oscillator_with_spectrum;
     // 1. an initial point the constraints cannot be evaluated at
     let (sys, _) = oscillator_with_spectrum("cubic");
@@ -379,7 +379,7 @@ fn bad_inputs_give_errors_naming_time_and_cause() {
 /// tongue, `x1` decays and the response has period T.
 #[test]
 fn period_doubled_steady_state_is_found_with_period_multiples() {
-    use ssm_engine::fom::{steady_state, SimError, SteadyOptions};
+    use ssm_core::fom::{steady_state, SimError, SteadyOptions};
     use ssm_tests::one_to_two_forced;
     let sys = one_to_two_forced(0.02, 1.0);
     let outs = [sys.output("x1").unwrap(), sys.output("x2").unwrap()];

@@ -1,9 +1,9 @@
 //! Spectrum of the pencil against published and closed-form references.
 
 use num_complex::Complex64 as C64;
-use ssm_engine::model::system::System;
-use ssm_engine::scene::Normalization;
-use ssm_engine::spectrum::{self, Method};
+use ssm_core::model::system::System;
+use ssm_core::spectrum::Normalization;
+use ssm_core::spectrum::{self, Method};
 use ssm_tests::{chain_eigenvalues, oscillator_published_eigenvalues, system, CHAIN_DEFAULTS};
 
 use ssm_tests::spectrum_options as opts;
@@ -71,7 +71,7 @@ fn master_modes_are_normalized_eigenvectors() {
 }
 
 fn check_mode(sys: &System, m: &spectrum::MasterMode, norm: Normalization) {
-    use ssm_engine::spectrum::modes::{spmv, spmv_t};
+    use ssm_core::spectrum::modes::{spmv, spmv_t};
     let (a, b) = (sys.a.as_ref(), sys.b.as_ref());
     let av = spmv(a, &m.right);
     let bv = spmv(b, &m.right);
@@ -259,7 +259,7 @@ fn spectrum_and_backbone_do_not_depend_on_units() {
             "omega = {w:e}, {method:?}: {found} vs {exact}"
         );
         let ssm = ssm_tests::ssm_of(&sys, &sp, &[1], 5, Normalization::Mass);
-        let polar = ssm_engine::ssm::analysis::polar(&ssm).unwrap();
+        let polar = ssm_core::ssm::analysis::polar(&ssm).unwrap();
         polar.c.iter().map(|c| c / w).collect()
     };
     let unit = scaled_polar(1.0, Method::Dense);

@@ -2,8 +2,8 @@
 //! convergence-rate references.
 
 use num_complex::Complex64 as C64;
-use ssm_engine::scene::Normalization;
-use ssm_engine::ssm::analysis::{invariance_error, polar};
+use ssm_core::spectrum::Normalization;
+use ssm_core::ssm::analysis::{invariance_error, polar};
 use ssm_tests::{
     cubic_map, map_spectrum, oscillator_published_polar, oscillator_with_spectrum, ssm_of, system,
     OSCILLATOR_CONSTRAINTS,
@@ -97,7 +97,7 @@ fn duffing_cubic_backbone_coefficient_matches_closed_form() {
             "",
             &format!("zeta = {zeta}\nomega = {w}\nkappa = {kappa}"),
         );
-        let sp = ssm_engine::spectrum::compute(
+        let sp = ssm_core::spectrum::compute(
             sys.a.as_ref(),
             sys.b.as_ref(),
             &ssm_tests::spectrum_options(None, 0),
@@ -182,7 +182,7 @@ fn order_35_stays_finite_and_converges() {
 /// map, by direct expansion of the monomials of `F` (independent of the
 /// engine's composition code): `g[j][exponents]`.
 fn diagonal_coefficients(
-    sys: &ssm_engine::model::system::System,
+    sys: &ssm_core::model::system::System,
     v: &[[C64; 4]; 4],
     vinv: &[[C64; 4]; 4],
 ) -> Vec<std::collections::HashMap<[u8; 4], C64>> {
@@ -336,17 +336,17 @@ fn map_cubic_coefficient_matches_theorem_6_3() {
 /// to O(13)).
 #[test]
 fn exact_one_to_two_resonance_warns_errors_or_goes_into_r() {
-    use ssm_engine::spectrum::check_resonances;
-    use ssm_engine::ssm::{self, SsmError, SsmOptions};
+    use ssm_core::spectrum::check_resonances;
+    use ssm_core::ssm::{self, SsmError, SsmOptions};
     let sys = ssm_tests::one_to_two_resonant(0.01);
-    let sp = ssm_engine::spectrum::compute(
+    let sp = ssm_core::spectrum::compute(
         sys.a.as_ref(),
         sys.b.as_ref(),
         &ssm_tests::spectrum_options(None, 0),
     )
     .unwrap();
     assert!((sp.eigenvalues[2] - 2.0 * sp.eigenvalues[0]).norm() < 1e-12);
-    let masters = ssm_engine::spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit).unwrap();
+    let masters = ssm_core::spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit).unwrap();
     let report = check_resonances(&sp.eigenvalues, &[masters[0].index], 5, 0.02, true);
     assert!(
         report

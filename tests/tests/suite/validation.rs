@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use ssm_engine::model::plugin::Registry;
+use ssm_core::model::plugin::Registry;
 use ssm_engine::pipeline::{self, JobError, Quiet};
 use ssm_engine::scene::{SceneError, SceneFile};
 use ssm_tests::{plugin_path, run_zoo_in, run_zoo_with, scene_error};

@@ -5,11 +5,11 @@ use serde::Serialize;
 
 use super::DampingSpec;
 use crate::analyses::Context;
-use crate::rom::accuracy::{exceeds, exponent, pair_defect, tail, tail_orders, TAIL_RATIO_MAX};
-use crate::ssm::analysis::{amplitude, polar, Polar, PolarError};
-use crate::ssm::modal_residual::ModalResidual;
-use crate::ssm::{Dynamics, SsmExpansion};
 use crate::C64;
+use ssm_core::rom::accuracy::{exceeds, exponent, pair_defect, tail, tail_orders, TAIL_RATIO_MAX};
+use ssm_core::ssm::analysis::{amplitude, polar, Polar, PolarError};
+use ssm_core::ssm::modal_residual::ModalResidual;
+use ssm_core::ssm::{Dynamics, SsmExpansion};
 
 /// Amplitudes of a curve at which its error is evaluated (linear in `rho`
 /// in between: the estimate grows smoothly, like `rho^(order - 1)`).

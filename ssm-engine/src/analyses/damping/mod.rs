@@ -4,7 +4,7 @@
 //! This is the curve experimentalists compare with decay measurements: the
 //! envelope of a free decay read by the Hilbert transform gives the same
 //! ratio, `zeta = -A' / (A omega)` (see
-//! [`crate::compare::instantaneous::hilbert_cycles`]).
+//! [`ssm_core::compare::instantaneous::hilbert_cycles`]).
 //!
 //! For a flow, `rho' = rho Re f(rho)` and `theta' = Im f(rho)` with
 //! `f(rho) = lambda + c_1 rho^2 + c_2 rho^4 + ...` (the coefficients of the
@@ -34,8 +34,8 @@ pub use curve::{damping_curves, DampingCurve, DampingCurves, DampingError, Dampi
 
 use super::{Analysis, Context, Needs, Sizes, Work};
 use crate::output::plot::PlotError;
-use crate::rom::accuracy::{percent, AnswerEstimate};
-use crate::spec::{BackboneSpec, SpecError};
+use ssm_core::rom::accuracy::{percent, AnswerEstimate};
+use ssm_core::spec::{BackboneSpec, SpecError};
 
 /// `[analysis.damping]`: damping curves `zeta(rho)` of the master pair, one
 /// per expansion order, on the amplitudes of a backbone (`rho_max`,

@@ -20,11 +20,11 @@ use std::ops::Range;
 pub use runs::{check_pod, check_pod_reducer};
 
 use super::error::JobError;
-use crate::model::system::System;
-use crate::number::short;
 use crate::scene::{SceneError, SceneFile, ValidateSection, AUTO_MAX_ORDER};
-use crate::spectrum::{MasterMode, DENSE_LIMIT};
-use crate::ssm::Dynamics;
+use ssm_core::model::system::System;
+use ssm_core::spectrum::{MasterMode, DENSE_LIMIT};
+use ssm_core::ssm::Dynamics;
+use ssm_kernel::number::short;
 
 /// Elementary operations per second assumed by the estimates (complex
 /// multiply-adds and sparse-solve entries on one core of a 2-core machine,
@@ -79,7 +79,7 @@ pub fn check_analyses(
     planned: &[crate::plan::PlannedAnalysis],
     masters: &[MasterMode],
     order: usize,
-    outputs: &[&crate::model::system::OutputMap],
+    outputs: &[&ssm_core::model::system::OutputMap],
     limits: &Limits,
 ) -> Result<(), JobError> {
     let sizes = crate::analyses::Sizes {
@@ -572,7 +572,7 @@ fn check_validate(
 /// The forced response curves of `f`: one pair, amplitude roots per
 /// frequency; several, continuation steps (up to 20 per point), each a
 /// Newton solve of the reduced equations, and per point the response
-/// sampled from the harmonic table of [`crate::rom::forced_multi`], whose
+/// sampled from the harmonic table of [`ssm_core::rom::forced_multi`], whose
 /// slots grow with the resonance ratios times the order.
 fn check_forcing(
     scene: &SceneFile,
@@ -594,8 +594,9 @@ fn check_forcing(
         .unwrap_or(0)
         .max(scene.scene.ssm.order.as_ref().map_or(0, |o| *o.get_ref()));
     let (slots, samples) = if pairs > 1 {
-        let ratios = crate::rom::forced_response::resonance_ratios(&crate::plan::frc(f), masters);
-        crate::rom::forced_multi::harmonic_table(&ratios, top.max(1))
+        let ratios =
+            ssm_core::rom::forced_response::resonance_ratios(&crate::plan::frc(f), masters);
+        ssm_core::rom::forced_multi::harmonic_table(&ratios, top.max(1))
     } else {
         (0.0, 0.0)
     };
@@ -619,7 +620,7 @@ fn check_forcing(
             "forcing.resonance",
             format!(
                 "forced response curves at resonance ratios {} ({} harmonics sampled at {} phases)",
-                crate::number::list(r.get_ref()),
+                ssm_kernel::number::list(r.get_ref()),
                 short(slots),
                 short(samples)
             ),
@@ -701,9 +702,9 @@ pub fn check_reference(
     let stage_steps = 8.0 * (k - 1.0);
     let hill = if !*r.stability.get_ref() {
         0.0
-    } else if nu <= crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64 {
+    } else if nu <= ssm_core::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64 {
         nu.powi(3)
-    } else if n <= crate::fom::periodic::monodromy::MAX_MONODROMY_STATES as f64 {
+    } else if n <= ssm_core::fom::periodic::monodromy::MAX_MONODROMY_STATES as f64 {
         stage_steps * 2.0 * n * (sizes.nnz + sizes.factors) + 10.0 * n.powi(3)
     } else {
         stage_steps * 2.0 * 64.0 * (sizes.nnz + sizes.factors)
@@ -711,7 +712,7 @@ pub fn check_reference(
     // the kept LUs of the period's steps (9 blocks of the pencil's pattern
     // and fill each)
     let kept_lus = if *r.stability.get_ref()
-        && nu > crate::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64
+        && nu > ssm_core::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64
     {
         stage_steps * 9.0 * (sizes.nnz + sizes.factors) * 16.0
     } else {

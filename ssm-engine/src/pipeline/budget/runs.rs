@@ -6,9 +6,9 @@
 use std::ops::Range;
 
 use super::{ensure, section, ssm_cost, Cost, Limits, Sizes, OPS_PER_SECOND};
-use crate::model::system::System;
-use crate::number::short;
 use crate::scene::{PodSection, SceneError, SceneFile};
+use ssm_core::model::system::System;
+use ssm_kernel::number::short;
 
 /// Newton iterations assumed per fixed HHT step (the iteration matrix is
 /// factored once per step at a fixed step size, and again when Newton needs

@@ -47,11 +47,11 @@ use std::time::Instant;
 use ssm_api::{PolyVector, TimeKind};
 
 use crate::model::system::System;
-use crate::poly::{eval_poly, Composition, MultiIndexSet};
 use crate::spectrum::modes::spmv;
 use crate::spectrum::MasterMode;
 use crate::C64;
 use homological::{Homological, HomologicalError, SolveStats};
+use ssm_kernel::poly::{eval_poly, Composition, MultiIndexSet};
 
 /// Continuous or discrete time.
 #[derive(Debug, Clone, Copy, PartialEq)]

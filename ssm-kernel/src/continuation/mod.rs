@@ -222,7 +222,8 @@ pub enum ContinuationError {
     Problem(#[from] ProblemFailure),
 }
 
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+/// The Euclidean inner product `a . b` of two vectors of equal length.
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
@@ -690,7 +691,7 @@ where
 /// What changes on the step from `last` to `next` (points of one branch):
 /// a fold where the parameter's tangent component changes sign, each test
 /// function that changes.
-pub(crate) fn crossed<I>(last: &Point<I>, next: &Point<I>) -> Vec<EventKind> {
+pub fn crossed<I>(last: &Point<I>, next: &Point<I>) -> Vec<EventKind> {
     let k = next.u.len() - 1;
     let mut found = Vec::new();
     if (next.tangent[k] > 0.0) != (last.tangent[k] > 0.0) {

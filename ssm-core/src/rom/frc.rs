@@ -106,7 +106,7 @@ pub struct ForcedCoefficients {
 impl ForcedCoefficients {
     /// Chebyshev nodes (second kind) on `[a, b]`.
     pub fn nodes(a: f64, b: f64, count: usize) -> Vec<f64> {
-        crate::chebyshev::lobatto_nodes(a, b, count)
+        ssm_kernel::chebyshev::lobatto_nodes(a, b, count)
     }
 
     /// From `(sigma, tau)` evaluated at [`ForcedCoefficients::nodes`].
@@ -127,10 +127,11 @@ impl ForcedCoefficients {
     /// `(eps sigma_a, eps tau_b)` at `omega` (barycentric interpolation; held
     /// at the end values outside the nodes, where the FRC is not reported).
     fn at(&self, omega: f64) -> (Vec<C64>, Vec<C64>) {
-        let all: Vec<C64> = crate::chebyshev::interpolate_held(&self.nodes, &self.values, omega)
-            .iter()
-            .map(|c| c * self.eps)
-            .collect();
+        let all: Vec<C64> =
+            ssm_kernel::chebyshev::interpolate_held(&self.nodes, &self.values, omega)
+                .iter()
+                .map(|c| c * self.eps)
+                .collect();
         (all[..self.n_sigma].to_vec(), all[self.n_sigma..].to_vec())
     }
 }

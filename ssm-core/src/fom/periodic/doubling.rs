@@ -20,8 +20,8 @@
 //! E. J. Doedel, H. B. Keller, J. P. Kernevez, Numerical analysis and control
 //! of bifurcation problems (II), Int. J. Bifurc. Chaos 1 (1991) 745-772.
 
-use crate::continuation::{correct, local_parameter, Point, Problem, Settings};
 use crate::model::system::System;
+use ssm_kernel::continuation::{correct, local_parameter, Point, Problem, Settings};
 
 use super::branch::{
     classify, drop_rejoining_step, orbits_at, Reader, ReferenceBranch, ReferenceError,

@@ -27,9 +27,9 @@
 use super::forced::{ForcedError, ForcedSsm};
 use super::SsmExpansion;
 use crate::model::system::System;
-use crate::poly::MultiIndexSet;
 use crate::spectrum::modes::spmv;
 use crate::C64;
+use ssm_kernel::poly::MultiIndexSet;
 
 /// One harmonic's expansion: coefficient of `e^{i kappa phi} p^k`.
 #[derive(Debug, Clone)]
@@ -323,13 +323,13 @@ impl NonAutonomous {
         let mut res = spmv(sys.b.as_ref(), &lhs);
         let az = spmv(sys.a.as_ref(), &z);
         let mut fz = vec![C64::new(0.0, 0.0); n];
-        crate::poly::eval_poly(&sys.nonlinearity, &z, &mut fz);
+        ssm_kernel::poly::eval_poly(&sys.nonlinearity, &z, &mut fz);
         for h in &sys.forcing {
             let (c, s) = ((h.multiple * phi).cos(), (h.multiple * phi).sin());
             let mut fc = vec![C64::new(0.0, 0.0); n];
             let mut fs = vec![C64::new(0.0, 0.0); n];
-            crate::poly::eval_poly(&h.cos, &z, &mut fc);
-            crate::poly::eval_poly(&h.sin, &z, &mut fs);
+            ssm_kernel::poly::eval_poly(&h.cos, &z, &mut fc);
+            ssm_kernel::poly::eval_poly(&h.sin, &z, &mut fs);
             for i in 0..n {
                 fz[i] += eps * (c * fc[i] + s * fs[i]);
             }

@@ -18,7 +18,6 @@
 use std::collections::HashMap;
 
 use crate::model::system::{OutputMap, System};
-use crate::poly::MultiIndexSet;
 use crate::rom::accuracy::{self, percent};
 use crate::rom::frc::{one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair};
 use crate::rom::frc_result::{
@@ -31,6 +30,7 @@ use crate::ssm::forced::{table_warning, ForcedSsm};
 use crate::ssm::modal_residual::ModalResidual;
 use crate::ssm::SsmExpansion;
 use crate::C64;
+use ssm_kernel::poly::MultiIndexSet;
 
 /// Exact non-autonomous data at the Chebyshev nodes in `Omega`.
 struct NaTable {
@@ -210,7 +210,7 @@ pub fn forced_response_one_pair(
                     "raise [forcing] nonautonomous_order (or leave it out to let the engine choose)"
                 } else {
                     "raise the expansion order, or lower the forcing (the response may lie beyond the SSM's convergence radius)"
-                }, eps = crate::number::short(eps)
+                }, eps = ssm_kernel::number::short(eps)
             ));
         }
         let mut curve = best.curve;
@@ -280,7 +280,7 @@ impl Context<'_> {
             let mut h1 = Vec::with_capacity(outputs.len());
             match table {
                 Some(t) => {
-                    let x = crate::chebyshev::interpolate(nodes, &t.xs, p.omega);
+                    let x = ssm_kernel::chebyshev::interpolate(nodes, &t.xs, p.omega);
                     let len = t.set.len();
                     for (oi, ser) in series.iter().enumerate() {
                         let xo = &x[oi * len..(oi + 1) * len];
@@ -307,7 +307,7 @@ impl Context<'_> {
             if linf.iter().chain(&h1).any(|v| !v.is_finite()) {
                 return Err(FrcError::Unsupported(format!(
                 "O({order}), eps = {eps}: non-finite response amplitude at rho = {}: the expansion diverges there; lower [forcing] rho_max",
-                p.rho, eps = crate::number::short(eps)
+                p.rho, eps = ssm_kernel::number::short(eps)
             )));
             }
             rows.push(FrcRow {

@@ -17,8 +17,8 @@
 //! Nonlinear Dyn. 86 (2016) 1493-1534 (the SSM's periodic orbits as
 //! predictions of the full system's).
 
-use crate::continuation::{self, dot, solve_at_parameter, Point, Settings, Stop};
 use crate::model::system::System;
+use ssm_kernel::continuation::{self, dot, solve_at_parameter, Point, Settings, Stop};
 
 pub use super::branch::Seed;
 use super::branch::{

@@ -319,8 +319,8 @@ fn dopri(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::poly::MultiIndexSet;
     use crate::ssm::RTerm;
+    use ssm_kernel::poly::MultiIndexSet;
 
     /// The linear reduced flow `p' = lambda p` of one pair.
     fn linear_pair(lambda: C64) -> SsmExpansion {

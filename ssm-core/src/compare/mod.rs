@@ -40,7 +40,7 @@ pub enum ValidateError {
     #[error(transparent)]
     Reduced(#[from] RomError),
     /// A steady-state point failed.
-    #[error("steady-state reference at Omega = {}: {source}", crate::number::short(.omega))]
+    #[error("steady-state reference at Omega = {}: {source}", ssm_kernel::number::short(.omega))]
     SteadyPoint {
         /// Forcing frequency of the failed point.
         omega: f64,

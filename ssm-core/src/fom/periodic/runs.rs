@@ -13,7 +13,7 @@
 //! ledger written for another model or other settings is refused, not
 //! mixed in.
 
-use crate::continuation::{self, Branch, Ledger, Point, Settings, Stop};
+use ssm_kernel::continuation::{self, Branch, Ledger, Point, Settings, Stop};
 
 use super::branch::{Reader, ReferenceError, ReferenceOrbit};
 use super::{HarmonicBalance, OrbitInfo};

@@ -18,8 +18,8 @@
 //! D. T. Mook, *Nonlinear Oscillations*, Wiley (1979), Sect. 4.1.4 (the
 //! amplitude response of the Duffing oscillator and its jumps).
 
-use crate::continuation::{solve_at_parameter, NoLedger, Settings};
 use crate::model::system::{OutputMap, System};
+use ssm_kernel::continuation::{solve_at_parameter, NoLedger, Settings};
 
 use super::branch::{classify, orbits_at, Reader, ReferenceBranch, ReferenceError, ReferenceOrbit};
 use super::frc::check_flow;
@@ -85,7 +85,7 @@ where
     if !(omega.is_finite() && omega > 0.0) {
         return Err(ReferenceError::Settings(format!(
             "the frequency {omega} of an amplitude response must be finite and positive",
-            omega = crate::number::short(omega)
+            omega = ssm_kernel::number::short(omega)
         )));
     }
     if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo) {
@@ -118,7 +118,7 @@ where
     let scale = c_top.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     if !(scale.is_finite() && scale > 0.0) {
         return Err(ReferenceError::Settings(format!(
-            "the linear response at Omega = {omega}, eps = {hi} is {scale}: no forcing reaches the model", omega = crate::number::short(omega)
+            "the linear response at Omega = {omega}, eps = {hi} is {scale}: no forcing reaches the model", omega = ssm_kernel::number::short(omega)
         )));
     }
     hb.amplitude_scale = scale;
@@ -144,7 +144,7 @@ where
         .map(|pd| {
             format!(
                 "period doubling at Omega = {omega}, eps = {:e}: the branch of period 2T is traced only in a continuation in Omega",
-                pd.parameter() * hb.epsilon_scale, omega = crate::number::short(omega)
+                pd.parameter() * hb.epsilon_scale, omega = ssm_kernel::number::short(omega)
             )
         })
         .collect();

@@ -26,8 +26,8 @@ pub use super::branch::{
     ReferenceOrbit, ReferenceSettings,
 };
 
-use crate::continuation::{solve_at_parameter, NoLedger, Point, Settings};
 use crate::model::system::System;
+use ssm_kernel::continuation::{solve_at_parameter, NoLedger, Point, Settings};
 
 use super::branch::{classify, orbits_at, Reader};
 use super::runs::Runs;

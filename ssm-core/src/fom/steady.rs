@@ -156,7 +156,7 @@ pub fn steady_state(
         let mut pass: Option<(usize, f64)> = None;
         for m in 1..=opts.max_multiple.min(ends.len()) {
             let back = &ends[ends.len() - m];
-            let diff = crate::continuation::distance(&now, back);
+            let diff = ssm_kernel::continuation::distance(&now, back);
             let base = back.iter().map(|a| a * a).sum::<f64>().sqrt();
             if base == 0.0 {
                 continue;

@@ -58,11 +58,11 @@ pub mod radau;
 pub mod sample;
 pub mod steady;
 
-use crate::number::short;
 pub use consistent::{consistent_initial, consistent_initial_keeping, given_start, Consistent};
 pub use problem::DaeProblem;
 pub use radau::{Radau, RadauOptions, RadauStats};
 pub use sample::{add_noise, sample_run, Integrator, SampledRun, Simulation};
+use ssm_kernel::number::short;
 pub use steady::{steady_state, SteadyOptions, SteadyState};
 
 /// Why a full-system simulation failed. Every variant names the time reached.

@@ -28,10 +28,10 @@ use ssm_api::PolyVector;
 
 use super::homological::{Homological, HomologicalError};
 use super::reduced_modes;
-use crate::chebyshev::{self, Table};
 use crate::model::system::System;
 use crate::spectrum::MasterMode;
 use crate::C64;
+use ssm_kernel::chebyshev::{self, Table};
 
 /// Why the forced SSM could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -51,7 +51,7 @@ pub enum ForcedError {
     #[error("the forcing depends on the state; higher-order non-autonomous terms need a state-independent Fext")]
     StateDependentForcing,
     /// A harmonic's homological equation failed.
-    #[error("harmonic {harmonic} at Omega = {}: {source}", crate::number::short(.omega))]
+    #[error("harmonic {harmonic} at Omega = {}: {source}", ssm_kernel::number::short(.omega))]
     Solve {
         /// 1-based harmonic.
         harmonic: usize,

@@ -13,7 +13,7 @@
 //! of `F(y, Omega)`, `y = (Re q_1, Im q_1, ...)`, in Cartesian form so that
 //! branches through `q_j = 0` (the `rho_1 = 0` main branch of a 1:2 resonance)
 //! are regular. They are continued by the shared core
-//! ([`crate::continuation`]: local parametrization, step control, events
+//! ([`ssm_kernel::continuation`]: local parametrization, step control, events
 //! located along the chord), with this module's test functions between
 //! consecutive points: `det F_y` (it changes sign at folds, which the core
 //! reports from the tangent's `Omega` component, and at branch points),
@@ -35,12 +35,12 @@
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 
-use crate::continuation::{
+use crate::rom::frc::BifurcationKind;
+use crate::C64;
+use ssm_kernel::continuation::{
     self as core, correct, local_parameter, solve_at_parameter, EventKind, Monitor, Problem,
     ProblemFailure, Stop, Test,
 };
-use crate::rom::frc::BifurcationKind;
-use crate::C64;
 
 /// One term `coeff * q^exponents` of the equation of pair `pair`; exponents
 /// over `(q_1, conj q_1, q_2, conj q_2, ...)`.

@@ -8,7 +8,7 @@
 //! M. Krack, J. Gross, *Harmonic Balance for Nonlinear Vibration Problems*,
 //! Springer (2019), Sect. 4.2 (path continuation in any parameter).
 
-use crate::continuation::{Monitor, Problem, ProblemFailure, Test};
+use ssm_kernel::continuation::{Monitor, Problem, ProblemFailure, Test};
 
 use super::{floquet, HarmonicBalance, OrbitInfo};
 
@@ -145,7 +145,7 @@ impl OrbitInfo {
     /// checkpoint, are not what [`Problem::monitor`] computes: its Floquet
     /// data disagree with themselves ([`floquet::Floquet::inconsistency`]),
     /// or the tests are not those of its multipliers.
-    pub(crate) fn restored_inconsistency(&self, tests: &[Test]) -> Option<String> {
+    pub fn restored_inconsistency(&self, tests: &[Test]) -> Option<String> {
         if let Some(why) = self.floquet.as_ref().and_then(|f| f.inconsistency()) {
             return Some(why);
         }

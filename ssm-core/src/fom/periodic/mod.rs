@@ -67,11 +67,11 @@ pub mod seed;
 
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 
-use crate::continuation::sparse::SparseBordered;
 use crate::fom::problem::DaeProblem;
 use crate::model::system::System;
 use crate::spectrum::dense::FiniteStructure;
 use gauge::Gauge;
+use ssm_kernel::continuation::sparse::SparseBordered;
 
 pub use amplitude::{reference_amplitude, reference_amplitude_resumable, AmplitudeSettings};
 pub use floquet::{Floquet, FloquetError};

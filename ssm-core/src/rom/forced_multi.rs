@@ -147,7 +147,7 @@ impl Samples {
 /// `ratios`, for the cost gate before any of it is allocated: the slots (at
 /// most the harmonics `-h..=h`, `h = periods * order * max r`) and the
 /// sampled phases (64 per response period).
-pub(crate) fn harmonic_table(ratios: &[f64], order: usize) -> (f64, f64) {
+pub fn harmonic_table(ratios: &[f64], order: usize) -> (f64, f64) {
     let periods = period_multiple(ratios);
     let top = ratios.iter().fold(0.0f64, |a, r| a.max(r.abs()));
     (
@@ -326,7 +326,7 @@ pub fn forced_response_multi(
                     "O({order}), eps = {eps}: branch {} was stopped at Omega = {:.6}, where a pair amplitude passed [forcing] rho_max = {}; beyond it the expansion is not trusted",
                     bi + 1,
                     last.omega,
-                    crate::number::short(sec.rho_max.unwrap_or(f64::INFINITY)), eps = crate::number::short(eps),
+                    ssm_kernel::number::short(sec.rho_max.unwrap_or(f64::INFINITY)), eps = ssm_kernel::number::short(eps),
                 ));
             }
             let first_of_branch = rows.len();
@@ -457,13 +457,13 @@ pub fn forced_response_multi(
         let untrusted = accuracy::exceeds(error_estimate, tolerance);
         if lower.is_none() {
             warnings.push(format!(
-                "O({order}), eps = {eps}: no error estimate below O(3) (the estimate compares the curve with the one two orders lower); do not trust this curve: raise the expansion order", eps = crate::number::short(eps)
+                "O({order}), eps = {eps}: no error estimate below O(3) (the estimate compares the curve with the one two orders lower); do not trust this curve: raise the expansion order", eps = ssm_kernel::number::short(eps)
             ));
         } else if untrusted {
             warnings.push(format!(
                 "O({order}), eps = {eps}: the estimated error of the response, {}, exceeds the accuracy target {} ([ssm] tolerance); do not trust this curve: raise the expansion order, or lower the forcing (the response may lie beyond the SSM's convergence radius); non-autonomous terms beyond the leading order are implemented for one master pair only",
                 percent(error_estimate),
-                percent(tolerance), eps = crate::number::short(eps),
+                percent(tolerance), eps = ssm_kernel::number::short(eps),
             ));
         }
         curves.push(FrcCurve {

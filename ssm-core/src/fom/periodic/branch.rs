@@ -4,11 +4,11 @@
 //! into an orbit (shared by the traced branches of [`super::frc`],
 //! [`super::seed`], [`super::doubling`] and [`super::runs`]).
 
-use crate::continuation::{
-    self, solve_at_parameter, ContinuationError, EventKind, Point, Problem, Settings, Stop,
-};
 use crate::model::system::OutputMap;
 use crate::C64;
+use ssm_kernel::continuation::{
+    self, solve_at_parameter, ContinuationError, EventKind, Point, Problem, Settings, Stop,
+};
 
 use super::floquet::{FloquetError, MultiplierCheck};
 use super::monodromy::check_multipliers;

@@ -1,0 +1,17 @@
+//! # ssm-kernel
+//!
+//! The numerical kernel of ssm, below the model and the SSM: it knows no
+//! mechanical system, scene or file.
+//! - [`poly`]: multi-indices, truncated series, order-by-order composition
+//!   `F(W(p))`;
+//! - [`chebyshev`]: adaptive Chebyshev tables in one variable;
+//! - [`continuation`]: the continuation core (local parametrization, step
+//!   control, test functions and the events they locate);
+//! - [`number`]: numbers from user input in messages and CSV files.
+
+pub mod chebyshev;
+pub mod continuation;
+pub mod number;
+pub mod poly;
+
+pub use num_complex::Complex64 as C64;
