@@ -11,7 +11,6 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use ssm_core::model::plugin::Plugin;
-use ssm_model_files::ModelFiles;
 use ssm_tests::{plugin_path, tmp_dir};
 
 fn model_files(c: &mut Criterion) {
@@ -21,7 +20,7 @@ fn model_files(c: &mut Criterion) {
     let files = Plugin::load(&plugin_path("matrix-model")).expect("matrix-model plugin");
     for n in [10_000usize, 100_000] {
         let model = chain.build_model("", &format!("n = {n}")).expect("chain");
-        let (folder, _) = ModelFiles::from_model(&model).expect("exportable");
+        let (folder, _) = ssm_plugin_kit::files_from_model(&model).expect("exportable");
         let dir = tmp_dir(&format!("bench-files-{n}"));
         std::fs::create_dir_all(&dir).expect("folder");
         let mut bytes = 0;

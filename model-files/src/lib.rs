@@ -16,17 +16,19 @@
 //! | `outputs.csv` | `name,dof[,weight]` rows naming outputs | no |
 //!
 //! Indices are 1-based, `%` starts a comment, duplicates are summed. Every
-//! read error names its file and line ([`FileError`]).
+//! read error names its file and line ([`FileError`]). This crate reads and
+//! writes the format; a folder becomes a mechanical system, and a model a
+//! folder, in `ssm-plugin-kit` (beside the mechanical builder it inverts).
 //!
 //! # References
 //! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical systems
 //! via spectral submanifolds*, Nonlinear Dyn. 111 (2023) 8881-8911, eqs. (1)-(2).
 
-mod convert;
 mod coo;
 mod error;
 pub mod input;
 mod lines;
+mod mass;
 mod mtx;
 mod outputs;
 
@@ -34,12 +36,12 @@ use std::path::Path;
 
 use ssm_api::{PolyVector, SparseMatrix};
 
-pub use convert::mass_defect;
 pub use coo::{read_tensor, write_tensor};
 pub use error::{ExportError, FileError};
 pub use lines::Progress;
-pub use mtx::{read_matrix, write_matrix, write_vector};
-pub use outputs::{read_outputs, write_outputs, NamedOutput};
+pub use mass::mass_defect;
+pub use mtx::{read_matrix, summed, write_matrix, write_vector};
+pub use outputs::{read_outputs, valid_name, write_outputs, NamedOutput};
 
 /// Names of the files of a model folder.
 pub mod names {

@@ -43,7 +43,7 @@ pub fn read_outputs(
 }
 
 /// A name `outputs.csv` can hold: non-empty letters, digits, `_`, `.`, `-`.
-pub(crate) fn valid_name(name: &str) -> bool {
+pub fn valid_name(name: &str) -> bool {
     !name.is_empty()
         && name
             .chars()

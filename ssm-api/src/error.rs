@@ -88,12 +88,6 @@ impl std::fmt::Display for PluginError {
 
 impl std::error::Error for PluginError {}
 
-impl From<crate::mechanical::BuildError> for PluginError {
-    fn from(e: crate::mechanical::BuildError) -> Self {
-        Self::new(ErrorKind::BuildFailed, "mechanical builder", &e.to_string())
-    }
-}
-
 /// Runs `f`, turning a panic into a [`PluginError`] of kind
 /// [`ErrorKind::Panicked`] naming `stage` and the panic message, so that no
 /// panic unwinds through the plugin boundary.

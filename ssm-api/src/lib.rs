@@ -1,9 +1,16 @@
 //! # ssm-api: the stable ABI between the `ssm` engine and model plugins
 //!
-//! A plugin is a `cdylib` that depends on this crate only. It exports one root
+//! A plugin is a `cdylib` that depends on this crate. It exports one root
 //! module ([`SsmPlugin`]) with [`declare_plugin!`], lists the models it offers
 //! ([`ModelInfo`], with their parameters and defaults), and builds a [`Model`] from
 //! the scene's parameter table.
+//!
+//! This crate holds the ABI and nothing else: the data that crosses the
+//! boundary and the root module. The helpers plugins build that data with
+//! (the mechanical builder, the `Expr` builder, parameter specs and their
+//! parsing, models from model folders) live in `ssm-plugin-kit`, which
+//! plugins use beside this crate; they changed crate in 1.2 without changing
+//! any layout, so plugins built before load as they did.
 //!
 //! ## The four concepts
 //! - **Model** ([`Model`]): stable *data*, the first-order system
@@ -12,13 +19,14 @@
 //!   ([`SparseMatrix`]), a sparse multivariate polynomial `F` ([`PolyVector`]),
 //!   harmonic forcing ([`Harmonic`]), named and tagged states ([`StateInfo`]) and
 //!   named outputs ([`Output`]).
-//! - **Constraint** ([`Constraints`]): stable data, the polynomial configuration
+//! - **Constraint** (the layout in [`MechanicalInfo`]): the polynomial configuration
 //!   constraints `g(x) = G0 x + g_nl(x) = 0` of a mechanical system. The
-//!   [`MechanicalSystem`] builder turns `(M, C, K, f(x, x'), g(x), fext)` into the
+//!   `MechanicalSystem` builder of `ssm-plugin-kit` turns `(M, C, K, f(x, x'), g(x), fext)` into the
 //!   first-order DAE of eqs. (4)-(5) of Li, Jain & Haller (2023), so plugins never
 //!   assemble block matrices by hand; the resulting [`Model`] keeps the constraint
 //!   structure in [`MechanicalInfo`].
-//! - **Recast** ([`Expr`], [`ExprVector`]): non-polynomial terms (`sin`, `cos`,
+//! - **Recast** ([`ExprVector`], written with the `Expr` builder of
+//!   `ssm-plugin-kit`): non-polynomial terms (`sin`, `cos`,
 //!   `exp`, `ln`, `sqrt`, `1/x`, integer powers) written as expressions over the
 //!   states, with an optional equilibrium to expand about. The engine turns them
 //!   into a polynomial DAE with auxiliary states (`u1 = sin phi`,
@@ -51,22 +59,18 @@ mod error;
 mod expr;
 pub mod limits;
 mod listing;
-mod mechanical;
 mod model;
-mod params;
 mod plugin;
 mod reducer;
 pub mod v1_0;
 
 pub use error::{guard, ErrorKind, PluginError};
-pub use expr::{Expr, ExprNode, ExprOp, ExprTerm, ExprVector};
-pub use listing::{select_model, ModelInfo, ParamInfo};
-pub use mechanical::{BuildError, Constraints, Equilibrium, MechanicalSystem};
+pub use expr::{ExprNode, ExprOp, ExprTerm, ExprVector};
+pub use listing::{select_model, ModelInfo, ParamInfo, PATH_KIND};
 pub use model::{
     Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyTerm, PolyVector, SparseMatrix,
     StateInfo, StateKind, TimeKind, Triplet, VarPower, Weight, SYMMETRY_TOLERANCE,
 };
-pub use params::{ParamKind, ParamSpec, ParamValue, Params, PATH_KIND};
 pub use plugin::{SsmPlugin, SsmPluginRef, API_VERSION};
 pub use reducer::{
     Diagnostic, InputNeeds, Lift, Reduced, ReducerInfo, ReducerInput, Signals, Trajectory,

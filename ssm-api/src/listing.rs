@@ -6,6 +6,11 @@ use abi_stable::StableAbi;
 
 use crate::error::{ErrorKind, PluginError};
 
+/// The listed kind ([`ParamInfo::kind`]) of a path parameter: the engine
+/// resolves relative values of such parameters against the scene's folder
+/// before it passes the table to the plugin.
+pub const PATH_KIND: &str = "path";
+
 /// Listing of one parameter of a model.
 #[repr(C)]
 #[derive(StableAbi, Clone, Debug, PartialEq)]
@@ -21,7 +26,7 @@ pub struct ParamInfo {
 }
 
 /// Listing of one model a plugin offers (built from parameter specs by
-/// [`ModelInfo::new`]).
+/// `ssm_plugin_kit::model_info`).
 #[repr(C)]
 #[derive(StableAbi, Clone, Debug, PartialEq)]
 pub struct ModelInfo {

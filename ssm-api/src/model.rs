@@ -301,8 +301,9 @@ pub enum TimeKind {
 ///
 /// The layout is explicit, so a model assembled by hand in any order is read
 /// correctly; the engine checks it against the state tags ([`StateKind`]).
-/// [`crate::MechanicalSystem`] writes the canonical layout `z = (x, x', mu)`
-/// with the constraints in rows `2n .. 2n + n_c`.
+/// The mechanical builder (`ssm_plugin_kit::MechanicalSystem`) writes the
+/// canonical layout `z = (x, x', mu)` with the constraints in rows
+/// `2n .. 2n + n_c`.
 #[repr(C)]
 #[derive(StableAbi, Clone, Debug, PartialEq)]
 pub struct MechanicalInfo {
@@ -359,7 +360,8 @@ pub struct Model {
     pub outputs: RVec<Output>,
     /// Flow or map.
     pub time: TimeKind,
-    /// Mechanical structure, when the model came from [`crate::MechanicalSystem`].
+    /// Mechanical structure, when the model came from the mechanical builder
+    /// (`ssm_plugin_kit::MechanicalSystem`) or declares its layout.
     pub mechanical: ROption<MechanicalInfo>,
     /// Non-polynomial right-hand-side terms `E(z)` (`N` components in the `N`
     /// states), added to `A z + F(z)`; they may have constant and linear parts.

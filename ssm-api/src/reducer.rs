@@ -13,7 +13,6 @@ use abi_stable::StableAbi;
 
 use crate::listing::ParamInfo;
 use crate::model::{Model, SparseMatrix, StateInfo};
-use crate::params::ParamSpec;
 
 /// What a reducer takes: sampled signals, a model, or both (bit set; a
 /// transparent `u8` so that later versions can add kinds of input).
@@ -64,18 +63,6 @@ pub struct ReducerInfo {
     pub params: RVec<ParamInfo>,
     /// What input it needs.
     pub needs: InputNeeds,
-}
-
-impl ReducerInfo {
-    /// The listing of a reducer with the parameters `specs`.
-    pub fn new(name: &str, description: &str, specs: &[ParamSpec], needs: InputNeeds) -> Self {
-        Self {
-            name: name.into(),
-            description: description.into(),
-            params: specs.iter().map(ParamSpec::info).collect(),
-            needs,
-        }
-    }
 }
 
 /// One sampled trajectory: `n_samples` rows of `n_observables` values

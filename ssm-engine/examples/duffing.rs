@@ -11,7 +11,7 @@
 //! system's differ by more than three times the reduced curve's error
 //! estimate.
 
-use ssm_api::{Harmonic, MechanicalSystem, PolyVector, SparseMatrix};
+use ssm_api::{Harmonic, PolyVector, SparseMatrix};
 use ssm_core::fom::periodic::frc::{reference_frc, ReferenceSettings};
 use ssm_core::model::system::System;
 use ssm_core::rom::autonomous::backbone;
@@ -22,6 +22,7 @@ use ssm_core::spectrum::{self, SpectrumOptions};
 use ssm_core::ssm::{self, SsmOptions};
 use ssm_engine::analyses::damping::{damping_curves, DampingSpec};
 use ssm_engine::analyses::Context;
+use ssm_plugin_kit::MechanicalSystem;
 
 /// Damping ratio, cubic stiffness, forcing amplitude.
 const ZETA: f64 = 0.01;

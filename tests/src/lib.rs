@@ -395,7 +395,8 @@ pub fn one_to_two_resonant(zeta: f64) -> System {
 /// `x1` parametrically (a Mathieu tongue for `0.5 |x2| > 4 zeta`), so the
 /// response can be of period `2T` (a frequency divider).
 pub fn one_to_two_forced(zeta: f64, f: f64) -> System {
-    use ssm_api::{Harmonic, MechanicalSystem, PolyVector, SparseMatrix};
+    use ssm_api::{Harmonic, PolyVector, SparseMatrix};
+    use ssm_plugin_kit::MechanicalSystem;
     let mut m = MechanicalSystem::new("one-to-two", &["x1", "x2"]);
     if f != 0.0 {
         let mut cos = PolyVector::zeros(2, 4);
@@ -436,7 +437,8 @@ pub fn pendulum_with_spectrum(model: &str, params: &str) -> (System, Spectrum) {
 /// damped oscillator `3 x'' + 0.3 x' + 8 x = 0`. Returns the system and the
 /// closed-form solution [`LinearConstrained`] from `x(0) = x0`, `x'(0) = 0`.
 pub fn linear_constrained_oscillator(x0: f64) -> (System, LinearConstrained) {
-    use ssm_api::{Constraints, MechanicalSystem, PolyVector, SparseMatrix};
+    use ssm_api::{PolyVector, SparseMatrix};
+    use ssm_plugin_kit::{Constraints, MechanicalSystem};
     let mut m = MechanicalSystem::new("linear-constrained", &["x1", "x2"]);
     m.mass = SparseMatrix::diagonal(&[1.0, 2.0]);
     m.damping = SparseMatrix::diagonal(&[0.1, 0.2]);
@@ -620,7 +622,8 @@ pub fn pod_coordinate_error(
 /// linear oscillator, whose steady state is the closed form
 /// [`linear_steady_state`]).
 pub fn forced_duffing(zeta: f64, gamma: f64, loads: &[(f64, f64)]) -> System {
-    use ssm_api::{Harmonic, MechanicalSystem, PolyVector, SparseMatrix};
+    use ssm_api::{Harmonic, PolyVector, SparseMatrix};
+    use ssm_plugin_kit::MechanicalSystem;
     let mut m = MechanicalSystem::new("duffing", &["x"]);
     m.mass = SparseMatrix::diagonal(&[1.0]);
     m.damping = SparseMatrix::diagonal(&[2.0 * zeta]);
@@ -768,7 +771,8 @@ pub fn parametric_pump_reference(
 /// and `x1` obeys a damped Mathieu equation whose tongue near `Omega = 2`
 /// is bounded by two period doublings.
 pub fn parametric_pump(zeta1: f64, zeta2: f64, alpha: f64, beta: f64, f: f64) -> System {
-    use ssm_api::{Harmonic, MechanicalSystem, PolyVector, SparseMatrix};
+    use ssm_api::{Harmonic, PolyVector, SparseMatrix};
+    use ssm_plugin_kit::MechanicalSystem;
     let mut m = MechanicalSystem::new("parametric-pump", &["x1", "x2"]);
     m.mass = SparseMatrix::diagonal(&[1.0, 1.0]);
     m.damping = SparseMatrix::diagonal(&[2.0 * zeta1, 4.0 * zeta2]);

@@ -45,9 +45,9 @@
 //! Multibody Systems*, Springer (1994), Ch. 2-3 (natural coordinates).
 
 use ssm_api::{
-    Constraints, ErrorKind, Harmonic, MechanicalSystem, Model, ModelInfo, MotionKind, ParamSpec,
-    Params, PluginError, PolyVector, SparseMatrix,
+    ErrorKind, Harmonic, Model, ModelInfo, MotionKind, PluginError, PolyVector, SparseMatrix,
 };
+use ssm_plugin_kit::{Constraints, MechanicalSystem, ParamSpec, Params};
 
 const MODEL: &str = "crank-drive";
 

@@ -15,10 +15,8 @@
 //! Sect. 9b; D. A. Ehrhardt, M. S. Allen, Mech. Syst. Signal Process. 76-77
 //! (2016) 612-633.
 
-use ssm_api::{
-    MechanicalSystem, Model, MotionKind, Output, ParamSpec, Params, PluginError, PolyVector,
-    SparseMatrix, Weight,
-};
+use ssm_api::{Model, MotionKind, Output, PluginError, PolyVector, SparseMatrix, Weight};
+use ssm_plugin_kit::{MechanicalSystem, ParamSpec, Params};
 use von_karman_beam::{Mesh, Section, Support};
 
 use crate::{elements, invalid, positive};

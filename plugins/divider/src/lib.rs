@@ -31,9 +31,9 @@
 mod beam;
 
 use ssm_api::{
-    Constraints, ErrorKind, Harmonic, MechanicalSystem, Model, ModelInfo, MotionKind, ParamSpec,
-    Params, PluginError, PolyVector, SparseMatrix,
+    ErrorKind, Harmonic, Model, ModelInfo, MotionKind, PluginError, PolyVector, SparseMatrix,
 };
+use ssm_plugin_kit::{Constraints, MechanicalSystem, ParamSpec, Params};
 use von_karman_beam::{Mesh, Section, Support};
 
 /// Largest number of elements per beam accepted: the limit of double

@@ -6,9 +6,9 @@
 //! defaults, a `build` function returning a [`Model`], and `declare_plugin!`.
 
 use ssm_api::{
-    ErrorKind, Harmonic, MechanicalSystem, Model, ModelInfo, MotionKind, ParamSpec, Params,
-    PluginError, PolyVector, SparseMatrix,
+    ErrorKind, Harmonic, Model, ModelInfo, MotionKind, PluginError, PolyVector, SparseMatrix,
 };
+use ssm_plugin_kit::{MechanicalSystem, ParamSpec, Params};
 
 fn specs() -> Vec<ParamSpec> {
     vec![

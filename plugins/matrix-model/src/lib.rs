@@ -14,8 +14,9 @@
 use std::io::IsTerminal;
 use std::path::Path;
 
-use ssm_api::{ErrorKind, Model, ModelInfo, ParamSpec, Params, PluginError};
+use ssm_api::{ErrorKind, Model, ModelInfo, PluginError};
 use ssm_model_files::{names, FileError, ModelFiles};
+use ssm_plugin_kit::{ParamSpec, Params};
 
 const MODEL: &str = "files";
 
@@ -37,7 +38,7 @@ fn specs() -> Vec<ParamSpec> {
 }
 
 fn models() -> Vec<ModelInfo> {
-    vec![ModelInfo::new(
+    vec![ssm_plugin_kit::model_info(
         MODEL,
         "M x'' + C x' + K x + f(x) + G(x)^T mu = eps fext cos(Omega t), g(x) = 0 from files (eqs. 1-2)",
         &specs(),
@@ -81,7 +82,7 @@ fn build(name: &str, params: &str) -> Result<Model, PluginError> {
             ),
         ));
     }
-    let sys = files.into_mechanical(MODEL, rayleigh).map_err(|message| {
+    let sys = ssm_plugin_kit::mechanical_from_files(files, MODEL, rayleigh).map_err(|message| {
         file_error(FileError::Content {
             file: dir.join(names::OUTPUTS),
             message,

@@ -24,9 +24,10 @@ pub mod fit;
 pub mod map;
 
 use ssm_api::{
-    Diagnostic, ErrorKind, InputNeeds, Model, ModelInfo, ParamSpec, Params, PluginError, Reduced,
-    ReducerInfo, ReducerInput,
+    Diagnostic, ErrorKind, InputNeeds, Model, ModelInfo, PluginError, Reduced, ReducerInfo,
+    ReducerInput,
 };
+use ssm_plugin_kit::{ParamSpec, Params};
 
 use crate::embedding::{MonomialBasis, Series};
 use crate::fit::{FitError, FitSettings};
@@ -111,7 +112,7 @@ fn build(name: &str, _params: &str) -> Result<Model, PluginError> {
 }
 
 fn reducers() -> Vec<ReducerInfo> {
-    vec![ReducerInfo::new(
+    vec![ssm_plugin_kit::reducer_info(
         REDUCER,
         "polynomial sampling map of order r on 2nu-dimensional delay vectors of one observable, fitted by QR/SVD least squares (Szalai, Ehrhardt & Haller 2017, eqs. 3.1, 7.1-7.2)",
         &specs(),

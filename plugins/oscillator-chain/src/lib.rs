@@ -10,10 +10,8 @@
 //! `lambda_j = -zeta_j omega_j +- i omega_j sqrt(1 - zeta_j^2)` with
 //! `2 zeta_j omega_j = alpha + beta omega_j^2`.
 
-use ssm_api::{
-    ErrorKind, MechanicalSystem, Model, ModelInfo, MotionKind, ParamSpec, Params, PluginError,
-    SparseMatrix,
-};
+use ssm_api::{ErrorKind, Model, ModelInfo, MotionKind, PluginError, SparseMatrix};
+use ssm_plugin_kit::{MechanicalSystem, ParamSpec, Params};
 
 fn specs() -> Vec<ParamSpec> {
     vec![

@@ -31,9 +31,9 @@
 //! via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sect. 5.2 and Appendix F.
 
 use ssm_api::{
-    Constraints, Equilibrium, ErrorKind, Expr, Harmonic, MechanicalSystem, Model, ModelInfo,
-    MotionKind, ParamSpec, Params, PluginError, PolyVector, SparseMatrix,
+    ErrorKind, Harmonic, Model, ModelInfo, MotionKind, PluginError, PolyVector, SparseMatrix,
 };
+use ssm_plugin_kit::{Constraints, Equilibrium, Expr, MechanicalSystem, ParamSpec, Params};
 
 fn simple_specs() -> Vec<ParamSpec> {
     vec![

@@ -17,9 +17,9 @@
 //! Proc. R. Soc. A 473 (2017) 20160759, Sect. 9a, eqs. (9.1)-(9.2).
 
 use ssm_api::{
-    ErrorKind, Harmonic, MechanicalSystem, Model, ModelInfo, MotionKind, ParamSpec, Params,
-    PluginError, PolyVector, SparseMatrix,
+    ErrorKind, Harmonic, Model, ModelInfo, MotionKind, PluginError, PolyVector, SparseMatrix,
 };
+use ssm_plugin_kit::{MechanicalSystem, ParamSpec, Params};
 
 const MODEL: &str = "oscillator";
 
@@ -49,7 +49,7 @@ fn specs() -> Vec<ParamSpec> {
 }
 
 fn models() -> Vec<ModelInfo> {
-    vec![ModelInfo::new(
+    vec![ssm_plugin_kit::model_info(
         MODEL,
         "modified Shaw-Pierre oscillator, 2 DOF, damping proportional to stiffness, eq. (9.1)",
         &specs(),

@@ -10,9 +10,9 @@
 //! via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sect. 5.1, eqs. (23)-(25).
 
 use ssm_api::{
-    Constraints, ErrorKind, Harmonic, MechanicalSystem, Model, ModelInfo, MotionKind, ParamSpec,
-    Params, PluginError, PolyVector, SparseMatrix,
+    ErrorKind, Harmonic, Model, ModelInfo, MotionKind, PluginError, PolyVector, SparseMatrix,
 };
+use ssm_plugin_kit::{Constraints, MechanicalSystem, ParamSpec, Params};
 
 const MODEL: &str = "oscillator";
 

@@ -5,7 +5,7 @@
 //! - [`element`]: one two-node element; mass, linear stiffness and the
 //!   quadratic and cubic internal forces as exact sparse polynomials.
 //! - [`mesh`]: a straight beam of equal elements with end supports, assembled
-//!   into the sparse arrays of an `ssm_api::MechanicalSystem`.
+//!   into the sparse arrays of an `ssm_plugin_kit::MechanicalSystem`.
 //!
 //! Units are whatever the caller uses consistently (the divider: mm, kg, s, so
 //! forces in kg mm/s^2 and moduli in kPa).

@@ -2,7 +2,7 @@
 //! a model folder (see `ssm_model_files`), so that a plugin's model can be
 //! handed to another tool, or files checked against a plugin.
 
-use ssm_model_files::{ExportError, ModelFiles};
+use ssm_model_files::ExportError;
 
 use super::source::{build_model, SourceError};
 use crate::output::OutputSet;
@@ -50,7 +50,7 @@ pub fn export(
     // the engine's checks first: nothing is written that the engine (or the
     // reader) would refuse
     System::from_model(&plugin, model.clone())?;
-    let (files, notes) = ModelFiles::from_model(&model)?;
+    let (files, notes) = ssm_plugin_kit::files_from_model(&model)?;
     let source = format!(
         "plugin '{plugin}', model '{}' of {}",
         model.name,

@@ -5,10 +5,11 @@
 //! infinite frequency, and agreement with the Radau integrator on a
 //! nonlinear index-3 model.
 
-use ssm_api::{MechanicalSystem, SparseMatrix};
+use ssm_api::SparseMatrix;
 use ssm_core::fom::hht::{integrate, HhtOptions};
 use ssm_core::fom::{DaeProblem, Radau, RadauOptions, SimError};
 use ssm_core::model::system::System;
+use ssm_plugin_kit::MechanicalSystem;
 use ssm_tests::{linear_constrained_oscillator, system};
 
 /// The undamped oscillator `x'' + w^2 x = 0` as a mechanical model.

@@ -137,7 +137,7 @@ fn spatial_oscillator_with_cubic_constraint_round_trips() {
     let original = system("spatial-oscillator", "", "constraint = \"cubic\"");
     let plugin = Plugin::load(&plugin_path("spatial-oscillator")).unwrap();
     let model = plugin.build_model("", "constraint = \"cubic\"").unwrap();
-    let (files, notes) = ssm_model_files::ModelFiles::from_model(&model).unwrap();
+    let (files, notes) = ssm_plugin_kit::files_from_model(&model).unwrap();
     assert!(notes.is_empty(), "{notes:?}");
     let encoded = files.encode("test").unwrap();
     assert!(encoded.iter().any(|(n, _)| *n == "g3.coo"));
@@ -486,7 +486,7 @@ fn chain_of_100000_masses_from_files_through_the_sparse_path() {
         .unwrap()
         .build_model("", &params)
         .unwrap();
-    let (files, _) = ssm_model_files::ModelFiles::from_model(&model).unwrap();
+    let (files, _) = ssm_plugin_kit::files_from_model(&model).unwrap();
     let dir = tmp_dir("chain-files");
     std::fs::create_dir_all(&dir).unwrap();
     for (name, contents) in files.encode("test").unwrap() {

@@ -4,13 +4,14 @@
 //! for the truncation rules, and redundant constraints in oblique directions.
 
 use faer::Mat;
-use ssm_api::{Constraints, MechanicalSystem, PolyVector, SparseMatrix};
+use ssm_api::{PolyVector, SparseMatrix};
 use ssm_core::fom::hht::{integrate, HhtOptions};
 use ssm_core::fom::DaeProblem;
 use ssm_core::model::system::System;
 use ssm_core::reduce::pod::{
     global_projection, pod, reduce_constraints, residual_term, PodError, Truncation,
 };
+use ssm_plugin_kit::{Constraints, MechanicalSystem};
 
 /// Reference: Sect. 3.5 and Fig. 1 of the paper. A mass `m = 2` on a spring
 /// `k = 5` in `x` and `y`, held by the constraint `C_1 = y = 0`, released

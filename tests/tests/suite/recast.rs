@@ -4,7 +4,8 @@
 //! and the physical pencil has the recast pencil's spectrum minus the spurious
 //! zero modes.
 
-use ssm_api::{Constraints, Equilibrium, Expr, MechanicalSystem, SparseMatrix};
+use ssm_api::SparseMatrix;
+use ssm_plugin_kit::{Constraints, Equilibrium, Expr, MechanicalSystem};
 
 use ssm_core::model::recast::{AuxKind, RecastError};
 use ssm_core::model::system::{ModelError, System};

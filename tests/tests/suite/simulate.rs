@@ -304,9 +304,10 @@ fn chain_constraints_hold_over_100_periods_from_given_displacements() {
 
 #[test]
 fn bad_inputs_give_errors_naming_time_and_cause() {
-    use ssm_api::{Constraints, MechanicalSystem, PolyVector, SparseMatrix};
+    use ssm_api::{PolyVector, SparseMatrix};
     use ssm_core::fom::SimError;
     use ssm_core::model::system::System;
+    use ssm_plugin_kit::{Constraints, MechanicalSystem};
     use ssm_tests::oscillator_with_spectrum;
     // 1. an initial point the constraints cannot be evaluated at
     let (sys, _) = oscillator_with_spectrum("cubic");

@@ -284,7 +284,8 @@ fn spectrum_and_backbone_do_not_depend_on_units() {
 /// whatever the shift, with faer's `SymbolicSingular { index: .. }` beside it).
 #[test]
 fn redundant_constraints_are_named_not_blamed_on_the_shift() {
-    use ssm_api::{Constraints, MechanicalSystem, PolyVector, SparseMatrix};
+    use ssm_api::{PolyVector, SparseMatrix};
+    use ssm_plugin_kit::{Constraints, MechanicalSystem};
     let mut m = MechanicalSystem::new("redundant", &["x1", "x2"]);
     m.mass = SparseMatrix::diagonal(&[1.0, 1.0]);
     m.damping = SparseMatrix::diagonal(&[0.02, 0.02]);

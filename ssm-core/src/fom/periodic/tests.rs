@@ -1,8 +1,9 @@
 //! The discretization against direct quadrature and finite differences.
 
 use super::*;
-use ssm_api::{Harmonic, MechanicalSystem, PolyVector, SparseMatrix};
+use ssm_api::{Harmonic, PolyVector, SparseMatrix};
 use ssm_kernel::continuation::Problem;
+use ssm_plugin_kit::MechanicalSystem;
 
 /// `x'' + 0.04 x' + x + 0.5 x^2 + 0.3 x^3 = eps (cos Omega t + 0.4 sin 2 Omega t)`.
 fn duffing() -> System {

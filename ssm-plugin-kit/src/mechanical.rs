@@ -7,11 +7,12 @@
 
 use abi_stable::std_types::{RString, RVec};
 
-use crate::expr::{Expr, ExprVector};
-use crate::model::{
-    Harmonic, MechanicalInfo, Model, MotionKind, Output, PolyVector, SparseMatrix, StateInfo,
-    StateKind, TimeKind, Weight, SYMMETRY_TOLERANCE,
+use ssm_api::{
+    ErrorKind, Harmonic, MechanicalInfo, Model, MotionKind, Output, PluginError, PolyVector,
+    SparseMatrix, StateInfo, StateKind, TimeKind, Weight, SYMMETRY_TOLERANCE,
 };
+
+use crate::expr::{expr_vector, Expr};
 
 /// Configuration constraints `g(x) = 0` (eq. 2) in the `n` displacements: the
 /// polynomial ones `G0 x + g_nl(x)` first, then those written as expressions
@@ -384,7 +385,7 @@ impl MechanicalSystem {
                 }
             }
         }
-        let expressions = ExprVector::from_terms(big_n, big_n, &expr_terms);
+        let expressions = expr_vector(big_n, big_n, &expr_terms);
         let equilibrium: RVec<f64> = match &self.equilibrium {
             Some(eq) => {
                 eq.x.iter()
@@ -562,6 +563,12 @@ fn check_degree(what: &'static str, p: &PolyVector, min: u32) -> Result<(), Buil
     }
 }
 
+impl From<BuildError> for PluginError {
+    fn from(e: BuildError) -> Self {
+        Self::new(ErrorKind::BuildFailed, "mechanical builder", &e.to_string())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -630,8 +637,8 @@ mod tests {
         assert_eq!(
             row0[0].factors.as_slice(),
             &[
-                crate::VarPower { var: 0, power: 2 },
-                crate::VarPower { var: 4, power: 1 }
+                ssm_api::VarPower { var: 0, power: 2 },
+                ssm_api::VarPower { var: 4, power: 1 }
             ]
         );
     }

@@ -3,8 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::error::{ErrorKind, PluginError};
-use crate::listing::{ModelInfo, ParamInfo};
+use ssm_api::{ErrorKind, InputNeeds, ModelInfo, ParamInfo, PluginError, ReducerInfo, PATH_KIND};
 
 /// Type (and for strings, the allowed values) of a parameter.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -140,11 +139,6 @@ impl ParamSpec {
     }
 }
 
-/// The listed kind ([`ParamInfo::kind`]) of a [`ParamKind::Path`] parameter:
-/// the engine resolves relative values of such parameters against the scene's
-/// folder before it passes the table to the plugin.
-pub const PATH_KIND: &str = "path";
-
 /// Parsed and validated parameter values (defaults filled in).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
@@ -265,14 +259,27 @@ impl Params {
     }
 }
 
-impl ModelInfo {
-    /// The listing of a model with the parameters `specs` (defaults included).
-    pub fn new(name: &str, description: &str, specs: &[ParamSpec]) -> Self {
-        Self {
-            name: name.into(),
-            description: description.into(),
-            params: specs.iter().map(ParamSpec::info).collect(),
-        }
+/// The listing of a model with the parameters `specs` (defaults included).
+pub fn model_info(name: &str, description: &str, specs: &[ParamSpec]) -> ModelInfo {
+    ModelInfo {
+        name: name.into(),
+        description: description.into(),
+        params: specs.iter().map(ParamSpec::info).collect(),
+    }
+}
+
+/// The listing of a reducer with the parameters `specs` and what it `needs`.
+pub fn reducer_info(
+    name: &str,
+    description: &str,
+    specs: &[ParamSpec],
+    needs: InputNeeds,
+) -> ReducerInfo {
+    ReducerInfo {
+        name: name.into(),
+        description: description.into(),
+        params: specs.iter().map(ParamSpec::info).collect(),
+        needs,
     }
 }
 
