@@ -14,9 +14,10 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use ssm_core::fom::periodic::{reference_frc, ReferenceEventKind, ReferenceSettings};
+use ssm_core::fom::periodic::{reference_frc, ReferenceSettings};
 use ssm_core::fom::{steady_state, DaeProblem, SteadyOptions};
 use ssm_core::model::system::{OutputMap, System};
+use ssm_kernel::continuation::BifurcationKind;
 use ssm_tests::{duffing_fold, forced_duffing, system};
 
 fn settings(
@@ -61,7 +62,7 @@ fn duffing(c: &mut Criterion) {
         let errors: Vec<String> = b
             .events
             .iter()
-            .filter(|e| e.kind == ReferenceEventKind::Fold)
+            .filter(|e| e.kind == BifurcationKind::Fold)
             .map(|e| {
                 let (_, w) = duffing_fold(zeta, 1.0, eps, e.orbit.linf[0], e.orbit.omega);
                 format!("{:.2e}", (e.orbit.omega - w).abs() / w)
@@ -191,7 +192,7 @@ orders = [5]
     let pds: Vec<String> = b
         .events
         .iter()
-        .filter(|e| e.kind == ReferenceEventKind::PeriodDoubling)
+        .filter(|e| e.kind == BifurcationKind::PeriodDoubling)
         .map(|e| {
             format!(
                 "{:.5} ({:.1e} from the SSM's BP)",
@@ -204,7 +205,7 @@ orders = [5]
         .doubled
         .iter()
         .flat_map(|d| &d.events)
-        .filter(|e| e.kind == ReferenceEventKind::Fold)
+        .filter(|e| e.kind == BifurcationKind::Fold)
         .map(|e| {
             format!(
                 "{:.5} ({:.1e} from the SSM's SN)",

@@ -35,11 +35,10 @@
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 
-use crate::rom::frc::BifurcationKind;
 use crate::C64;
 use ssm_kernel::continuation::{
-    self as core, correct, local_parameter, solve_at_parameter, EventKind, Monitor, Problem,
-    ProblemFailure, Stop, Test,
+    self as core, correct, local_parameter, solve_at_parameter, BifurcationKind, EventKind,
+    Monitor, Problem, ProblemFailure, Stop, Test,
 };
 
 /// One term `coeff * q^exponents` of the equation of pair `pair`; exponents
@@ -90,21 +89,12 @@ pub struct BranchPoint {
 /// A located bifurcation on a continued branch.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Located {
-    /// Saddle-node, branch point or Hopf.
-    pub kind: LocatedKind,
+    /// Fold, branch point or Hopf.
+    pub kind: BifurcationKind,
     /// The point.
     pub at: BranchPoint,
     /// Tangent there (for branch switching).
     tangent: Vec<f64>,
-}
-
-/// Kind of a located point.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LocatedKind {
-    /// A fold or Hopf point.
-    Bifurcation(BifurcationKind),
-    /// A branch point.
-    BranchPoint,
 }
 
 /// One continued branch and what was found on it.
@@ -296,8 +286,8 @@ impl RotatingFrame {
                 // crosses a symmetric (pitchfork) branch point: that is the
                 // branch point the augmented determinant reports
                 EventKind::Fold if step_has(e.after, EventKind::Test(1)) => continue,
-                EventKind::Fold => LocatedKind::Bifurcation(BifurcationKind::SaddleNode),
-                EventKind::Test(1) => LocatedKind::BranchPoint,
+                EventKind::Fold => BifurcationKind::Fold,
+                EventKind::Test(1) => BifurcationKind::BranchPoint,
                 // det F_y alone: a fold (reported by the tangent) or a
                 // branch point (reported by the augmented determinant)
                 EventKind::Test(0) => continue,
@@ -308,7 +298,7 @@ impl RotatingFrame {
                     if real {
                         continue;
                     }
-                    LocatedKind::Bifurcation(BifurcationKind::Hopf)
+                    BifurcationKind::Hopf
                 }
             };
             located.push(Located {

@@ -11,9 +11,7 @@
 
 use crate::model::system::{OutputMap, System};
 use crate::rom::accuracy::{self, percent};
-use crate::rom::continuation::{
-    Branch, BranchPoint, LocatedKind, PolarTerm, RotatingFrame, Settings,
-};
+use crate::rom::continuation::{Branch, BranchPoint, PolarTerm, RotatingFrame, Settings};
 use crate::rom::frc_result::{
     CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
 };
@@ -22,6 +20,7 @@ use crate::spectrum::MasterMode;
 use crate::ssm::forced::{table_warning, ForcedSsm};
 use crate::ssm::SsmExpansion;
 use crate::C64;
+use ssm_kernel::continuation::BifurcationKind;
 
 /// Branch switches at most per curve (each branch point found is switched once).
 const MAX_SWITCHES: usize = 6;
@@ -296,7 +295,7 @@ pub fn forced_response_multi(
             let bps: Vec<_> = branches[k]
                 .located
                 .iter()
-                .filter(|l| l.kind == LocatedKind::BranchPoint)
+                .filter(|l| l.kind == BifurcationKind::BranchPoint)
                 .cloned()
                 .collect();
             for bp in bps {
@@ -306,7 +305,7 @@ pub fn forced_response_multi(
                 let seen = branches.iter().enumerate().any(|(i, b)| {
                     i != k
                         && b.located.iter().any(|l| {
-                            l.kind == LocatedKind::BranchPoint
+                            l.kind == BifurcationKind::BranchPoint
                                 && same_point(&l.at, &bp.at, settings.h_max)
                         })
                 });
@@ -396,10 +395,7 @@ pub fn forced_response_multi(
                             .map(|(a, b)| (a - b).norm())
                             .sum::<f64>()
                 };
-                let kind = match l.kind {
-                    LocatedKind::BranchPoint => "BP",
-                    LocatedKind::Bifurcation(b) => b.label(),
-                };
+                let kind = l.kind.label();
                 let rho: Vec<f64> = l.at.q.iter().map(|q| q.norm()).collect();
                 // a closed secondary branch runs through its mirror image
                 // (q_j -> -q_j for the pairs of odd resonance ratio, the same

@@ -31,30 +31,14 @@
 
 use crate::ssm::analysis::Polar;
 use crate::C64;
-
-/// Kind of a bifurcation point on an FRC.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BifurcationKind {
-    /// Saddle-node (fold): the determinant of the Jacobian vanishes.
-    SaddleNode,
-    /// Hopf: a complex pair crosses the imaginary axis.
-    Hopf,
-}
-
-impl BifurcationKind {
-    /// `SN` or `HB`, as in the summary.
-    pub fn label(self) -> &'static str {
-        match self {
-            Self::SaddleNode => "SN",
-            Self::Hopf => "HB",
-        }
-    }
-}
+use ssm_kernel::continuation::BifurcationKind;
 
 /// A located bifurcation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Bifurcation {
-    /// Kind.
+    /// Kind: [`BifurcationKind::Fold`] where the determinant of the
+    /// Jacobian vanishes, [`BifurcationKind::Hopf`] where a complex pair
+    /// crosses the imaginary axis.
     pub kind: BifurcationKind,
     /// Forcing frequency.
     pub omega: f64,
@@ -395,15 +379,19 @@ pub fn one_pair_frc(pb: &OnePair, rho_max: f64, samples: usize, omega_range: (f6
                 };
                 if let Some((pr, ptr, pdet)) = prev {
                     for (kind, before, after) in [
-                        (BifurcationKind::SaddleNode, pdet, det),
+                        (BifurcationKind::Fold, pdet, det),
                         (BifurcationKind::Hopf, ptr, trace),
                     ] {
-                        let hopf_ok = kind == BifurcationKind::SaddleNode || det > 0.0;
+                        let hopf_ok = kind == BifurcationKind::Fold || det > 0.0;
                         if before * after < 0.0 && hopf_ok {
                             let f = |x: f64| {
-                                pb.point(x, sign).map_or(0.0, |p| match kind {
-                                    BifurcationKind::SaddleNode => p.3,
-                                    BifurcationKind::Hopf => p.2,
+                                // the determinant for a fold, the trace for Hopf
+                                pb.point(x, sign).map_or(0.0, |p| {
+                                    if kind == BifurcationKind::Fold {
+                                        p.3
+                                    } else {
+                                        p.2
+                                    }
                                 })
                             };
                             let rb = bisect(&f, pr, r);
@@ -547,7 +535,7 @@ mod tests {
             assert!(d < 1e-9, "Hopf at u = {u}, trace roots {roots:?}");
         }
         // the continuation finds the same Hopf frequencies
-        use crate::rom::continuation::{LocatedKind, PolarTerm, RotatingFrame, Settings};
+        use crate::rom::continuation::{PolarTerm, RotatingFrame, Settings};
         let frame = RotatingFrame {
             terms: vec![
                 PolarTerm {
@@ -581,7 +569,7 @@ mod tests {
         let found: Vec<f64> = br
             .located
             .iter()
-            .filter(|l| l.kind == LocatedKind::Bifurcation(BifurcationKind::Hopf))
+            .filter(|l| l.kind == BifurcationKind::Hopf)
             .map(|l| l.at.omega)
             .collect();
         for h in &hopf {

@@ -153,7 +153,48 @@ impl<I> Point<I> {
     }
 }
 
-/// What was located on a branch.
+/// What a continued branch passes, in one vocabulary for every continued
+/// problem: the reduced model's forced responses (equilibria of the polar
+/// or rotating-frame dynamics) and the full system's periodic orbits. The
+/// core itself sees only an [`EventKind`]; each problem names it.
+///
+/// # References
+/// Y. A. Kuznetsov, *Elements of Applied Bifurcation Theory*, 3rd ed.,
+/// Springer (2004), Ch. 3-5 and 10.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BifurcationKind {
+    /// Fold (saddle-node): the branch turns in the parameter; a real
+    /// eigenvalue of an equilibrium crosses 0, or a Floquet multiplier of an
+    /// orbit passes `+1`.
+    Fold,
+    /// Hopf: a complex pair of eigenvalues of an equilibrium crosses the
+    /// imaginary axis.
+    Hopf,
+    /// Branch point: a real eigenvalue crosses 0 (a multiplier passes `+1`)
+    /// where the branch does not turn.
+    BranchPoint,
+    /// Period doubling: a multiplier passes `-1`.
+    PeriodDoubling,
+    /// Neimark-Sacker: a complex pair of multipliers leaves the unit circle.
+    NeimarkSacker,
+}
+
+impl BifurcationKind {
+    /// `SN`, `HB`, `BP`, `PD` or `NS`, as in the summary and the CSV files.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Fold => "SN",
+            Self::Hopf => "HB",
+            Self::BranchPoint => "BP",
+            Self::PeriodDoubling => "PD",
+            Self::NeimarkSacker => "NS",
+        }
+    }
+}
+
+/// What the core located on a branch: a fold in the parameter or a sign
+/// change of one of the problem's test functions (which the problem names
+/// with a [`BifurcationKind`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum EventKind {
     /// A fold in the parameter.

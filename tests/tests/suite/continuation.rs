@@ -3,9 +3,10 @@
 //! closed form from its averaged (quadratic) equations.
 
 use num_complex::Complex64 as C64;
-use ssm_core::rom::continuation::{LocatedKind, PolarTerm, RotatingFrame, Settings};
+use ssm_core::rom::continuation::{PolarTerm, RotatingFrame, Settings};
 use ssm_core::spectrum;
 use ssm_core::spectrum::Normalization;
+use ssm_kernel::continuation::BifurcationKind;
 use ssm_tests::{one_to_two_resonant, spectrum_options, ssm_of};
 
 /// Reference: the averaged equations of the 1:2 resonant pair with the second
@@ -109,7 +110,7 @@ fn one_to_two_branch_points_match_the_closed_form() {
     let bps: Vec<_> = main
         .located
         .iter()
-        .filter(|l| l.kind == LocatedKind::BranchPoint)
+        .filter(|l| l.kind == BifurcationKind::BranchPoint)
         .collect();
     eprintln!(
         "branch points: continuation {:?}, closed form {exact:?}",
@@ -161,7 +162,7 @@ fn one_to_two_branch_points_match_the_closed_form() {
         .fold(0.0, f64::max);
     assert!(peak > 1e-2, "secondary branch peak |q1| = {peak}");
     let rejoins = coupled.located.iter().any(|l| {
-        l.kind == LocatedKind::BranchPoint && ((l.at.omega - exact[1]) / exact[1]).abs() < 1e-4
+        l.kind == BifurcationKind::BranchPoint && ((l.at.omega - exact[1]) / exact[1]).abs() < 1e-4
     }) || coupled
         .points
         .iter()

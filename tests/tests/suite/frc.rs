@@ -5,12 +5,13 @@
 
 use num_complex::Complex64 as C64;
 use ssm_core::model::system::System;
-use ssm_core::rom::frc::{one_pair_frc, response_amplitudes, BifurcationKind, Frc, OnePair};
+use ssm_core::rom::frc::{one_pair_frc, response_amplitudes, Frc, OnePair};
 use ssm_core::spectrum::Normalization;
 use ssm_core::spectrum::{self, MasterMode};
 use ssm_core::ssm::analysis::polar;
 use ssm_core::ssm::forced::ForcedSsm;
 use ssm_core::ssm::SsmExpansion;
+use ssm_kernel::continuation::BifurcationKind;
 use ssm_tests::{spectrum_options, ssm_of, system};
 
 const ZETA: f64 = 0.002;
@@ -130,7 +131,7 @@ fn duffing_frc_matches_harmonic_balance() {
     let sn: Vec<_> = frc
         .bifurcations
         .iter()
-        .filter(|b| b.kind == BifurcationKind::SaddleNode)
+        .filter(|b| b.kind == BifurcationKind::Fold)
         .collect();
     assert_eq!(sn.len(), 2, "{:?}", frc.bifurcations);
     let (w_lo, w_hi) = (sn[0].omega.min(sn[1].omega), sn[0].omega.max(sn[1].omega));
@@ -242,7 +243,7 @@ fn fig6_residual_of_the_leading_order_periodic_ssm() {
         let a = frc
             .bifurcations
             .iter()
-            .filter(|b| b.kind == BifurcationKind::SaddleNode)
+            .filter(|b| b.kind == BifurcationKind::Fold)
             .max_by(|x, y| x.rho.total_cmp(&y.rho))
             .copied();
         // the top of the curve when there is no fold (small eps)

@@ -3,11 +3,10 @@
 
 use num_complex::Complex64 as C64;
 use ssm_core::fom::periodic::{
-    floquet::floquet, reference_frc, HarmonicBalance, ReferenceBranch, ReferenceEventKind,
-    ReferenceSettings,
+    floquet::floquet, reference_frc, HarmonicBalance, ReferenceBranch, ReferenceSettings,
 };
 use ssm_core::model::system::OutputMap;
-use ssm_kernel::continuation::{solve_at_parameter, Settings};
+use ssm_kernel::continuation::{solve_at_parameter, BifurcationKind, Settings};
 use ssm_tests::{duffing_fold, forced_duffing, linear_steady_state};
 
 /// The orbit of `hb` at fixed `omega` by Newton from the coefficients `c`.
@@ -133,7 +132,7 @@ fn duffing_branch_without_stability_is_the_same_curve() {
     let folds = |b: &ReferenceBranch| -> Vec<f64> {
         b.events
             .iter()
-            .filter(|e| e.kind == ReferenceEventKind::Fold)
+            .filter(|e| e.kind == BifurcationKind::Fold)
             .map(|e| e.orbit.omega)
             .collect()
     };
@@ -157,7 +156,7 @@ fn duffing_folds_agree_with_the_harmonic_balance_closed_form() {
         let folds: Vec<_> = b
             .events
             .iter()
-            .filter(|e| e.kind == ReferenceEventKind::Fold)
+            .filter(|e| e.kind == BifurcationKind::Fold)
             .collect();
         assert_eq!(folds.len(), 2, "H = {h}: {:?}", b.events);
         for f in folds {
@@ -700,7 +699,7 @@ fn period_doublings_of_a_parametric_pump_and_the_doubled_branch() {
     let pds: Vec<f64> = b
         .events
         .iter()
-        .filter(|e| e.kind == ReferenceEventKind::PeriodDoubling)
+        .filter(|e| e.kind == BifurcationKind::PeriodDoubling)
         .map(|e| e.orbit.omega)
         .collect();
     assert_eq!(pds.len(), 2, "{:?}", b.events);

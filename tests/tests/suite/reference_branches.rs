@@ -4,11 +4,10 @@
 //! in `eps` at a fixed `Omega`).
 
 use ssm_core::fom::periodic::{
-    reference_amplitude, reference_frc, AmplitudeSettings, ReferenceError, ReferenceEventKind,
-    ReferenceSettings, Seed,
+    reference_amplitude, reference_frc, AmplitudeSettings, ReferenceError, ReferenceSettings, Seed,
 };
 use ssm_core::model::system::OutputMap;
-use ssm_kernel::continuation::Stop;
+use ssm_kernel::continuation::{BifurcationKind, Stop};
 use ssm_tests::{duffing_fold, duffing_orbits, forced_duffing};
 
 const ZETA: f64 = 0.005;
@@ -100,7 +99,7 @@ fn a_seed_reaches_the_upper_branch_that_the_start_from_rest_misses() {
     let folds: Vec<_> = up
         .events
         .iter()
-        .filter(|e| e.kind == ReferenceEventKind::Fold)
+        .filter(|e| e.kind == BifurcationKind::Fold)
         .collect();
     assert_eq!(folds.len(), 1, "{:?}", up.events);
     let f = &folds[0].orbit;
@@ -225,7 +224,7 @@ step = {step}
     let folds: Vec<f64> = wide
         .events
         .iter()
-        .filter(|e| e.kind == ReferenceEventKind::Fold)
+        .filter(|e| e.kind == BifurcationKind::Fold)
         .map(|e| e.orbit.omega)
         .collect();
     assert_eq!(folds.len(), 2, "{folds:?}");
@@ -240,7 +239,7 @@ step = {step}
         .branches
         .iter()
         .flat_map(|b| &b.events)
-        .filter(|e| e.kind == ReferenceEventKind::Fold)
+        .filter(|e| e.kind == BifurcationKind::Fold)
         .map(|e| e.orbit.omega)
         .collect();
     assert_eq!(found.len(), 1, "{found:?}");
@@ -359,7 +358,7 @@ fn duffing_amplitude_response_follows_the_closed_form_through_both_jumps() {
     let folds: Vec<_> = b
         .events
         .iter()
-        .filter(|e| e.kind == ReferenceEventKind::Fold)
+        .filter(|e| e.kind == BifurcationKind::Fold)
         .collect();
     assert_eq!(folds.len(), 2, "{:?}", b.events);
     for (f, a) in folds.iter().zip(&roots) {
@@ -490,7 +489,7 @@ fn amplitude_and_frequency_continuations_meet_on_the_index_3_oscillator() {
     let folds: Vec<f64> = a
         .events
         .iter()
-        .filter(|e| e.kind == ReferenceEventKind::Fold)
+        .filter(|e| e.kind == BifurcationKind::Fold)
         .map(|e| e.orbit.epsilon)
         .collect();
     assert_eq!(folds.len(), 2, "{:?}", a.events);
@@ -499,7 +498,7 @@ fn amplitude_and_frequency_continuations_meet_on_the_index_3_oscillator() {
         let near = b
             .events
             .iter()
-            .filter(|e| e.kind == ReferenceEventKind::Fold)
+            .filter(|e| e.kind == BifurcationKind::Fold)
             .map(|e| (e.orbit.omega - omega).abs() / omega)
             .fold(f64::INFINITY, f64::min);
         eprintln!(
@@ -657,7 +656,7 @@ fn a_failed_branch_switch_is_a_warning_beside_the_branches_that_worked() {
     let pds = main
         .events
         .iter()
-        .filter(|e| e.kind == ReferenceEventKind::PeriodDoubling)
+        .filter(|e| e.kind == BifurcationKind::PeriodDoubling)
         .count();
     assert_eq!(pds, 2);
     let summary = String::from_utf8_lossy(r.outputs.get("summary.json").expect("summary"));

@@ -7,7 +7,8 @@
 use crate::model::system::OutputMap;
 use crate::C64;
 use ssm_kernel::continuation::{
-    self, solve_at_parameter, ContinuationError, EventKind, Point, Problem, Settings, Stop,
+    self, solve_at_parameter, BifurcationKind, ContinuationError, EventKind, Point, Problem,
+    Settings, Stop,
 };
 
 use super::floquet::{FloquetError, MultiplierCheck};
@@ -102,32 +103,6 @@ pub struct ReferenceSettings {
     pub seeds: Vec<Seed>,
 }
 
-/// What was located on the reference branch.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ReferenceEventKind {
-    /// A fold (saddle-node of orbits): a multiplier passes `+1` where the
-    /// branch turns in `Omega`.
-    Fold,
-    /// A multiplier passes `+1` without a fold: a branch point.
-    BranchPoint,
-    /// A multiplier passes `-1`: period doubling.
-    PeriodDoubling,
-    /// A complex pair of multipliers leaves the unit circle.
-    NeimarkSacker,
-}
-
-impl ReferenceEventKind {
-    /// `SN`, `BP`, `PD` or `NS`.
-    pub fn label(self) -> &'static str {
-        match self {
-            Self::Fold => "SN",
-            Self::BranchPoint => "BP",
-            Self::PeriodDoubling => "PD",
-            Self::NeimarkSacker => "NS",
-        }
-    }
-}
-
 /// One orbit of the reference forced response.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReferenceOrbit {
@@ -154,7 +129,7 @@ pub struct ReferenceOrbit {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReferenceEvent {
     /// What it is.
-    pub kind: ReferenceEventKind,
+    pub kind: BifurcationKind,
     /// The orbit there.
     pub orbit: ReferenceOrbit,
     /// The critical multiplier.
@@ -322,8 +297,8 @@ pub(super) fn classify(
                 .as_ref()
                 .and_then(|f| f.critical(e.kind != EventKind::Test(1)));
         let kind = match e.kind {
-            EventKind::Fold => ReferenceEventKind::Fold,
-            EventKind::Test(1) => ReferenceEventKind::NeimarkSacker,
+            EventKind::Fold => BifurcationKind::Fold,
+            EventKind::Test(1) => BifurcationKind::NeimarkSacker,
             EventKind::Test(_) => {
                 let Some(rho) = critical else { continue };
                 if rho.re > 0.0 {
@@ -334,10 +309,10 @@ pub(super) fn classify(
                     if fold_same_step {
                         continue;
                     }
-                    ReferenceEventKind::BranchPoint
+                    BifurcationKind::BranchPoint
                 } else {
                     doublings.push(e.at.clone());
-                    ReferenceEventKind::PeriodDoubling
+                    BifurcationKind::PeriodDoubling
                 }
             }
         };

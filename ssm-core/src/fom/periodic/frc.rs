@@ -22,8 +22,8 @@
 //! critical multipliers).
 
 pub use super::branch::{
-    series_linf, ReferenceBranch, ReferenceError, ReferenceEvent, ReferenceEventKind, ReferenceFrc,
-    ReferenceOrbit, ReferenceSettings,
+    series_linf, ReferenceBranch, ReferenceError, ReferenceEvent, ReferenceFrc, ReferenceOrbit,
+    ReferenceSettings,
 };
 
 use crate::model::system::System;

@@ -77,7 +77,7 @@ pub use amplitude::{reference_amplitude, reference_amplitude_resumable, Amplitud
 pub use floquet::{Floquet, FloquetError};
 pub use frc::{
     reference_frc, reference_frc_resumable, ReferenceBranch, ReferenceError, ReferenceEvent,
-    ReferenceEventKind, ReferenceOrbit, ReferenceSettings,
+    ReferenceOrbit, ReferenceSettings,
 };
 pub use problem::Parameter;
 pub use runs::Runs;
