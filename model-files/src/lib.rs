@@ -24,6 +24,8 @@
 //! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical systems
 //! via spectral submanifolds*, Nonlinear Dyn. 111 (2023) 8881-8911, eqs. (1)-(2).
 
+#![warn(missing_docs)]
+
 mod coo;
 mod error;
 pub mod input;

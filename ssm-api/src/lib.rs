@@ -52,6 +52,8 @@
 //! - a plugin built against another major version is refused at load with
 //!   both versions named.
 
+#![warn(missing_docs)]
+
 #[macro_use]
 mod tag;
 

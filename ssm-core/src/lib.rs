@@ -27,7 +27,9 @@
 //! Below it, `ssm-kernel` holds the series, Chebyshev tables and the
 //! continuation core. No two files or folders import each other (checked by
 //! the suite's `layers::no_import_cycles_between_files_or_folders`), and the
-//! crate does not depend on `toml` (`layers::core_crates_do_not_depend_on_toml`).
+//! crate does not depend on `toml` (`layers::core_crates_do_not_depend_on_the_front_end`).
+
+#![warn(missing_docs)]
 
 pub mod compare;
 pub mod fom;

@@ -25,6 +25,8 @@
 //! the stages' result types, and no two files or folders import each other
 //! (checked by the suite's `layers::no_import_cycles_between_files_or_folders`).
 
+#![warn(missing_docs)]
+
 pub mod analyses;
 pub mod output;
 pub mod pipeline;

@@ -9,6 +9,8 @@
 //!   control, test functions and the events they locate);
 //! - [`number`]: numbers from user input in messages and CSV files.
 
+#![warn(missing_docs)]
+
 pub mod chebyshev;
 pub mod continuation;
 pub mod number;

@@ -21,12 +21,16 @@
 //! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical systems
 //! via spectral submanifolds*, Nonlinear Dyn. 111 (2023) 8881-8911, eqs. (1)-(5).
 
+#![warn(missing_docs)]
+
 mod expr;
 mod files;
+mod listing;
 mod mechanical;
 mod params;
 
 pub use expr::{expr_vector, Expr};
 pub use files::{files_from_model, mechanical_from_files};
+pub use listing::{model_info, reducer_info};
 pub use mechanical::{BuildError, Constraints, Equilibrium, MechanicalSystem};
-pub use params::{model_info, reducer_info, ParamKind, ParamSpec, ParamValue, Params};
+pub use params::{ParamKind, ParamSpec, ParamValue, Params};

@@ -12,7 +12,7 @@ use ssm_api::{
     SparseMatrix, StateInfo, StateKind, TimeKind, Weight, SYMMETRY_TOLERANCE,
 };
 
-use crate::expr::{expr_vector, Expr};
+use crate::{expr_vector, Expr};
 
 /// Configuration constraints `g(x) = 0` (eq. 2) in the `n` displacements: the
 /// polynomial ones `G0 x + g_nl(x)` first, then those written as expressions

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use ssm_api::{ErrorKind, InputNeeds, ModelInfo, ParamInfo, PluginError, ReducerInfo, PATH_KIND};
+use ssm_api::{ErrorKind, ParamInfo, PluginError, PATH_KIND};
 
 /// Type (and for strings, the allowed values) of a parameter.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -256,30 +256,6 @@ impl Params {
             Some(ParamValue::Floats(v)) => v,
             _ => panic!("parameter '{name}' is not a declared list parameter"),
         }
-    }
-}
-
-/// The listing of a model with the parameters `specs` (defaults included).
-pub fn model_info(name: &str, description: &str, specs: &[ParamSpec]) -> ModelInfo {
-    ModelInfo {
-        name: name.into(),
-        description: description.into(),
-        params: specs.iter().map(ParamSpec::info).collect(),
-    }
-}
-
-/// The listing of a reducer with the parameters `specs` and what it `needs`.
-pub fn reducer_info(
-    name: &str,
-    description: &str,
-    specs: &[ParamSpec],
-    needs: InputNeeds,
-) -> ReducerInfo {
-    ReducerInfo {
-        name: name.into(),
-        description: description.into(),
-        params: specs.iter().map(ParamSpec::info).collect(),
-        needs,
     }
 }
 
