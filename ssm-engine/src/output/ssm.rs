@@ -98,17 +98,24 @@ pub fn backbone_csv(curves: &[BackboneCurve], outputs: &[String]) -> String {
     for c in curves {
         for p in &c.points {
             csv.push_str(&format!("{},{:.10e},{:.10e}", c.order, p.rho, p.omega));
-            for a in &p.amplitudes {
-                csv.push_str(&format!(",{a:.10e}"));
-            }
-            csv.push(',');
-            if let Some(e) = p.error_estimate.filter(|e| e.is_finite()) {
-                csv.push_str(&format!("{e:.3e}"));
-            }
-            csv.push('\n');
+            push_row_end(&mut csv, &p.amplitudes, p.error_estimate);
         }
     }
     csv
+}
+
+/// The end of a curve point's CSV row: its output amplitudes (`,%.10e`
+/// each), then `,` and its error estimate (`%.3e`; empty when there is none
+/// or it is not finite), then the newline.
+pub fn push_row_end(csv: &mut String, amplitudes: &[f64], estimate: Option<f64>) {
+    for a in amplitudes {
+        csv.push_str(&format!(",{a:.10e}"));
+    }
+    csv.push(',');
+    if let Some(e) = estimate.filter(|e| e.is_finite()) {
+        csv.push_str(&format!("{e:.3e}"));
+    }
+    csv.push('\n');
 }
 
 /// A curve's legend: its order, estimate and, above the target, a warning.

@@ -2,7 +2,7 @@
 
 use super::DampingCurves;
 use crate::output::plot::{stacked_plot, Curve, Panel, PlotError, Scale};
-use crate::output::ssm::estimate_label;
+use crate::output::ssm::{estimate_label, push_row_end};
 
 /// `damping.csv`: `order,rho,omega,decay_rate,zeta,<output>...,error_estimate`
 /// (the last empty where there is no estimate).
@@ -19,14 +19,7 @@ pub(super) fn csv(d: &DampingCurves, outputs: &[String]) -> String {
                 "{},{:.10e},{:.10e},{:.10e},{:.10e}",
                 c.order, p.rho, p.omega, p.decay_rate, p.zeta
             ));
-            for a in &p.amplitudes {
-                csv.push_str(&format!(",{a:.10e}"));
-            }
-            csv.push(',');
-            if let Some(e) = p.error_estimate.filter(|e| e.is_finite()) {
-                csv.push_str(&format!("{e:.3e}"));
-            }
-            csv.push('\n');
+            push_row_end(&mut csv, &p.amplitudes, p.error_estimate);
         }
     }
     csv
