@@ -97,6 +97,8 @@ enum Command {
         #[arg(value_name = "DIR")]
         dir: PathBuf,
     },
+    /// Print the JSON Schema of summary.json (docs/summary.schema.json).
+    Schema,
 }
 
 /// Progress of a run: a spinner on a terminal, else one line per stage on
@@ -325,11 +327,15 @@ fn plugin_listing(registry: &Registry) -> Result<String, std::fmt::Error> {
     Ok(s)
 }
 
-/// Prints the plugin listing; a closed pipe (`ssm-engine plugins | head -1`)
-/// ends the listing quietly.
+/// Prints the plugin listing.
 fn list_plugins(registry: &Registry) -> anyhow::Result<()> {
+    print_text(&plugin_listing(registry)?)
+}
+
+/// Writes `text` to stdout; a closed pipe (`ssm-engine plugins | head -1`)
+/// ends it quietly.
+fn print_text(text: &str) -> anyhow::Result<()> {
     use std::io::Write;
-    let text = plugin_listing(registry)?;
     match std::io::stdout().lock().write_all(text.as_bytes()) {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
         _ => Ok(()),
@@ -337,6 +343,9 @@ fn list_plugins(registry: &Registry) -> anyhow::Result<()> {
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
+    if let Some(Command::Schema) = cli.command {
+        return print_text(&ssm_engine::output::summary::schema_json());
+    }
     let mut registry = Registry::discover(&cli.plugins)?;
     let resume = match (cli.resume_from, cli.resume) {
         (Some(p), _) => Some(Some(p)),
@@ -345,6 +354,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     };
     let (scene_path, out, report) = match cli.command {
         Some(Command::Plugins) => return list_plugins(&registry),
+        // printed before the plugins were looked for
+        Some(Command::Schema) => return Ok(()),
         Some(Command::Report { scene, out }) => (scene, out, true),
         Some(Command::Export { scene, dir }) => {
             let scene = SceneFile::load(&scene)?;

@@ -5,7 +5,9 @@ must agree to a relative 1e-12 (timings and the keys the newer run adds are
 skipped; warnings must be identical).
 
 usage: zoo_compare.py BEFORE_DIR AFTER_DIR
-       zoo_compare.py --run ENGINE OUT_DIR   (every zoo scene into OUT_DIR/<scene>)
+       zoo_compare.py --run ENGINE OUT_DIR   (every zoo scene into OUT_DIR/<scene>,
+                                              each summary checked against
+                                              docs/summary.schema.json)
 
 The data scenes (`*_data.toml`) run first and also write into the
 repository's `out/`, where the NAR scenes read their signals.
@@ -124,6 +126,20 @@ def run(engine, out):
                 shutil.rmtree(dest)
             shutil.copytree(target, dest)
         print(f"{scene.stem}: ok")
+    # every summary against the engine's JSON Schema
+    check = subprocess.run(
+        [
+            sys.executable,
+            str(root / "tests/scripts/validate_summary.py"),
+            str(root / "docs/summary.schema.json"),
+            *sorted(str(p) for p in out.glob("*/summary.json")),
+        ],
+        check=False,
+    )
+    if check.returncode != 0:
+        failed += 1
+    else:
+        print("every summary follows docs/summary.schema.json")
     return 1 if failed else 0
 
 

@@ -142,8 +142,47 @@ pub fn files_beside(out: &Path, kind: &str) -> Vec<PathBuf> {
     found
 }
 
+/// Checks `summary` (a `summary.json` file) against the engine's JSON
+/// Schema, `docs/summary.schema.json`, with the Python package `jsonschema`
+/// (`tests/scripts/validate_summary.py`); panics with every violation.
+pub fn assert_summary_valid(summary: &Path) {
+    let root = repo_root();
+    let o = std::process::Command::new("python3")
+        .arg(root.join("tests/scripts/validate_summary.py"))
+        .arg(root.join("docs/summary.schema.json"))
+        .arg(summary)
+        .output()
+        .expect(
+            "python3 runs the schema check: install python3 and the packages of \
+             tests/requirements.txt (`python3 -m pip install -r tests/requirements.txt`)",
+        );
+    assert!(
+        o.status.success(),
+        "{} does not follow docs/summary.schema.json:\n{}{}",
+        summary.display(),
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// [`assert_summary_valid`] for the `summary.json` of an in-process run
+/// (`name` names its scratch file).
+pub fn assert_job_summary_valid(job: &ssm_engine::pipeline::JobResult, name: &str) {
+    let dir = tmp_dir(&format!("summary-{name}"));
+    std::fs::create_dir_all(&dir).expect("scratch directory");
+    let file = dir.join("summary.json");
+    std::fs::write(
+        &file,
+        job.outputs.get("summary.json").expect("summary.json"),
+    )
+    .expect("written");
+    assert_summary_valid(&file);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Runs the zoo scene `scene` through the binary (with `args` before it, e.g.
-/// `["report"]`); returns its summary and output directory.
+/// `["report"]`); returns its summary (checked against the schema) and
+/// output directory.
 pub fn run_zoo_with(args: &[&str], scene: &str) -> (serde_json::Value, PathBuf) {
     let out = tmp_dir(scene);
     let o = std::process::Command::new(engine_binary())
@@ -155,6 +194,7 @@ pub fn run_zoo_with(args: &[&str], scene: &str) -> (serde_json::Value, PathBuf) 
         .output()
         .expect("ssm-engine runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_summary_valid(&out.join("summary.json"));
     let s = serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("summary"))
         .expect("summary is JSON");
     (s, out)
@@ -552,12 +592,14 @@ pub fn chain3_data(dir: &Path) -> Vec<PathBuf> {
 
 /// Runs the zoo's data scene `scene` (a `[simulate]` section with `runs`
 /// runs) in-process and writes its files into `dir`; returns the
-/// `simulation_<k>.csv` files, so tests use the zoo's own data.
+/// `simulation_<k>.csv` files, so tests use the zoo's own data (its summary
+/// checked against the schema).
 pub fn zoo_data(scene: &str, dir: &Path, runs: usize) -> Vec<PathBuf> {
     let text = std::fs::read_to_string(repo_root().join("zoo").join(scene))
         .unwrap_or_else(|e| panic!("zoo/{scene}: {e}"));
     let r = run_scene_text(&text).unwrap_or_else(|e| panic!("zoo/{scene}: {e}"));
     r.outputs.write(dir).expect("data written");
+    assert_summary_valid(&dir.join("summary.json"));
     (1..=runs)
         .map(|k| dir.join(format!("simulation_{k}.csv")))
         .collect()

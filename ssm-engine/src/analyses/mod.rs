@@ -14,6 +14,7 @@ pub mod damping;
 use std::fmt::Debug;
 use std::marker::PhantomData;
 
+use schemars::{json_schema, JsonSchema, Schema, SchemaGenerator};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
@@ -99,8 +100,9 @@ pub trait Analysis {
     /// What is asked (serde: from the scene's table or from JSON; unknown
     /// keys are refused, defaults documented on the fields).
     type Spec: Serialize + DeserializeOwned;
-    /// What it computed (serialized into `summary.json`).
-    type Output: Serialize + Debug + Send;
+    /// What it computed (serialized into `summary.json`; its schema is part
+    /// of `summary.json`'s).
+    type Output: Serialize + JsonSchema + Debug + Send;
     /// Why it failed.
     type Error: std::error::Error + Send + Sync + 'static;
 
@@ -150,6 +152,22 @@ pub trait Entry: Sync {
         spec: &serde_json::Value,
         cx: &Context<'_>,
     ) -> Result<Box<dyn Finished>, AnalysisError>;
+    /// The JSON Schema of its results (`analyses.<name>` of `summary.json`).
+    fn output_schema(&self, generator: &mut SchemaGenerator) -> Schema;
+}
+
+/// The schema of `analyses` of `summary.json`: an object with one optional
+/// key per analysis of [`REGISTRY`], holding its results.
+pub fn outputs_schema(generator: &mut SchemaGenerator) -> Schema {
+    let properties: serde_json::Map<String, serde_json::Value> = REGISTRY
+        .iter()
+        .map(|e| (e.name().to_owned(), e.output_schema(generator).to_value()))
+        .collect();
+    json_schema!({
+        "type": "object",
+        "properties": properties,
+        "additionalProperties": false,
+    })
 }
 
 /// The results of an analysis, for the run's summary, accuracy and files.
@@ -264,6 +282,10 @@ impl<A: Analysis + 'static> Entry for Slice<A> {
             source: Box::new(e),
         })?;
         Ok(Box::new(Done::<A>(out)))
+    }
+
+    fn output_schema(&self, generator: &mut SchemaGenerator) -> Schema {
+        generator.subschema_for::<A::Output>()
     }
 }
 

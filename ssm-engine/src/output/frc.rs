@@ -2,15 +2,17 @@
 //! reference of `[validate]` drawn in) and the summary's `frc`. They format a
 //! [`ForcedResponse`] and compute nothing.
 
-use serde_json::{json, Value};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 use ssm_kernel::number::short;
 
+use super::json::{Complex, PerPair};
 use super::plot::{line_plot, Curve, PlotError, Scale};
 use super::reference::reference_curves;
 use ssm_core::compare::validation::SteadyReference;
 use ssm_core::fom::periodic::frc::ReferenceFrc;
 use ssm_core::rom::accuracy::percent;
-use ssm_core::rom::forced_response::{CurveDetails, ForcedResponse};
+use ssm_core::rom::forced_response::{CurveDetails, ForcedResponse, FrcCurve};
 
 /// `frc.csv`: `order,epsilon,omega,stable,branch,<out>_linf...,rho_1..rho_m,<out>_h1...`.
 pub fn frc_csv(f: &ForcedResponse) -> String {
@@ -138,80 +140,153 @@ pub fn frc_svg(
     )
 }
 
-/// The summary's `frc`.
-pub fn frc_json(f: &ForcedResponse) -> Value {
-    let one_pair = f.forcing_on_master.len() == 1;
-    let bifurcations: Vec<Value> = f
-        .curves
-        .iter()
-        .flat_map(|c| {
-            c.bifurcations.iter().map(move |b| {
-                json!({
-                    "kind": b.kind,
-                    "omega": b.omega,
-                    "epsilon": c.epsilon,
-                    "order": c.order,
-                    "rho": if one_pair { json!(b.rho[0]) } else { json!(b.rho) },
-                    "branch": b.branch,
-                })
-            })
-        })
-        .collect();
-    let curves: Vec<Value> = f
-        .curves
-        .iter()
-        .map(|c| {
-            let mut v = json!({
-                "order": c.order,
-                "epsilon": c.epsilon,
-                "points": c.points,
-                "branches": c.branches,
-                "untrusted": c.untrusted,
-            });
-            match &c.details {
-                CurveDetails::OnePair {
-                    rho_peak,
-                    invariance_error_at_peak,
-                    residual_eq60_at_peak,
-                    error_estimate,
-                    nonautonomous_order,
-                } => {
-                    v["error_estimate"] =
-                        json!(error_estimate.is_finite().then_some(error_estimate));
-                    v["rho_peak"] = json!(rho_peak);
-                    v["invariance_error_at_peak"] = json!(invariance_error_at_peak);
-                    v["residual_eq60_at_peak"] = json!(residual_eq60_at_peak);
-                    v["nonautonomous_order"] = json!(nonautonomous_order);
-                }
-                CurveDetails::Continuation {
-                    branch_switches,
-                    continuation_steps,
-                    error_estimate,
-                } => {
-                    v["error_estimate"] =
-                        json!(error_estimate.is_finite().then_some(error_estimate));
-                    v["branch_switches"] = json!(branch_switches);
-                    v["continuation_steps"] = json!(continuation_steps);
-                }
+/// `"frc"` of `summary.json`: the forced response curves of `[forcing]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FrcSummary {
+    /// Bifurcations and branch points inside the frequency range.
+    pub bifurcations: Vec<FrcBifurcationSummary>,
+    /// Points of all curves (the rows of `frc.csv`).
+    pub points: usize,
+    /// One entry per expansion order and forcing amplitude.
+    pub curves: Vec<FrcCurveSummary>,
+    /// External resonance ratios `r_j` (eq. 16).
+    pub resonance: Vec<f64>,
+    /// Resonant forcing `u_j^* Fext` on the master pair (one per pair for
+    /// several).
+    pub forcing_on_master: PerPair<Complex>,
+    /// Terms left out or other caveats.
+    pub warnings: Vec<String>,
+    /// Largest polar amplitude searched (one pair).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rho_max: Option<f64>,
+}
+
+/// A bifurcation located on a reduced forced response curve.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FrcBifurcationSummary {
+    /// `SN` (fold), `HB` (Hopf), `BP` (branch point), `PD`, `NS`.
+    pub kind: String,
+    /// Forcing frequency.
+    pub omega: f64,
+    /// Forcing amplitude of its curve.
+    pub epsilon: f64,
+    /// Expansion order of its curve.
+    pub order: usize,
+    /// `|q_j|` there (one number for one master pair).
+    pub rho: PerPair<f64>,
+    /// Branch it lies on.
+    pub branch: usize,
+}
+
+/// One reduced forced response curve: an order and a forcing amplitude.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FrcCurveSummary {
+    /// Expansion order.
+    pub order: usize,
+    /// Forcing amplitude.
+    pub epsilon: f64,
+    /// Points written (inside the frequency range).
+    pub points: usize,
+    /// Branches.
+    pub branches: usize,
+    /// The error estimate exceeds `[ssm] tolerance`.
+    pub untrusted: bool,
+    /// Estimated relative error of the response amplitude (null when the
+    /// expansion diverged or there is none).
+    pub error_estimate: Option<f64>,
+    /// One pair: largest polar amplitude on the curve.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rho_peak: Option<f64>,
+    /// One pair: eq. (41) at `rho_peak` (null when not computed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub invariance_error_at_peak: Option<Option<f64>>,
+    /// One pair: largest eq. (60) residual along the peak's orbit (null when
+    /// not computed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub residual_eq60_at_peak: Option<Option<f64>>,
+    /// One pair: order of the non-autonomous terms used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nonautonomous_order: Option<usize>,
+    /// Several pairs: branches switched to at branch points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branch_switches: Option<usize>,
+    /// Several pairs: continuation steps over all branches.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub continuation_steps: Option<usize>,
+}
+
+impl FrcCurveSummary {
+    fn new(c: &FrcCurve) -> Self {
+        let finite = |e: f64| e.is_finite().then_some(e);
+        let mut v = FrcCurveSummary {
+            order: c.order,
+            epsilon: c.epsilon,
+            points: c.points,
+            branches: c.branches,
+            untrusted: c.untrusted,
+            error_estimate: finite(c.error_estimate()),
+            rho_peak: None,
+            invariance_error_at_peak: None,
+            residual_eq60_at_peak: None,
+            nonautonomous_order: None,
+            branch_switches: None,
+            continuation_steps: None,
+        };
+        match &c.details {
+            CurveDetails::OnePair {
+                rho_peak,
+                invariance_error_at_peak,
+                residual_eq60_at_peak,
+                nonautonomous_order,
+                ..
+            } => {
+                v.rho_peak = Some(*rho_peak);
+                v.invariance_error_at_peak = Some(*invariance_error_at_peak);
+                v.residual_eq60_at_peak = Some(*residual_eq60_at_peak);
+                v.nonautonomous_order = Some(*nonautonomous_order);
             }
-            v
-        })
-        .collect();
-    let forcing: Vec<Value> = f
-        .forcing_on_master
-        .iter()
-        .map(|s| json!({"re": s.re, "im": s.im}))
-        .collect();
-    let mut v = json!({
-        "bifurcations": bifurcations,
-        "points": f.rows.len(),
-        "curves": curves,
-        "resonance": f.resonance,
-        "forcing_on_master": if one_pair { forcing[0].clone() } else { json!(forcing) },
-        "warnings": f.warnings,
-    });
-    if let Some(r) = f.rho_max {
-        v["rho_max"] = json!(r);
+            CurveDetails::Continuation {
+                branch_switches,
+                continuation_steps,
+                ..
+            } => {
+                v.branch_switches = Some(*branch_switches);
+                v.continuation_steps = Some(*continuation_steps);
+            }
+        }
+        v
     }
-    v
+}
+
+impl FrcSummary {
+    /// The summary of `f`.
+    pub fn new(f: &ForcedResponse) -> Self {
+        let one_pair = f.forcing_on_master.len() == 1;
+        let forcing: Vec<Complex> = f.forcing_on_master.iter().map(|&z| z.into()).collect();
+        FrcSummary {
+            bifurcations: f
+                .curves
+                .iter()
+                .flat_map(|c| {
+                    c.bifurcations.iter().map(move |b| FrcBifurcationSummary {
+                        kind: b.kind.to_owned(),
+                        omega: b.omega,
+                        epsilon: c.epsilon,
+                        order: c.order,
+                        rho: PerPair::of(&b.rho, one_pair),
+                        branch: b.branch,
+                    })
+                })
+                .collect(),
+            points: f.rows.len(),
+            curves: f.curves.iter().map(FrcCurveSummary::new).collect(),
+            resonance: f.resonance.clone(),
+            forcing_on_master: PerPair::of(&forcing, one_pair),
+            warnings: f.warnings.clone(),
+            rho_max: f.rho_max,
+        }
+    }
 }

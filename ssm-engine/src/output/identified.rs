@@ -6,7 +6,7 @@
 use serde_json::{json, Value};
 use ssm_api::TimeKind;
 
-use super::summary::diagnostics_json;
+use super::json::diagnostics;
 use ssm_core::model::system::System;
 use ssm_core::reduce::Reduction;
 
@@ -52,7 +52,7 @@ pub fn identified_json(r: &Reduction, sys: &System) -> String {
         "states": sys.states.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
         "linear_part": a,
         "nonlinear_terms": terms,
-        "diagnostics": diagnostics_json(&r.diagnostics),
+        "diagnostics": diagnostics(&r.diagnostics),
     });
     serde_json::to_string_pretty(&value).expect("JSON of finite numbers and strings")
 }

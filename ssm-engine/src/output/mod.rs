@@ -7,6 +7,7 @@ pub mod checkpoint;
 mod files;
 pub mod frc;
 pub mod identified;
+pub mod json;
 pub mod plot;
 pub mod pod;
 pub mod reference;

@@ -4,7 +4,8 @@
 //! `pod_povs.svg` (the POV decay), `pod_constraints.csv` and the summary's
 //! `pod`. They format a [`PodStudy`] and compute nothing.
 
-use serde_json::{json, Value};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 use ssm_kernel::number::short;
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
@@ -304,64 +305,234 @@ pub fn report_md(model: &str, study: &PodStudy) -> String {
     s
 }
 
-fn truncation_json(t: &Truncation) -> Value {
-    match t {
-        Truncation::Drop { decades } => json!({"drop_decades": decades}),
-        Truncation::Energy { fraction } => json!({"energy_left_out": fraction}),
-    }
+/// `"pod"` of `summary.json`: the reduced models of the `[pod]` study and
+/// their runs against the full system.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PodSummary {
+    /// The compared outputs.
+    pub outputs: Vec<String>,
+    /// States of the full model.
+    pub n_full_states: usize,
+    /// The HHT integrator every model runs with.
+    pub hht: HhtSummary,
+    /// Relative rank tolerance of the constraint reduction.
+    pub rank_tol: f64,
+    /// The POD models.
+    pub pod_models: Vec<PodModelSummary>,
+    /// The SSM models.
+    pub ssm_models: Vec<SsmModelSummary>,
+    /// The load cases and every model's run.
+    pub cases: Vec<PodCaseSummary>,
 }
 
-/// The summary's `pod`.
-pub fn pod_json(study: &PodStudy) -> Value {
-    let infos = roms(study);
-    json!({
-        "outputs": study.outputs,
-        "n_full_states": study.n_full_states,
-        "hht": {"alpha": study.settings.alpha, "step": study.settings.step},
-        "rank_tol": study.settings.rank_tol,
-        "pod_models": study.pod.iter().enumerate().map(|(k, r)| json!({
-            "id": format!("pod{}", k + 1),
-            "truncation": truncation_json(&r.truncation),
-            "kept": r.reduction.kinds.iter().map(|g| json!({
-                "kind": format!("{:?}", g.motion),
-                "coordinates": g.coordinates.len(),
-                "kept": g.basis.kept(),
-            })).collect::<Vec<_>>(),
-            "reduced_coordinates": r.reduction.u.ncols(),
-            "constraints": r.reduction.constraints.basis.nrows(),
-            "constraints_kept": r.reduction.constraints.basis.ncols(),
-            "constraints_removed": r.reduction.constraints.removed(),
-            "singular_values": r.reduction.constraints.singular_values,
-            "initial_residual": r.reduction.initial_residual,
-            "states": r.system.n_states(),
-            "offline_s": r.offline_s,
-        })).collect::<Vec<_>>(),
-        "ssm_models": study.ssm.iter().enumerate().map(|(k, r)| json!({
-            "id": format!("ssm{}", k + 1),
-            "master_pairs": r.pairs,
-            "order": r.expansion.order,
-            "dimension": r.expansion.dim(),
-            "offline_s": r.offline_s,
-        })).collect::<Vec<_>>(),
-        "cases": study.cases.iter().map(|c| json!({
-            "case": c.case.label,
-            "trained": c.case.trained,
-            "epsilon": c.case.epsilon,
-            "omega": c.case.omega,
-            "t_end": c.case.t_end,
-            "full_s": c.full_s,
-            "full_steps": c.full_steps,
-            "runs": infos.iter().zip(runs(c)).map(|(i, r)| json!({
-                "id": i.id,
-                "online_s": r.online_s,
-                "speedup": c.full_s / r.online_s.max(1e-12),
-                "max_error": r.errors.as_ref().map(|x| x.max),
-                "late_error": r.errors.as_ref().map(|x| x.late),
-                "reaction_gap": r.reactions.map(|g| g.full_space),
-                "reaction_gap_subspace": r.reactions.map(|g| g.in_subspace),
-                "start_distance": r.start_distance,
-                "failure": r.failure,
-            })).collect::<Vec<_>>(),
-        })).collect::<Vec<_>>(),
-    })
+/// The HHT-alpha integrator of the study.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct HhtSummary {
+    /// Numerical damping `alpha` (in `[-1/3, 0]`).
+    pub alpha: f64,
+    /// Time step.
+    pub step: f64,
+}
+
+/// How the POD basis was truncated.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum TruncationSummary {
+    /// `{"drop_decades": d}`: proper orthogonal values more than `d` decades
+    /// below the largest are dropped.
+    DropDecades(f64),
+    /// `{"energy_left_out": f}`: the fraction `f` of the energy left out.
+    EnergyLeftOut(f64),
+}
+
+/// The kept POD basis of one kind of motion.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct KeptSummary {
+    /// The kind of motion.
+    pub kind: String,
+    /// Coordinates of that kind.
+    pub coordinates: usize,
+    /// POD vectors kept.
+    pub kept: usize,
+}
+
+/// One POD model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PodModelSummary {
+    /// `pod1`, `pod2`, ...
+    pub id: String,
+    /// Its truncation.
+    pub truncation: TruncationSummary,
+    /// The basis kept per kind of motion.
+    pub kept: Vec<KeptSummary>,
+    /// Reduced coordinates.
+    pub reduced_coordinates: usize,
+    /// Constraints of the full model.
+    pub constraints: usize,
+    /// Constraints kept by the generalized constraint reduction.
+    pub constraints_kept: usize,
+    /// Constraints removed.
+    pub constraints_removed: usize,
+    /// Singular values of the projected constraint Jacobians.
+    pub singular_values: Vec<f64>,
+    /// Residuals of the reduced model's initial state (position, velocity).
+    pub initial_residual: [f64; 2],
+    /// States of the reduced DAE.
+    pub states: usize,
+    /// Seconds to build it.
+    pub offline_s: f64,
+}
+
+/// One SSM model of the study.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SsmModelSummary {
+    /// `ssm1`, `ssm2`, ...
+    pub id: String,
+    /// Its master pairs.
+    pub master_pairs: Vec<usize>,
+    /// Expansion order.
+    pub order: usize,
+    /// Dimension of the SSM.
+    pub dimension: usize,
+    /// Seconds to compute it.
+    pub offline_s: f64,
+}
+
+/// One load case: the full run and every model's run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PodCaseSummary {
+    /// Its label.
+    pub case: String,
+    /// The POD models were trained on it.
+    pub trained: bool,
+    /// Forcing amplitude.
+    pub epsilon: f64,
+    /// Forcing frequency.
+    pub omega: f64,
+    /// End time.
+    pub t_end: f64,
+    /// Seconds of the full run.
+    pub full_s: f64,
+    /// Steps of the full run.
+    pub full_steps: usize,
+    /// Every model's run (POD models first, then SSM models).
+    pub runs: Vec<PodRunSummary>,
+}
+
+/// One reduced model's run of a load case (null: the run failed).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PodRunSummary {
+    /// The model's id.
+    pub id: String,
+    /// Seconds of the run.
+    pub online_s: f64,
+    /// The full run's seconds over these.
+    pub speedup: f64,
+    /// Largest relative output error over the run.
+    pub max_error: Option<f64>,
+    /// Largest relative output error over the last part of the run.
+    pub late_error: Option<f64>,
+    /// Relative gap of the constraint reactions to the full run's.
+    pub reaction_gap: Option<f64>,
+    /// The same gap within the reduced subspace.
+    pub reaction_gap_subspace: Option<f64>,
+    /// Distance of its start to the full model's start.
+    pub start_distance: f64,
+    /// Why the run failed.
+    pub failure: Option<String>,
+}
+
+impl PodSummary {
+    /// The summary of `study`.
+    pub fn new(study: &PodStudy) -> Self {
+        let infos = roms(study);
+        PodSummary {
+            outputs: study.outputs.clone(),
+            n_full_states: study.n_full_states,
+            hht: HhtSummary {
+                alpha: study.settings.alpha,
+                step: study.settings.step,
+            },
+            rank_tol: study.settings.rank_tol,
+            pod_models: study
+                .pod
+                .iter()
+                .enumerate()
+                .map(|(k, r)| PodModelSummary {
+                    id: format!("pod{}", k + 1),
+                    truncation: match r.truncation {
+                        Truncation::Drop { decades } => TruncationSummary::DropDecades(decades),
+                        Truncation::Energy { fraction } => {
+                            TruncationSummary::EnergyLeftOut(fraction)
+                        }
+                    },
+                    kept: r
+                        .reduction
+                        .kinds
+                        .iter()
+                        .map(|g| KeptSummary {
+                            kind: format!("{:?}", g.motion),
+                            coordinates: g.coordinates.len(),
+                            kept: g.basis.kept(),
+                        })
+                        .collect(),
+                    reduced_coordinates: r.reduction.u.ncols(),
+                    constraints: r.reduction.constraints.basis.nrows(),
+                    constraints_kept: r.reduction.constraints.basis.ncols(),
+                    constraints_removed: r.reduction.constraints.removed(),
+                    singular_values: r.reduction.constraints.singular_values.clone(),
+                    initial_residual: r.reduction.initial_residual,
+                    states: r.system.n_states(),
+                    offline_s: r.offline_s,
+                })
+                .collect(),
+            ssm_models: study
+                .ssm
+                .iter()
+                .enumerate()
+                .map(|(k, r)| SsmModelSummary {
+                    id: format!("ssm{}", k + 1),
+                    master_pairs: r.pairs.clone(),
+                    order: r.expansion.order,
+                    dimension: r.expansion.dim(),
+                    offline_s: r.offline_s,
+                })
+                .collect(),
+            cases: study
+                .cases
+                .iter()
+                .map(|c| PodCaseSummary {
+                    case: c.case.label.clone(),
+                    trained: c.case.trained,
+                    epsilon: c.case.epsilon,
+                    omega: c.case.omega,
+                    t_end: c.case.t_end,
+                    full_s: c.full_s,
+                    full_steps: c.full_steps,
+                    runs: infos
+                        .iter()
+                        .zip(runs(c))
+                        .map(|(i, r)| PodRunSummary {
+                            id: i.id.clone(),
+                            online_s: r.online_s,
+                            speedup: c.full_s / r.online_s.max(1e-12),
+                            max_error: r.errors.as_ref().map(|x| x.max),
+                            late_error: r.errors.as_ref().map(|x| x.late),
+                            reaction_gap: r.reactions.map(|g| g.full_space),
+                            reaction_gap_subspace: r.reactions.map(|g| g.in_subspace),
+                            start_distance: r.start_distance,
+                            failure: r.failure.clone(),
+                        })
+                        .collect(),
+                })
+                .collect(),
+        }
+    }
 }

@@ -3,8 +3,12 @@
 //! responses' `reference_amplitude.csv`/`.svg`, and the summary's
 //! `reference`. They format a [`ReferenceFrc`] and compute nothing.
 
-use serde_json::{json, Value};
+use std::collections::BTreeMap;
 
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::json::Complex;
 use super::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::fom::periodic::frc::{ReferenceBranch, ReferenceFrc, ReferenceOrbit};
 use ssm_kernel::continuation::Stop;
@@ -171,69 +175,177 @@ fn stop_text(s: &Stop) -> String {
     }
 }
 
-/// The summary's `reference`: per branch its parameter's fixed value, the
-/// orbit count, why it stopped, its costs and bifurcations.
-pub fn reference_json(r: &ReferenceFrc) -> Value {
-    let branches: Vec<Value> = r
-        .branches
-        .iter()
-        .map(|b| {
-            let mut v = branch_json(r, b);
-            v["epsilon"] = json!(b.orbits.first().map_or(0.0, |o| o.epsilon));
-            v
-        })
-        .collect();
-    let amplitude: Vec<Value> = r
-        .amplitude
-        .iter()
-        .map(|b| {
-            let mut v = branch_json(r, b);
-            v["omega"] = json!(b.orbits.first().map_or(0.0, |o| o.omega));
-            v
-        })
-        .collect();
-    json!({
-        "method": "harmonic balance (AFT) continued in Omega (and in eps at the frequencies of amplitude_at) by local parametrization; Floquet multipliers by Hill's method up to 1500 Fourier coefficients, above by the monodromy map (Radau IIA on the variational DAE: the whole matrix up to 200 states, the multipliers above 1e-3 by subspace iteration above)",
-        "harmonics": r.harmonics,
-        "samples_per_period": r.samples,
-        "outputs": r.outputs,
-        "branches": branches,
-        "amplitude_responses": amplitude,
-        "seconds": r.seconds,
-    })
+/// What `"reference.method"` of `summary.json` says.
+pub const REFERENCE_METHOD: &str = "harmonic balance (AFT) continued in Omega (and in eps at the frequencies of amplitude_at) by local parametrization; Floquet multipliers by Hill's method up to 1500 Fourier coefficients, above by the monodromy map (Radau IIA on the variational DAE: the whole matrix up to 200 states, the multipliers above 1e-3 by subspace iteration above)";
+
+/// `"reference"` of `summary.json`: the full-system forced responses of
+/// `[reference]`; per branch its parameter's fixed value, the orbit count,
+/// why it stopped, its costs and bifurcations.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ReferenceSummary {
+    /// How the curves were computed ([`REFERENCE_METHOD`]).
+    pub method: String,
+    /// Harmonics of the Fourier series.
+    pub harmonics: usize,
+    /// Time samples per period (AFT).
+    pub samples_per_period: usize,
+    /// The outputs whose amplitudes are reported.
+    pub outputs: Vec<String>,
+    /// The branches continued in `Omega` (each at fixed `epsilon`).
+    pub branches: Vec<BranchSummary>,
+    /// The branches continued in `epsilon` (each at fixed `Omega`).
+    pub amplitude_responses: Vec<BranchSummary>,
+    /// Wall time in seconds.
+    pub seconds: f64,
 }
 
-fn branch_json(r: &ReferenceFrc, b: &ReferenceBranch) -> Value {
-    json!({
-        "orbits": b.orbits.len(),
-        "stop": stop_text(&b.stop),
-        "factorizations": b.factorizations,
-        "coefficients": b.coefficients,
-        "largest_tail": b.orbits.iter().map(|o| o.tail).fold(0.0, f64::max),
-        "stability_computed": b.orbits.iter().all(|o| o.stable.is_some()),
-        "multiplier_check": b.multiplier_check.as_ref().map(|c| match c {
-            Ok(c) => json!({
-                "omega": c.omega,
-                "epsilon": c.epsilon,
-                "steps": c.steps,
-                "difference": c.difference,
-                "uncertain_orbits": c.uncertain_orbits,
+/// One continued branch of periodic orbits.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BranchSummary {
+    /// Forcing amplitude (branches continued in `Omega`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub epsilon: Option<f64>,
+    /// Forcing frequency (branches continued in `epsilon`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub omega: Option<f64>,
+    /// Orbits computed.
+    pub orbits: usize,
+    /// Why the continuation stopped (`range`, `bound`, `closed`,
+    /// `max_steps`, `interrupted`, or `step too small: ...`).
+    pub stop: String,
+    /// LU factorizations.
+    pub factorizations: usize,
+    /// Fourier coefficients of an orbit.
+    pub coefficients: usize,
+    /// Largest relative size of the highest harmonics over the orbits.
+    pub largest_tail: f64,
+    /// Every orbit has its stability.
+    pub stability_computed: bool,
+    /// The multipliers checked at the most critical orbit by the monodromy
+    /// map (null without multipliers).
+    pub multiplier_check: Option<MultiplierCheckSummary>,
+    /// Bifurcations located on the branch.
+    pub bifurcations: Vec<ReferenceBifurcationSummary>,
+}
+
+/// The independent check of a branch's Floquet multipliers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum MultiplierCheckSummary {
+    /// The check ran.
+    Done {
+        /// Forcing frequency of the orbit checked.
+        omega: f64,
+        /// Forcing amplitude of the orbit checked.
+        epsilon: f64,
+        /// Integration steps of the monodromy map.
+        steps: usize,
+        /// Largest difference between the two sets of multipliers.
+        difference: f64,
+        /// Orbits whose stability is uncertain by that difference.
+        uncertain_orbits: usize,
+    },
+    /// It failed.
+    Failed {
+        /// Why.
+        error: String,
+    },
+}
+
+/// A bifurcation of the full system located on a branch.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ReferenceBifurcationSummary {
+    /// `SN` (fold), `BP` (branch point), `PD` (period doubling), `NS`
+    /// (Neimark-Sacker).
+    pub kind: String,
+    /// Forcing frequency.
+    pub omega: f64,
+    /// Forcing amplitude.
+    pub epsilon: f64,
+    /// Branch it lies on.
+    pub branch: usize,
+    /// Period of the orbit in forcing periods.
+    pub period_multiple: usize,
+    /// The multiplier that crossed the unit circle (null at a fold or
+    /// branch point located by other means).
+    pub multiplier: Option<Complex>,
+    /// `<output>_linf`: largest `|output|` over the orbit, per output.
+    #[serde(flatten)]
+    pub linf: BTreeMap<String, f64>,
+}
+
+impl ReferenceSummary {
+    /// The summary of `r`.
+    pub fn new(r: &ReferenceFrc) -> Self {
+        ReferenceSummary {
+            method: REFERENCE_METHOD.to_owned(),
+            harmonics: r.harmonics,
+            samples_per_period: r.samples,
+            outputs: r.outputs.clone(),
+            branches: r
+                .branches
+                .iter()
+                .map(|b| BranchSummary {
+                    epsilon: Some(b.orbits.first().map_or(0.0, |o| o.epsilon)),
+                    ..BranchSummary::new(r, b)
+                })
+                .collect(),
+            amplitude_responses: r
+                .amplitude
+                .iter()
+                .map(|b| BranchSummary {
+                    omega: Some(b.orbits.first().map_or(0.0, |o| o.omega)),
+                    ..BranchSummary::new(r, b)
+                })
+                .collect(),
+            seconds: r.seconds,
+        }
+    }
+}
+
+impl BranchSummary {
+    fn new(r: &ReferenceFrc, b: &ReferenceBranch) -> Self {
+        BranchSummary {
+            epsilon: None,
+            omega: None,
+            orbits: b.orbits.len(),
+            stop: stop_text(&b.stop),
+            factorizations: b.factorizations,
+            coefficients: b.coefficients,
+            largest_tail: b.orbits.iter().map(|o| o.tail).fold(0.0, f64::max),
+            stability_computed: b.orbits.iter().all(|o| o.stable.is_some()),
+            multiplier_check: b.multiplier_check.as_ref().map(|c| match c {
+                Ok(c) => MultiplierCheckSummary::Done {
+                    omega: c.omega,
+                    epsilon: c.epsilon,
+                    steps: c.steps,
+                    difference: c.difference,
+                    uncertain_orbits: c.uncertain_orbits,
+                },
+                Err(e) => MultiplierCheckSummary::Failed {
+                    error: e.to_string(),
+                },
             }),
-            Err(e) => json!({ "error": e.to_string() }),
-        }),
-        "bifurcations": b.events.iter().map(|e| {
-            let mut v = json!({
-                "kind": e.kind.label(),
-                "omega": e.orbit.omega,
-                "epsilon": e.orbit.epsilon,
-                "branch": e.orbit.branch,
-                "period_multiple": e.orbit.period_multiple,
-                "multiplier": e.multiplier.map(|m| json!({"re": m.re, "im": m.im})),
-            });
-            for (name, a) in r.outputs.iter().zip(&e.orbit.linf) {
-                v[format!("{name}_linf")] = json!(a);
-            }
-            v
-        }).collect::<Vec<_>>(),
-    })
+            bifurcations: b
+                .events
+                .iter()
+                .map(|e| ReferenceBifurcationSummary {
+                    kind: e.kind.label().to_owned(),
+                    omega: e.orbit.omega,
+                    epsilon: e.orbit.epsilon,
+                    branch: e.orbit.branch,
+                    period_multiple: e.orbit.period_multiple,
+                    multiplier: e.multiplier.map(Complex::from),
+                    linf: r
+                        .outputs
+                        .iter()
+                        .zip(&e.orbit.linf)
+                        .map(|(name, &a)| (format!("{name}_linf"), a))
+                        .collect(),
+                })
+                .collect(),
+        }
+    }
 }

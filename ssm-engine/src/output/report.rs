@@ -2,7 +2,8 @@
 //! `report.svg` and the summary's `report`. They format a [`Report`] and
 //! compute nothing.
 
-use serde_json::{json, Value};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::compare::report::{FullKind, Report};
@@ -147,20 +148,80 @@ pub fn svg(report: &Report) -> Result<String, PlotError> {
     )
 }
 
-/// The summary's `report`.
-pub fn json(report: &Report) -> Value {
-    json!({
-        "rows": report.rows.iter().map(|r| json!({
-            "order": r.order,
-            "ssm_s": r.ssm_s,
-            "backbone_s": r.backbone_s,
-            "transient_s": r.transient_s,
-            "frc_s": r.frc_s,
-            "invariance_error": r.invariance_error,
-            "invariance_rho": r.invariance_rho,
-            "transient_error": r.transient_error,
-            "frc_error": r.frc_error,
-        })).collect::<Vec<_>>(),
-        "full_system": report.full.iter().map(|f| json!({"what": f.what, "wall_s": f.wall_s})).collect::<Vec<_>>(),
-    })
+/// `"report"` of `summary.json`: each reduced model's cost and error, and
+/// the full-system runs they are measured against.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ReportSummary {
+    /// One reduced model (expansion order) a row.
+    pub rows: Vec<ReportRowSummary>,
+    /// The full-system runs.
+    pub full_system: Vec<FullCostSummary>,
+}
+
+/// One reduced model of the report (null: not computed).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ReportRowSummary {
+    /// Expansion order.
+    pub order: usize,
+    /// Seconds to compute the SSM and its reduced dynamics.
+    pub ssm_s: f64,
+    /// Seconds for a backbone curve (200 amplitudes), one pair only.
+    pub backbone_s: Option<f64>,
+    /// Seconds for the reduced transient of `[validate]`.
+    pub transient_s: Option<f64>,
+    /// Seconds for the FRCs of `[forcing]` at this order.
+    pub frc_s: Option<f64>,
+    /// Invariance error (eq. 41) at `invariance_rho`.
+    pub invariance_error: Option<f64>,
+    /// Radius of the invariance error.
+    pub invariance_rho: Option<f64>,
+    /// Largest relative output error of the transient against the full
+    /// system.
+    pub transient_error: Option<f64>,
+    /// Largest relative FRC amplitude error against the `[reference]`
+    /// curve, else against the steady states.
+    pub frc_error: Option<f64>,
+}
+
+/// A full-system run of the report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FullCostSummary {
+    /// What ran.
+    pub what: String,
+    /// Wall time in seconds.
+    pub wall_s: f64,
+}
+
+impl ReportSummary {
+    /// The summary of `report`.
+    pub fn new(report: &Report) -> Self {
+        ReportSummary {
+            rows: report
+                .rows
+                .iter()
+                .map(|r| ReportRowSummary {
+                    order: r.order,
+                    ssm_s: r.ssm_s,
+                    backbone_s: r.backbone_s,
+                    transient_s: r.transient_s,
+                    frc_s: r.frc_s,
+                    invariance_error: r.invariance_error,
+                    invariance_rho: r.invariance_rho,
+                    transient_error: r.transient_error,
+                    frc_error: r.frc_error,
+                })
+                .collect(),
+            full_system: report
+                .full
+                .iter()
+                .map(|f| FullCostSummary {
+                    what: f.what.clone(),
+                    wall_s: f.wall_s,
+                })
+                .collect(),
+        }
+    }
 }

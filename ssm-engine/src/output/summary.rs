@@ -1,9 +1,22 @@
 //! `summary.json`: every typed result of a run, formatted; nothing is
-//! computed here.
+//! computed here. The file is [`SummaryFile`] serialized; its JSON Schema
+//! ([`schema_json`], kept in `docs/summary.schema.json`) is generated from
+//! these types, and [`SCHEMA_VERSION`] changes with any change of shape.
 
-use serde_json::{json, Value};
+use std::collections::BTreeMap;
 
-use super::{frc, pod, reference, report, simulation, ssm, validation};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use super::frc::FrcSummary;
+use super::json::{diagnostics, Complex, Diagnostics};
+use super::pod::PodSummary;
+use super::reference::ReferenceSummary;
+use super::report::ReportSummary;
+use super::simulation::SimulationSummary;
+use super::ssm::{InvarianceSummary, PolarSummary, SsmSummary};
+use super::validation::ValidationSummary;
 use ssm_core::compare::pod::PodStudy;
 use ssm_core::compare::report::Report;
 use ssm_core::compare::validation::Validation;
@@ -92,187 +105,546 @@ pub struct Summary<'a> {
     pub timing: Timing,
 }
 
+/// The version of the shape of `summary.json` (its `schema_version`); it
+/// changes whenever a key is added, removed or changes its type.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// `summary.json`: a run's summary, or that of a `[pod]` scene that asks
+/// for no SSM answer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+#[schemars(title = "summary.json of ssm-engine")]
+pub enum SummaryFile {
+    /// A run with an SSM.
+    Run(Box<RunSummary>),
+    /// A `[pod]` study alone.
+    PodOnly(Box<PodOnlySummary>),
+}
+
+/// The summary of a run with an SSM.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RunSummary {
+    /// The version of the file's shape, `SCHEMA_VERSION`.
+    #[schemars(schema_with = "version_schema")]
+    pub schema_version: u32,
+    /// The plugin libraries that ran (model, reducer).
+    pub plugins: Vec<PluginSummary>,
+    /// The model analysed.
+    pub model: ModelSummary,
+    /// The reduction that made the model (`[reduce]`), if any.
+    pub reduction: Option<ReductionSummary>,
+    /// The recast of a non-polynomial model, if any.
+    pub recast: Option<RecastSummary>,
+    /// The finite eigenvalues computed.
+    pub spectrum: Vec<Complex>,
+    /// How they were computed.
+    pub spectrum_method: String,
+    /// Every finite eigenvalue was computed.
+    pub spectrum_complete: bool,
+    /// The master pairs asked for (1-based).
+    pub master_pairs: Vec<usize>,
+    /// The master modes.
+    pub master_modes: Vec<MasterModeSummary>,
+    /// Spectral quotients (eqs. 54, 58).
+    pub spectral_quotients: QuotientsSummary,
+    /// The SSM.
+    pub ssm: SsmSummary,
+    /// Polar form of a two-dimensional SSM of a flow.
+    pub polar: Option<Vec<PolarSummary>>,
+    /// `[outputs.invariance_error]`.
+    pub invariance_error: Option<Vec<InvarianceSummary>>,
+    /// Steps of the reduced transient of `[outputs.transient]`.
+    pub rom_steps: Option<usize>,
+    /// `[forcing]`.
+    pub frc: Option<FrcSummary>,
+    /// `[validate]`.
+    pub validation: Option<ValidationSummary>,
+    /// `[report]`.
+    pub report: Option<ReportSummary>,
+    /// `[simulate]`.
+    pub simulation: Option<SimulationSummary>,
+    /// `[pod]`.
+    pub pod: Option<PodSummary>,
+    /// `[reference]`.
+    pub reference: Option<ReferenceSummary>,
+    /// The accuracy target, the order and every answer's estimate.
+    pub accuracy: AccuracySummary,
+    /// Warnings of the run.
+    pub warnings: Vec<String>,
+    /// Seconds per stage.
+    pub timing_s: TimingSummary,
+    /// Work of the sparse linear algebra of the SSM.
+    pub linear_algebra: LinearAlgebraSummary,
+    /// The results of the analyses of `[analysis]`, by name (absent without
+    /// analyses).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    #[schemars(schema_with = "crate::analyses::outputs_schema")]
+    pub analyses: BTreeMap<String, Value>,
+}
+
+/// The summary of a `[pod]` scene that asks for no SSM answer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PodOnlySummary {
+    /// The version of the file's shape, `SCHEMA_VERSION`.
+    #[schemars(schema_with = "version_schema")]
+    pub schema_version: u32,
+    /// The plugin libraries that ran.
+    pub plugins: Vec<PluginSummary>,
+    /// The model.
+    pub model: ModelSummary,
+    /// The study (null when it was interrupted before its first case).
+    pub pod: Option<PodSummary>,
+    /// Warnings of the run.
+    pub warnings: Vec<String>,
+    /// Seconds.
+    pub timing_s: PodTimingSummary,
+}
+
+/// A plugin library that ran.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PluginSummary {
+    /// Its name.
+    pub name: String,
+    /// Its version.
+    pub version: String,
+    /// Its file.
+    pub file: String,
+}
+
+/// The model analysed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ModelSummary {
+    /// The plugin that built it.
+    pub plugin: String,
+    /// The model's name.
+    pub name: String,
+    /// States of its first-order form.
+    pub n_states: usize,
+    /// Finite modes (counted, or known from its structure; absent in a
+    /// `[pod]`-only summary).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub n_finite_modes: Option<usize>,
+}
+
+/// The reduction of `[reduce]` that made the model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ReductionSummary {
+    /// The reducer's plugin.
+    pub plugin: String,
+    /// The reducer.
+    pub reducer: String,
+    /// States of the model it reduced (null: from data).
+    pub n_input_states: Option<usize>,
+    /// Trajectories it used.
+    pub n_trajectories: usize,
+    /// States of the reduced model.
+    pub n_reduced_states: usize,
+    /// The lift back to the full states, if any.
+    pub lift: Option<LiftSummary>,
+    /// Outputs of the full model lifted to the reduced one.
+    pub lifted_outputs: Vec<String>,
+    /// The reducer's diagnostics.
+    pub diagnostics: Diagnostics,
+}
+
+/// A linear lift `x = V y (+ offset)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LiftSummary {
+    /// Rows of `V`.
+    pub n_full_states: usize,
+    /// Columns of `V`.
+    pub n_reduced_states: usize,
+    /// The lift has an offset.
+    pub offset: bool,
+}
+
+/// The recast of a non-polynomial model into a polynomial DAE.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RecastSummary {
+    /// States before the recast.
+    pub n_original_states: usize,
+    /// The equilibrium was shifted to the origin.
+    pub equilibrium_shifted: bool,
+    /// The auxiliary variables added.
+    pub auxiliaries: Vec<AuxiliarySummary>,
+}
+
+/// An auxiliary variable of the recast.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AuxiliarySummary {
+    /// Its name.
+    pub name: String,
+    /// What it stands for.
+    pub definition: String,
+    /// `differential` or `algebraic`.
+    pub equation: String,
+}
+
+/// A master mode.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MasterModeSummary {
+    /// Its pair (1-based).
+    pub pair: usize,
+    /// Its eigenvalue.
+    pub lambda: Complex,
+    /// Residual of its eigenvector.
+    pub residual: f64,
+}
+
+/// Spectral quotients (eqs. 54, 58; null: not bounded).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct QuotientsSummary {
+    /// Relative spectral quotient.
+    pub relative: Option<u64>,
+    /// Absolute spectral quotient.
+    pub absolute: Option<u64>,
+    /// Computed over the whole finite spectrum.
+    pub complete: bool,
+}
+
+/// The accuracy target, the order and every answer's estimate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AccuracySummary {
+    /// Relative accuracy target (`[ssm] tolerance`).
+    pub tolerance: f64,
+    /// The expansion order of the answers.
+    pub order: usize,
+    /// `tolerance` (chosen) or `scene` (given).
+    pub order_from: String,
+    /// The orders tried while choosing.
+    pub orders_tried: Vec<OrderTried>,
+    /// Each answer's error estimate.
+    pub answers: Vec<AnswerSummary>,
+    /// Errors measured against the full system.
+    pub measured: Vec<MeasuredSummary>,
+}
+
+/// An order tried while choosing it from the tolerance.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OrderTried {
+    /// Expansion order.
+    pub order: usize,
+    /// Largest estimate of its answers (null: none, or diverged).
+    pub largest_estimate: Option<f64>,
+}
+
+/// An answer's error estimate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AnswerSummary {
+    /// `backbone`, `frc`, `transient`, ...
+    pub answer: String,
+    /// Expansion order.
+    pub order: usize,
+    /// Forcing amplitude (forced answers).
+    pub epsilon: Option<f64>,
+    /// Estimated relative error (null: none, or diverged).
+    pub error_estimate: Option<f64>,
+    /// The expansion diverged there.
+    pub diverged: bool,
+    /// The estimate exceeds the tolerance.
+    pub untrusted: bool,
+    /// Largest amplitude up to which it is within the tolerance.
+    pub trusted_up_to_rho: Option<f64>,
+}
+
+/// An error measured against the full system.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MeasuredSummary {
+    /// The answer.
+    pub answer: String,
+    /// Expansion order.
+    pub order: usize,
+    /// Forcing amplitude (forced answers).
+    pub epsilon: Option<f64>,
+    /// Relative error measured.
+    pub relative_error: Option<f64>,
+    /// The output compared.
+    pub output: Option<String>,
+    /// What it was measured against.
+    pub against: String,
+}
+
+/// Seconds per stage.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TimingSummary {
+    /// Spectrum and master modes.
+    pub spectrum: f64,
+    /// Non-resonance checks (eqs. 53, 57).
+    pub resonance_check: f64,
+    /// The SSM.
+    pub ssm: f64,
+    /// Of which composing the nonlinearity.
+    pub ssm_composition: f64,
+    /// Of which factorizing.
+    pub ssm_factorization: f64,
+    /// Of which solving.
+    pub ssm_solves: f64,
+    /// Backbone, invariance error, reduced transient.
+    pub results: f64,
+    /// Forced response curves.
+    pub frc: f64,
+    /// Full-system comparisons.
+    pub validation: f64,
+    /// Speed-against-error report.
+    pub report: f64,
+    /// The `[pod]` study.
+    pub pod: f64,
+    /// The `[reference]` forced responses.
+    pub reference: f64,
+    /// The whole run.
+    pub total: f64,
+}
+
+/// Seconds of a `[pod]`-only run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PodTimingSummary {
+    /// The study.
+    pub pod: f64,
+    /// The whole run.
+    pub total: f64,
+}
+
+/// Work of the sparse linear algebra of the SSM.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LinearAlgebraSummary {
+    /// Symbolic factorizations.
+    pub symbolic_factorizations: usize,
+    /// Numeric factorizations.
+    pub numeric_factorizations: usize,
+    /// Solves.
+    pub solves: usize,
+}
+
+impl RunSummary {
+    /// The summary of the results `s`.
+    pub fn new(s: &Summary<'_>) -> Self {
+        let sys = s.system;
+        let t = &s.timing;
+        let lin = &s.ssm.timing.linear;
+        RunSummary {
+            schema_version: SCHEMA_VERSION,
+            plugins: plugins(s.plugins),
+            model: ModelSummary {
+                plugin: sys.plugin.clone(),
+                name: sys.name.clone(),
+                n_states: sys.n_states(),
+                n_finite_modes: Some(s.n_finite_modes),
+            },
+            reduction: s.reduction.map(reduction),
+            recast: sys.recast.as_ref().map(|r| RecastSummary {
+                n_original_states: r.n_original,
+                equilibrium_shifted: r.equilibrium.iter().any(|&v| v != 0.0),
+                auxiliaries: r
+                    .auxiliaries
+                    .iter()
+                    .map(|a| AuxiliarySummary {
+                        name: a.name.clone(),
+                        definition: a.definition.clone(),
+                        equation: if a.kind.is_differential() {
+                            "differential"
+                        } else {
+                            "algebraic"
+                        }
+                        .to_owned(),
+                    })
+                    .collect(),
+            }),
+            spectrum: s.spectrum.eigenvalues.iter().map(|&l| l.into()).collect(),
+            spectrum_method: s.spectrum.method.as_str().to_owned(),
+            spectrum_complete: s.spectrum.complete,
+            master_pairs: s.master_pairs.to_vec(),
+            master_modes: s
+                .masters
+                .iter()
+                .map(|m| MasterModeSummary {
+                    pair: m.pair,
+                    lambda: m.lambda.into(),
+                    residual: m.residual,
+                })
+                .collect(),
+            spectral_quotients: QuotientsSummary {
+                relative: s.quotients.relative,
+                absolute: s.quotients.absolute,
+                complete: s.quotients.complete,
+            },
+            ssm: SsmSummary::new(s.ssm),
+            polar: s.polar.map(PolarSummary::new),
+            invariance_error: s.invariance.map(InvarianceSummary::new),
+            rom_steps: s.rom_steps,
+            frc: s.frc.map(FrcSummary::new),
+            validation: s.validation.map(ValidationSummary::new),
+            report: s.report.map(ReportSummary::new),
+            simulation: s.simulation.map(SimulationSummary::new),
+            pod: s.pod.map(PodSummary::new),
+            reference: s.reference.map(ReferenceSummary::new),
+            accuracy: accuracy(s.accuracy),
+            warnings: s.warnings.to_vec(),
+            timing_s: TimingSummary {
+                spectrum: t.spectrum,
+                resonance_check: t.resonance_check,
+                ssm: t.ssm,
+                ssm_composition: s.ssm.timing.compose_s,
+                ssm_factorization: lin.factor_s,
+                ssm_solves: lin.solve_s,
+                results: t.results,
+                frc: t.frc,
+                validation: t.validation,
+                report: t.report,
+                pod: t.pod,
+                reference: t.reference,
+                total: t.total,
+            },
+            linear_algebra: LinearAlgebraSummary {
+                symbolic_factorizations: lin.symbolic,
+                numeric_factorizations: lin.factorizations,
+                solves: lin.solves,
+            },
+            analyses: s
+                .analyses
+                .iter()
+                .map(|(name, v)| ((*name).to_owned(), v.clone()))
+                .collect(),
+        }
+    }
+}
+
 /// `summary.json`, pretty-printed.
 pub fn summary_json(s: &Summary<'_>) -> String {
-    let sys = s.system;
-    let t = &s.timing;
-    let lin = &s.ssm.timing.linear;
-    let mut value = json!({
-        "plugins": plugins_json(s.plugins),
-        "model": {
-            "plugin": sys.plugin,
-            "name": sys.name,
-            "n_states": sys.n_states(),
-            "n_finite_modes": s.n_finite_modes,
-        },
-        "reduction": s.reduction.map(reduction_json),
-        "recast": sys.recast.as_ref().map(|r| json!({
-            "n_original_states": r.n_original,
-            "equilibrium_shifted": r.equilibrium.iter().any(|&v| v != 0.0),
-            "auxiliaries": r.auxiliaries.iter().map(|a| json!({
-                "name": a.name,
-                "definition": a.definition,
-                "equation": if a.kind.is_differential() { "differential" } else { "algebraic" },
-            })).collect::<Vec<_>>(),
-        })),
-        "spectrum": s.spectrum.eigenvalues.iter().map(|l| json!({"re": l.re, "im": l.im})).collect::<Vec<_>>(),
-        "spectrum_method": s.spectrum.method.as_str(),
-        "spectrum_complete": s.spectrum.complete,
-        "master_pairs": s.master_pairs,
-        "master_modes": s.masters.iter().map(|m| json!({
-            "pair": m.pair,
-            "lambda": {"re": m.lambda.re, "im": m.lambda.im},
-            "residual": m.residual,
-        })).collect::<Vec<_>>(),
-        "spectral_quotients": {
-            "relative": s.quotients.relative,
-            "absolute": s.quotients.absolute,
-            "complete": s.quotients.complete,
-        },
-        "ssm": ssm::ssm_json(s.ssm),
-        "polar": s.polar.map(ssm::polar_json),
-        "invariance_error": s.invariance.map(ssm::invariance_json),
-        "rom_steps": s.rom_steps,
-        "frc": s.frc.map(frc::frc_json),
-        "validation": s.validation.map(validation::validation_json),
-        "report": s.report.map(report::json),
-        "simulation": s.simulation.map(simulation::simulation_json),
-        "pod": s.pod.map(pod::pod_json),
-        "reference": s.reference.map(reference::reference_json),
-        "accuracy": accuracy_json(s.accuracy),
-        "warnings": s.warnings,
-        "timing_s": {
-            "spectrum": t.spectrum,
-            "resonance_check": t.resonance_check,
-            "ssm": t.ssm,
-            "ssm_composition": s.ssm.timing.compose_s,
-            "ssm_factorization": lin.factor_s,
-            "ssm_solves": lin.solve_s,
-            "results": t.results,
-            "frc": t.frc,
-            "validation": t.validation,
-            "report": t.report,
-            "pod": t.pod,
-            "reference": t.reference,
-            "total": t.total,
-        },
-        "linear_algebra": {
-            "symbolic_factorizations": lin.symbolic,
-            "numeric_factorizations": lin.factorizations,
-            "solves": lin.solves,
-        },
-    });
-    if !s.analyses.is_empty() {
-        value["analyses"] = s
-            .analyses
-            .iter()
-            .map(|(name, v)| ((*name).to_owned(), v.clone()))
-            .collect::<serde_json::Map<_, _>>()
-            .into();
-    }
-    serde_json::to_string_pretty(&value).expect("JSON values are serializable")
-}
-
-/// `"accuracy"`: the target, the order (and how it was set), and the error
-/// estimate of each answer.
-fn accuracy_json(a: &Accuracy) -> Value {
-    let finite = |e: Option<f64>| e.filter(|x| x.is_finite());
-    json!({
-        "tolerance": a.tolerance,
-        "order": a.order,
-        "order_from": if a.chosen { "tolerance" } else { "scene" },
-        "orders_tried": a.tried.iter().map(|(o, e)| json!({
-            "order": o,
-            "largest_estimate": finite(*e),
-        })).collect::<Vec<_>>(),
-        "answers": a.answers.iter().map(|x| json!({
-            "answer": x.answer,
-            "order": x.order,
-            "epsilon": x.epsilon,
-            "error_estimate": finite(x.estimate),
-            "diverged": x.estimate.is_some_and(|e| !e.is_finite()),
-            "untrusted": x.untrusted,
-            "trusted_up_to_rho": x.trusted_up_to,
-        })).collect::<Vec<_>>(),
-        "measured": a.measured.iter().map(|m| json!({
-            "answer": m.answer,
-            "order": m.order,
-            "epsilon": m.epsilon,
-            "relative_error": m.relative_error,
-            "output": m.output,
-            "against": m.against,
-        })).collect::<Vec<_>>(),
-    })
-}
-
-/// A reducer's diagnostics as a JSON object: a number, a list, or text each.
-pub fn diagnostics_json(list: &[ssm_api::Diagnostic]) -> Value {
-    let map: serde_json::Map<String, Value> = list
-        .iter()
-        .map(|d| {
-            let v = match (d.values.len(), d.text.is_empty()) {
-                (_, false) if d.values.is_empty() => json!(d.text.as_str()),
-                (1, true) => json!(d.values[0]),
-                (_, true) => json!(d.values.as_slice()),
-                _ => json!({"values": d.values.as_slice(), "text": d.text.as_str()}),
-            };
-            (d.name.to_string(), v)
-        })
-        .collect();
-    Value::Object(map)
-}
-
-fn reduction_json(r: &Reduction) -> Value {
-    let diagnostics = diagnostics_json(&r.diagnostics);
-    json!({
-        "plugin": r.plugin,
-        "reducer": r.reducer,
-        "n_input_states": r.n_input_states,
-        "n_trajectories": r.n_trajectories,
-        "n_reduced_states": r.n_reduced_states,
-        "lift": r.lift.as_ref().map(|l| json!({
-            "n_full_states": l.basis.nrows,
-            "n_reduced_states": l.basis.ncols,
-            "offset": !l.offset.is_empty(),
-        })),
-        "lifted_outputs": r.lifted_outputs,
-        "diagnostics": diagnostics,
-    })
+    to_json(&SummaryFile::Run(Box::new(RunSummary::new(s))))
 }
 
 /// `summary.json` of a `[pod]` scene that asks for no SSM answer: the
 /// model, the plugins, the study, the warnings and the times.
 pub fn pod_only_summary_json(
     system: &System,
-    plugins: &[PluginOrigin],
+    plugins_ran: &[PluginOrigin],
     study: Option<&PodStudy>,
     warnings: &[String],
     timing: Timing,
 ) -> String {
-    let value = json!({
-        "plugins": plugins_json(plugins),
-        "model": {
-            "plugin": system.plugin,
-            "name": system.name,
-            "n_states": system.n_states(),
+    to_json(&SummaryFile::PodOnly(Box::new(PodOnlySummary {
+        schema_version: SCHEMA_VERSION,
+        plugins: plugins(plugins_ran),
+        model: ModelSummary {
+            plugin: system.plugin.clone(),
+            name: system.name.clone(),
+            n_states: system.n_states(),
+            n_finite_modes: None,
         },
-        "pod": study.map(pod::pod_json),
-        "warnings": warnings,
-        "timing_s": {"pod": timing.pod, "total": timing.total},
-    });
-    serde_json::to_string_pretty(&value).expect("JSON values are serializable")
+        pod: study.map(PodSummary::new),
+        warnings: warnings.to_vec(),
+        timing_s: PodTimingSummary {
+            pod: timing.pod,
+            total: timing.total,
+        },
+    })))
+}
+
+/// The JSON Schema of `summary.json` (draft 2020-12), pretty-printed: what
+/// `docs/summary.schema.json` holds and `ssm-engine schema` prints.
+pub fn schema_json() -> String {
+    let schema = schemars::schema_for!(SummaryFile);
+    let mut text = serde_json::to_string_pretty(&schema).expect("a schema is JSON");
+    text.push('\n');
+    text
+}
+
+/// `schema_version`: [`SCHEMA_VERSION`] and nothing else.
+fn version_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+    schemars::json_schema!({ "const": SCHEMA_VERSION })
+}
+
+fn to_json(file: &SummaryFile) -> String {
+    // non-finite numbers are written as null (serde_json's rule)
+    serde_json::to_string_pretty(file).expect("a summary of numbers and strings is JSON")
+}
+
+/// `"accuracy"`: the target, the order (and how it was set), and the error
+/// estimate of each answer.
+fn accuracy(a: &Accuracy) -> AccuracySummary {
+    let finite = |e: Option<f64>| e.filter(|x| x.is_finite());
+    AccuracySummary {
+        tolerance: a.tolerance,
+        order: a.order,
+        order_from: if a.chosen { "tolerance" } else { "scene" }.to_owned(),
+        orders_tried: a
+            .tried
+            .iter()
+            .map(|&(order, e)| OrderTried {
+                order,
+                largest_estimate: finite(e),
+            })
+            .collect(),
+        answers: a
+            .answers
+            .iter()
+            .map(|x| AnswerSummary {
+                answer: x.answer.to_owned(),
+                order: x.order,
+                epsilon: x.epsilon,
+                error_estimate: finite(x.estimate),
+                diverged: x.estimate.is_some_and(|e| !e.is_finite()),
+                untrusted: x.untrusted,
+                trusted_up_to_rho: x.trusted_up_to,
+            })
+            .collect(),
+        measured: a
+            .measured
+            .iter()
+            .map(|m| MeasuredSummary {
+                answer: m.answer.to_owned(),
+                order: m.order,
+                epsilon: m.epsilon,
+                relative_error: m.relative_error,
+                output: m.output.clone(),
+                against: m.against.to_owned(),
+            })
+            .collect(),
+    }
+}
+
+fn reduction(r: &Reduction) -> ReductionSummary {
+    ReductionSummary {
+        plugin: r.plugin.clone(),
+        reducer: r.reducer.clone(),
+        n_input_states: r.n_input_states,
+        n_trajectories: r.n_trajectories,
+        n_reduced_states: r.n_reduced_states,
+        lift: r.lift.as_ref().map(|l| LiftSummary {
+            n_full_states: l.basis.nrows as usize,
+            n_reduced_states: l.basis.ncols as usize,
+            offset: !l.offset.is_empty(),
+        }),
+        lifted_outputs: r.lifted_outputs.clone(),
+        diagnostics: diagnostics(&r.diagnostics),
+    }
 }
 
 /// The plugin libraries that ran, by name, version and file.
-fn plugins_json(plugins: &[PluginOrigin]) -> Value {
+fn plugins(plugins: &[PluginOrigin]) -> Vec<PluginSummary> {
     plugins
         .iter()
-        .map(|p| {
-            json!({
-                "name": p.name,
-                "version": p.version,
-                "file": p.file.display().to_string(),
-            })
+        .map(|p| PluginSummary {
+            name: p.name.clone(),
+            version: p.version.clone(),
+            file: p.file.display().to_string(),
         })
         .collect()
 }

@@ -226,6 +226,8 @@ orders = [3, 7]
 #[test]
 fn scene_runs_the_damping_analysis_beside_the_backbone() {
     let job = run_scene_text(SCENE).expect("scene runs");
+    // analyses.damping follows the schema's part generated from DampingCurves
+    ssm_tests::assert_job_summary_valid(&job, "damping");
     let csv = std::str::from_utf8(job.outputs.get("damping.csv").expect("damping.csv")).unwrap();
     assert!(csv.starts_with("order,rho,omega,decay_rate,zeta,x,error_estimate\n"));
     assert_eq!(csv.lines().count(), 1 + 2 * 41);

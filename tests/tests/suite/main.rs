@@ -42,5 +42,6 @@ mod shaw_pierre;
 mod simulate;
 mod spectrum;
 mod ssm_autonomous;
+mod summary_schema;
 mod validation;
 mod workspace;

@@ -471,6 +471,7 @@ fn zoo_scenes_identify_the_first_pair() {
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        ssm_tests::assert_summary_valid(&out.join("summary.json"));
     };
     run(
         &repo.join("zoo/shaw_pierre_data.toml"),

@@ -57,7 +57,9 @@ fn identify(zoo: &str, files: &[PathBuf], pair: i64, rho_max: f64) -> JobResult 
         toml::from_str::<toml::Table>(&format!("rho_max = {rho_max:?}\npoints = 61\norders = [7]"))
             .unwrap()
             .into();
-    run_scene_text(&toml::to_string(&scene).unwrap()).expect("identification runs")
+    let r = run_scene_text(&toml::to_string(&scene).unwrap()).expect("identification runs");
+    ssm_tests::assert_job_summary_valid(&r, &format!("identify-{zoo}-{pair}"));
+    r
 }
 
 /// What [`compare`] found.

@@ -1,6 +1,7 @@
 //! The damping curves `zeta(rho)` and their error estimates.
 
 use rayon::prelude::*;
+use schemars::JsonSchema;
 use serde::Serialize;
 
 use super::DampingSpec;
@@ -32,7 +33,7 @@ pub enum DampingError {
 }
 
 /// Damping curves of one master pair, one per expansion order.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 pub struct DampingCurves {
     /// The master pair (1-based).
     pub pair: usize,
@@ -46,7 +47,7 @@ pub struct DampingCurves {
 }
 
 /// The damping curve of one expansion order.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 pub struct DampingCurve {
     /// Expansion order.
     pub order: usize,
@@ -62,7 +63,7 @@ pub struct DampingCurve {
 }
 
 /// One point of a damping curve.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, JsonSchema)]
 pub struct DampingPoint {
     /// Polar amplitude `rho`.
     pub rho: f64,
