@@ -7,13 +7,18 @@
 //! - [`chebyshev`]: adaptive Chebyshev tables in one variable;
 //! - [`continuation`]: the continuation core (local parametrization, step
 //!   control, test functions and the events they locate);
+//! - [`stepper`]: the one interface of the time integrators, and sampling
+//!   any of them at given times;
+//! - [`dopri`]: the Dormand-Prince 5(4) pair on complex states;
 //! - [`number`]: numbers from user input in messages and CSV files.
 
 #![warn(missing_docs)]
 
 pub mod chebyshev;
 pub mod continuation;
+pub mod dopri;
 pub mod number;
 pub mod poly;
+pub mod stepper;
 
 pub use num_complex::Complex64 as C64;

@@ -29,6 +29,7 @@ use crate::rom::accuracy::relative_gap;
 use crate::ssm::rom::{integrate, RomError};
 use crate::ssm::SsmExpansion;
 use crate::C64;
+use ssm_kernel::stepper::sample;
 
 /// Why a validation could not be produced.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -312,16 +313,9 @@ pub fn transient(
     let times = rom_tr.times.clone();
     let mut states: Vec<Vec<f64>> = Vec::with_capacity(times.len());
     states.push(initial.z.clone());
-    let mut zt = vec![0.0; sys.n_states()];
-    let mut next = 1;
-    while next < times.len() {
-        radau.step(t_end)?;
-        while next < times.len() && times[next] <= radau.t() * (1.0 + 1e-14) {
-            radau.dense(times[next], &mut zt);
-            states.push(zt.clone());
-            next += 1;
-        }
-    }
+    sample(&mut radau, times.get(1..).unwrap_or(&[]), t_end, |_, z| {
+        states.push(z.to_vec());
+    })?;
     let full_s = t_full.elapsed().as_secs_f64();
     let full: Vec<Vec<f64>> = outputs
         .iter()

@@ -37,6 +37,11 @@
 //! available Radau5 ports need C sparse solvers), so the stepper is written
 //! here on top of faer's sparse LU.
 //!
+//! Radau IIA ([`Radau`]) and HHT-alpha ([`hht::Hht`], the integrator of the
+//! POD study) are both steppers of the kernel's one integrator interface
+//! (`ssm_kernel::stepper::Stepper`: accepted steps and dense output), so a
+//! sampled run reads either through the same `ssm_kernel::stepper::sample`.
+//!
 //! Consistent initial values ([`consistent`]) come from a point `W(p0)` on an
 //! SSM or from given displacements and velocities: positions are projected onto
 //! `g(x) = 0` and velocities onto `G(x) v = 0` in the mass metric, then the

@@ -23,6 +23,7 @@ use faer::Mat;
 
 use super::{DaeProblem, SimError};
 use crate::C64;
+use ssm_kernel::stepper::{StepStats, Stepper};
 
 const SQ6: f64 = 2.449_489_742_783_178;
 /// Collocation nodes.
@@ -594,6 +595,38 @@ impl<'p, 'a> Radau<'p, 'a> {
                 self.last_newton = newt;
                 return Ok(Newton::Converged(z));
             }
+        }
+    }
+}
+
+impl Stepper for Radau<'_, '_> {
+    type Scalar = f64;
+    type Error = SimError;
+
+    fn t(&self) -> f64 {
+        self.t
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.y
+    }
+
+    fn step(&mut self, t_end: f64) -> Result<(), SimError> {
+        Radau::step(self, t_end)
+    }
+
+    fn dense(&self, t: f64, out: &mut [f64]) {
+        Radau::dense(self, t, out);
+    }
+
+    fn stats(&self) -> StepStats {
+        let s = self.stats;
+        StepStats {
+            accepted: s.accepted,
+            rejected: s.rejected,
+            newton: s.newton,
+            factorizations: s.factorizations,
+            rhs: s.rhs,
         }
     }
 }

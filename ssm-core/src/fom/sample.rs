@@ -11,9 +11,10 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use ssm_api::TimeKind;
 
-use super::hht::{self, HhtOptions};
+use super::hht::{Hht, HhtOptions};
 use super::{consistent_initial_keeping, DaeProblem, Radau, RadauOptions, SimError};
 use crate::model::system::{OutputMap, System};
+use ssm_kernel::stepper::sample;
 
 /// The sampled runs of `[simulate]`.
 #[derive(Debug, Clone)]
@@ -116,41 +117,20 @@ pub fn sample_run(
             let initial = consistent_initial_keeping(&problem, 0.0, z0, keep)?;
             let t_end = times[samples - 1];
             observe(&initial.z, &mut values);
+            let mut zt = |_: f64, z: &[f64]| observe(z, &mut values);
+            // one sampling for every integrator: each sample by the dense
+            // output of the step that reaches it
             let steps = match integrator {
                 Integrator::Radau(opts) => {
                     let mut radau = Radau::new(&problem, 0.0, &initial.z, t_end, opts)?;
-                    let mut zt = vec![0.0; sys.n_states()];
-                    let mut next = 1;
-                    while next < samples {
-                        radau.step(t_end)?;
-                        while next < samples && times[next] <= radau.t() * (1.0 + 1e-14) {
-                            radau.dense(times[next], &mut zt);
-                            observe(&zt, &mut values);
-                            next += 1;
-                        }
-                    }
+                    sample(&mut radau, &times[1..], t_end, &mut zt)?;
                     radau.stats.accepted
                 }
                 Integrator::Hht { alpha, rtol, atol } => {
                     let o = HhtOptions::adaptive(alpha, period, rtol, atol);
-                    let n_dof = sys.mechanical.as_ref().map_or(0, |m| m.n_dof);
-                    // only the last step end is kept: the samples in each
-                    // step come from its Hermite interpolant
-                    let mut last: Option<(f64, Vec<f64>, Vec<f64>)> = None;
-                    let mut next = 1;
-                    let stats =
-                        hht::integrate_with(&problem, &initial.z, 0.0, t_end, &o, |t, z, a| {
-                            if let Some((t0, z0, a0)) = &last {
-                                while next < samples && times[next] <= t * (1.0 + 1e-14) {
-                                    let zt =
-                                        hht::hermite(times[next], (*t0, z0, a0), (t, z, a), n_dof);
-                                    observe(&zt, &mut values);
-                                    next += 1;
-                                }
-                            }
-                            last = Some((t, z.to_vec(), a.to_vec()));
-                        })?;
-                    stats.steps
+                    let mut hht = Hht::new(&problem, &initial.z, 0.0, &o)?;
+                    sample(&mut hht, &times[1..], t_end, &mut zt)?;
+                    hht.hht_stats().steps
                 }
             };
             Ok(SampledRun {

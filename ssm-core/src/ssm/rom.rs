@@ -2,13 +2,12 @@
 //! (maps) from an initial point on the SSM, lifted to the outputs through
 //! `W`; and forced flows `p' = R(p) + eps S(Omega t)` on the periodic SSM.
 //!
-//! Flows are integrated with the Dormand-Prince 5(4) pair, adaptive step,
-//! error per step below `rtol |p| + atol`, and the solution is reported at
-//! equally spaced times by the pair's free fourth-order dense output. The
-//! reduced model has `2m` complex unknowns (a handful), so a self-contained
-//! explicit integrator is used here rather than pulling a linear-algebra
-//! crate's vector types into the engine; the full-system DAE integrator is a
-//! different, implicit method.
+//! Flows are integrated with the Dormand-Prince 5(4) pair of the kernel
+//! ([`ssm_kernel::dopri`]: adaptive step, error per step below
+//! `rtol |p| + atol`), and the solution is reported at equally spaced times
+//! by the pair's free fourth-order dense output, read through the kernel's
+//! one integrator interface ([`ssm_kernel::stepper`]). The reduced model has
+//! `2m` complex unknowns (a handful): an explicit method on plain vectors.
 //!
 //! # References
 //! J. R. Dormand, P. J. Prince, *A family of embedded Runge-Kutta formulae*,
@@ -17,6 +16,8 @@
 
 use super::{Dynamics, SsmExpansion};
 use crate::C64;
+use ssm_kernel::dopri::{DopriError, DormandPrince};
+use ssm_kernel::stepper::{sample, Stepper};
 
 /// Why a reduced trajectory could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -49,59 +50,6 @@ pub struct Trajectory {
     /// Accepted integration steps.
     pub steps: usize,
 }
-
-// Dormand-Prince 5(4) tableau.
-const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
-const A: [[f64; 6]; 7] = [
-    [0.0; 6],
-    [0.2, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
-    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
-    [
-        19372.0 / 6561.0,
-        -25360.0 / 2187.0,
-        64448.0 / 6561.0,
-        -212.0 / 729.0,
-        0.0,
-        0.0,
-    ],
-    [
-        9017.0 / 3168.0,
-        -355.0 / 33.0,
-        46732.0 / 5247.0,
-        49.0 / 176.0,
-        -5103.0 / 18656.0,
-        0.0,
-    ],
-    [
-        35.0 / 384.0,
-        0.0,
-        500.0 / 1113.0,
-        125.0 / 192.0,
-        -2187.0 / 6784.0,
-        11.0 / 84.0,
-    ],
-];
-// error coefficients b5 - b4
-const E: [f64; 7] = [
-    71.0 / 57600.0,
-    0.0,
-    -71.0 / 16695.0,
-    71.0 / 1920.0,
-    -17253.0 / 339200.0,
-    22.0 / 525.0,
-    -1.0 / 40.0,
-];
-// dense output coefficients (Hairer-Norsett-Wanner, dopri5 contd5)
-const D: [f64; 7] = [
-    -12715105075.0 / 11282082432.0,
-    0.0,
-    87487479700.0 / 32700410799.0,
-    -10690763975.0 / 1880347072.0,
-    701980252875.0 / 199316789632.0,
-    -1453857185.0 / 822651844.0,
-    69997945.0 / 29380423.0,
-];
 
 /// One term `coeff * prod p_v^k` of coordinate `coord` of the reduced dynamics.
 type RomTerm = (usize, C64, Vec<(usize, i32)>);
@@ -219,9 +167,9 @@ fn reduced_field(ssm: &SsmExpansion, order: usize, dim: usize) -> impl Fn(&[C64]
     }
 }
 
-/// Dormand-Prince 5(4) on `p' = f(t, p)` from `p0` at `out_t[0]`, the states
-/// at the times `out_t` by the free dense output; error per step below
-/// `rtol |p| + atol`, `atol = 1e-3 rtol scale`.
+/// Dormand-Prince 5(4) ([`DormandPrince`]) on `p' = f(t, p)` from `p0` at
+/// `out_t[0]`, the states at the times `out_t` by its dense output; error
+/// per step below `rtol |p| + atol`, `atol = 1e-3 rtol scale`.
 fn dopri(
     f: impl Fn(f64, &[C64]) -> Vec<C64>,
     p0: &[C64],
@@ -229,90 +177,23 @@ fn dopri(
     rtol: f64,
     scale: f64,
 ) -> Result<Trajectory, RomError> {
-    let dim = p0.len();
-    let samples = out_t.len();
     let t_start = out_t.first().copied().unwrap_or(0.0);
     let t_end = out_t.last().copied().unwrap_or(0.0);
     let mut times = vec![t_start];
     let mut states = vec![p0.to_vec()];
-    let mut next_out = 1;
-    let mut t = t_start;
-    let mut y = p0.to_vec();
-    let atol = rtol * scale.max(1e-12) * 1e-3;
-    let mut k: Vec<Vec<C64>> = vec![vec![C64::new(0.0, 0.0); dim]; 7];
-    k[0] = f(t, &y);
-    let span = t_end - t_start;
-    let mut h = (span / samples as f64)
-        .min(0.1 / k[0].iter().map(|c| c.norm()).fold(1e-12, f64::max) * scale.max(1e-12));
-    let h_min = 1e-12 * span.abs().max(1.0);
-    let mut steps = 0;
-    let mut stage = vec![C64::new(0.0, 0.0); dim];
-    while next_out < samples {
-        h = h.min(t_end - t).max(h_min);
-        for s in 1..7 {
-            for i in 0..dim {
-                let mut acc = y[i];
-                for (j, kj) in k.iter().enumerate().take(s) {
-                    acc += kj[i] * (h * A[s][j]);
-                }
-                stage[i] = acc;
-            }
-            k[s] = f(t + C[s] * h, &stage);
-        }
-        let y_new = stage.clone();
-        let mut err: f64 = 0.0;
-        for i in 0..dim {
-            let e: C64 = (0..7).map(|s| k[s][i] * E[s]).sum::<C64>() * h;
-            let sc = atol + rtol * y[i].norm().max(y_new[i].norm());
-            err = err.max(e.norm() / sc);
-        }
-        if !err.is_finite() || y_new.iter().any(|c| !c.re.is_finite() || !c.im.is_finite()) {
-            if h <= h_min {
-                return Err(RomError::NonFinite { t });
-            }
-            h *= 0.1;
-            continue;
-        }
-        if err <= 1.0 {
-            // dense output on [t, t + h] (continuous extension of order 4)
-            while next_out < samples && out_t[next_out] <= t + h + 1e-14 * h {
-                let th = ((out_t[next_out] - t) / h).clamp(0.0, 1.0);
-                let th1 = 1.0 - th;
-                let p: Vec<C64> = (0..dim)
-                    .map(|i| {
-                        let ydiff = y_new[i] - y[i];
-                        let bspl = k[0][i] * h - ydiff;
-                        let r5: C64 = (0..7).map(|s| k[s][i] * D[s]).sum::<C64>() * h;
-                        y[i] + th
-                            * (ydiff + th1 * (bspl + th * (ydiff - k[6][i] * h - bspl + th1 * r5)))
-                    })
-                    .collect();
-                times.push(out_t[next_out]);
-                states.push(p);
-                next_out += 1;
-            }
-            t += h;
-            y = y_new;
-            k[0] = k[6].clone();
-            steps += 1;
-        } else if h <= h_min {
-            return Err(RomError::StepCollapse {
-                t,
-                step: h,
-                norm: y.iter().map(|c| c.norm()).fold(0.0, f64::max),
-            });
-        }
-        let factor = if err == 0.0 {
-            5.0
-        } else {
-            (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
-        };
-        h *= factor;
-    }
+    let mut dp = DormandPrince::new(f, t_start, p0, t_end, out_t.len(), rtol, scale);
+    sample(&mut dp, out_t.get(1..).unwrap_or(&[]), t_end, |t, p| {
+        times.push(t);
+        states.push(p.to_vec());
+    })
+    .map_err(|e| match e {
+        DopriError::NonFinite { t } => RomError::NonFinite { t },
+        DopriError::StepCollapse { t, step, norm } => RomError::StepCollapse { t, step, norm },
+    })?;
     Ok(Trajectory {
         times,
         states,
-        steps,
+        steps: dp.stats().accepted,
     })
 }
 
