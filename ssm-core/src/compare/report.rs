@@ -50,8 +50,10 @@ pub enum ReportError {
     },
 }
 
-/// One reduced model of the report.
-#[derive(Debug, Clone, PartialEq)]
+/// One reduced model of the report (`report.rows` of `summary.json`; null:
+/// not computed).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
 pub struct ReportRow {
     /// Expansion order.
     pub order: usize,

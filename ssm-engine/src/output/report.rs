@@ -6,7 +6,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::plot::{line_plot, Curve, PlotError, Scale};
-use ssm_core::compare::report::{FullKind, Report};
+use ssm_core::compare::report::{FullKind, Report, ReportRow};
 
 fn opt(v: Option<f64>) -> String {
     v.map_or_else(String::new, |x| format!("{x:.6e}"))
@@ -154,35 +154,9 @@ pub fn svg(report: &Report) -> Result<String, PlotError> {
 #[serde(deny_unknown_fields)]
 pub struct ReportSummary {
     /// One reduced model (expansion order) a row.
-    pub rows: Vec<ReportRowSummary>,
+    pub rows: Vec<ReportRow>,
     /// The full-system runs.
     pub full_system: Vec<FullCostSummary>,
-}
-
-/// One reduced model of the report (null: not computed).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct ReportRowSummary {
-    /// Expansion order.
-    pub order: usize,
-    /// Seconds to compute the SSM and its reduced dynamics.
-    pub ssm_s: f64,
-    /// Seconds for a backbone curve (200 amplitudes), one pair only.
-    pub backbone_s: Option<f64>,
-    /// Seconds for the reduced transient of `[validate]`.
-    pub transient_s: Option<f64>,
-    /// Seconds for the FRCs of `[forcing]` at this order.
-    pub frc_s: Option<f64>,
-    /// Invariance error (eq. 41) at `invariance_rho`.
-    pub invariance_error: Option<f64>,
-    /// Radius of the invariance error.
-    pub invariance_rho: Option<f64>,
-    /// Largest relative output error of the transient against the full
-    /// system.
-    pub transient_error: Option<f64>,
-    /// Largest relative FRC amplitude error against the `[reference]`
-    /// curve, else against the steady states.
-    pub frc_error: Option<f64>,
 }
 
 /// A full-system run of the report.
@@ -199,21 +173,7 @@ impl ReportSummary {
     /// The summary of `report`.
     pub fn new(report: &Report) -> Self {
         ReportSummary {
-            rows: report
-                .rows
-                .iter()
-                .map(|r| ReportRowSummary {
-                    order: r.order,
-                    ssm_s: r.ssm_s,
-                    backbone_s: r.backbone_s,
-                    transient_s: r.transient_s,
-                    frc_s: r.frc_s,
-                    invariance_error: r.invariance_error,
-                    invariance_rho: r.invariance_rho,
-                    transient_error: r.transient_error,
-                    frc_error: r.frc_error,
-                })
-                .collect(),
+            rows: report.rows.clone(),
             full_system: report
                 .full
                 .iter()

@@ -33,7 +33,7 @@ use ssm_core::ssm::analysis::Polar;
 use ssm_core::ssm::SsmExpansion;
 
 /// Seconds spent per stage.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Timing {
     /// Spectrum and master modes.
     pub spectrum: f64,
@@ -378,36 +378,20 @@ pub struct MeasuredSummary {
     pub against: String,
 }
 
-/// Seconds per stage.
+/// Seconds per stage, and the SSM's split (serde cannot deny unknown keys
+/// beside a flattened struct; the schema does).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
+#[schemars(extend("additionalProperties" = false))]
 pub struct TimingSummary {
-    /// Spectrum and master modes.
-    pub spectrum: f64,
-    /// Non-resonance checks (eqs. 53, 57).
-    pub resonance_check: f64,
-    /// The SSM.
-    pub ssm: f64,
-    /// Of which composing the nonlinearity.
+    /// The stages.
+    #[serde(flatten)]
+    pub stages: Timing,
+    /// Of the SSM: composing the nonlinearity.
     pub ssm_composition: f64,
-    /// Of which factorizing.
+    /// Of the SSM: factorizing.
     pub ssm_factorization: f64,
-    /// Of which solving.
+    /// Of the SSM: solving.
     pub ssm_solves: f64,
-    /// Backbone, invariance error, reduced transient.
-    pub results: f64,
-    /// Forced response curves.
-    pub frc: f64,
-    /// Full-system comparisons.
-    pub validation: f64,
-    /// Speed-against-error report.
-    pub report: f64,
-    /// The `[pod]` study.
-    pub pod: f64,
-    /// The `[reference]` forced responses.
-    pub reference: f64,
-    /// The whole run.
-    pub total: f64,
 }
 
 /// Seconds of a `[pod]`-only run.
@@ -497,19 +481,10 @@ impl RunSummary {
             accuracy: accuracy(s.accuracy),
             warnings: s.warnings.to_vec(),
             timing_s: TimingSummary {
-                spectrum: t.spectrum,
-                resonance_check: t.resonance_check,
-                ssm: t.ssm,
+                stages: *t,
                 ssm_composition: s.ssm.timing.compose_s,
                 ssm_factorization: lin.factor_s,
                 ssm_solves: lin.solve_s,
-                results: t.results,
-                frc: t.frc,
-                validation: t.validation,
-                report: t.report,
-                pod: t.pod,
-                reference: t.reference,
-                total: t.total,
             },
             linear_algebra: LinearAlgebraSummary {
                 symbolic_factorizations: lin.symbolic,
