@@ -12,7 +12,6 @@ use super::Progress;
 use crate::scene::{ReferenceSection, SceneFile, MAX_REFERENCE_COEFFICIENTS};
 use ssm_core::compare::seeds::ssm_seeds;
 use ssm_core::compare::validation::{frc_error_at, reference_points};
-use ssm_core::fom::periodic::floquet::CHECK_WARNING;
 use ssm_core::fom::periodic::frc::{ReferenceBranch, ReferenceFrc};
 use ssm_core::fom::periodic::{
     reference_amplitude_resumable, reference_frc_resumable, AmplitudeSettings, ReferenceOrbit,
@@ -151,7 +150,7 @@ pub fn reference_stage(
                 "[reference] eps = {eps}, branch {number}",
                 eps = ssm_kernel::number::short(eps)
             );
-            warnings.extend(multiplier_warning(b, &at));
+            warnings.extend(b.multiplier_warning(&at));
         }
     }
     let responses = AmplitudeResponses {
@@ -240,26 +239,10 @@ impl AmplitudeResponses<'_> {
                 tolerance,
             ));
             warnings.extend(branch.notes.iter().map(|n| format!("{at}: {n}")));
-            warnings.extend(multiplier_warning(&branch, &at));
+            warnings.extend(branch.multiplier_warning(&at));
             amplitude.push(branch);
         }
         Ok(amplitude)
-    }
-}
-
-/// The warning of a branch whose multipliers' check differs by more than
-/// [`CHECK_WARNING`] or failed, led by `at`; every traced branch (main,
-/// doubled, seeded, amplitude) gets it.
-fn multiplier_warning(branch: &ReferenceBranch, at: &str) -> Option<String> {
-    match branch.multiplier_check.as_ref()? {
-        Ok(c) if c.difference > CHECK_WARNING => Some(format!(
-            "{at}: the Floquet multipliers of the orbit at Omega = {:.6}, eps = {:e} differ by {:.2e} from a check by the monodromy map with {} steps: stability and bifurcations are uncertain to that much ({} orbits of the branch have their largest multiplier within it of the unit circle); raise harmonics",
-            c.omega, c.epsilon, c.difference, c.steps, c.uncertain_orbits
-        )),
-        Ok(_) => None,
-        Err(e) => Some(format!(
-            "{at}: the check of the Floquet multipliers failed ({e}); the stable column is unchecked"
-        )),
     }
 }
 
@@ -328,52 +311,4 @@ pub fn reference_errors(f: &ForcedResponse, r: &ReferenceFrc) -> Vec<MeasuredErr
         }
     }
     list
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use ssm_core::fom::periodic::floquet::{FloquetError, MultiplierCheck};
-
-    fn branch(check: Option<Result<MultiplierCheck, FloquetError>>) -> ReferenceBranch {
-        ReferenceBranch {
-            orbits: Vec::new(),
-            events: Vec::new(),
-            stop: Stop::Range,
-            factorizations: 0,
-            coefficients: 0,
-            samples: 0,
-            at: Vec::new(),
-            doubled: Vec::new(),
-            seeded: Vec::new(),
-            notes: Vec::new(),
-            failed: Vec::new(),
-            multiplier_check: check,
-        }
-    }
-
-    /// A check differing by 1e-4 is no warning, one differing by 2e-3
-    /// (above [`CHECK_WARNING`]) is a warning naming the orbit, the figure
-    /// and the uncertain orbits; a failed check is a warning too.
-    #[test]
-    fn a_multiplier_check_above_its_tolerance_is_a_warning() {
-        let check = |difference: f64| MultiplierCheck {
-            omega: 1.95,
-            epsilon: 0.02,
-            steps: 288,
-            difference,
-            uncertain_orbits: 3,
-        };
-        let warn = |b: &ReferenceBranch| multiplier_warning(b, "[reference]");
-        assert_eq!(warn(&branch(Some(Ok(check(1e-4))))), None);
-        assert_eq!(warn(&branch(None)), None);
-        let w = warn(&branch(Some(Ok(check(2e-3))))).expect("warning");
-        assert!(
-            w.contains("Omega = 1.950000") && w.contains("2.00e-3") && w.contains("3 orbits"),
-            "{w}"
-        );
-        let failed = Some(Err(FloquetError::Spectrum("did not converge".into())));
-        let w = warn(&branch(failed)).expect("warning");
-        assert!(w.contains("did not converge"), "{w}");
-    }
 }

@@ -322,3 +322,24 @@ fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
         (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
     }
 }
+
+/// Steps per period `2 pi / (omega step)`: 1.9 is an error (above
+/// Nyquist), 2.1 and 19 are warnings, 21 and a free run are silent.
+#[test]
+fn load_sampling_refuses_aliasing_and_warns_on_coarse_steps() {
+    let step = 0.01;
+    let omega = |per_period: f64| 2.0 * std::f64::consts::PI / (per_period * step);
+    let e = ssm_engine::scene::load_sampling(step, omega(1.9)).unwrap_err();
+    assert!(e.contains("Nyquist"), "{e}");
+    for n in [2.1, 19.0] {
+        let w = ssm_engine::scene::load_sampling(step, omega(n))
+            .unwrap()
+            .expect("warning");
+        assert!(w.contains("fewer than 20"), "{w}");
+    }
+    assert_eq!(
+        ssm_engine::scene::load_sampling(step, omega(21.0)),
+        Ok(None)
+    );
+    assert_eq!(ssm_engine::scene::load_sampling(step, 0.0), Ok(None));
+}

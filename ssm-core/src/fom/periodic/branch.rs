@@ -11,7 +11,7 @@ use ssm_kernel::continuation::{
     Settings, Stop,
 };
 
-use super::floquet::{FloquetError, MultiplierCheck};
+use super::floquet::{FloquetError, MultiplierCheck, CHECK_WARNING};
 use super::monodromy::check_multipliers;
 use super::{HarmonicBalance, HarmonicBalanceError, OrbitInfo, Parameter};
 
@@ -196,6 +196,22 @@ pub enum ReferenceError {
 }
 
 impl ReferenceBranch {
+    /// The warning a branch calls for when its multipliers' check differs
+    /// by more than [`CHECK_WARNING`] or failed, led by `at` (where it was
+    /// traced, e.g. `[reference]`); every traced branch gets it.
+    pub fn multiplier_warning(&self, at: &str) -> Option<String> {
+        match self.multiplier_check.as_ref()? {
+            Ok(c) if c.difference > CHECK_WARNING => Some(format!(
+                "{at}: the Floquet multipliers of the orbit at Omega = {:.6}, eps = {:e} differ by {:.2e} from a check by the monodromy map with {} steps: stability and bifurcations are uncertain to that much ({} orbits of the branch have their largest multiplier within it of the unit circle); raise harmonics",
+                c.omega, c.epsilon, c.difference, c.steps, c.uncertain_orbits
+            )),
+            Ok(_) => None,
+            Err(e) => Some(format!(
+                "{at}: the check of the Floquet multipliers failed ({e}); the stable column is unchecked"
+            )),
+        }
+    }
+
     /// A branch traced with `hb` through `points`: its orbits (one per
     /// point), events, stop and orbits at given parameter values, the costs
     /// of `hb`, the check of its multipliers, and no further branches.
@@ -511,4 +527,51 @@ pub struct ReferenceFrc {
     pub amplitude: Vec<ReferenceBranch>,
     /// Wall-clock seconds.
     pub seconds: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn branch(check: Option<Result<MultiplierCheck, FloquetError>>) -> ReferenceBranch {
+        ReferenceBranch {
+            orbits: Vec::new(),
+            events: Vec::new(),
+            stop: Stop::Range,
+            factorizations: 0,
+            coefficients: 0,
+            samples: 0,
+            at: Vec::new(),
+            doubled: Vec::new(),
+            seeded: Vec::new(),
+            notes: Vec::new(),
+            failed: Vec::new(),
+            multiplier_check: check,
+        }
+    }
+
+    /// A check differing by 1e-4 is no warning, one differing by 2e-3
+    /// (above [`CHECK_WARNING`]) is a warning naming the orbit, the figure
+    /// and the uncertain orbits; a failed check is a warning too.
+    #[test]
+    fn a_multiplier_check_above_its_tolerance_is_a_warning() {
+        let check = |difference: f64| MultiplierCheck {
+            omega: 1.95,
+            epsilon: 0.02,
+            steps: 288,
+            difference,
+            uncertain_orbits: 3,
+        };
+        let warn = |b: &ReferenceBranch| b.multiplier_warning("[reference]");
+        assert_eq!(warn(&branch(Some(Ok(check(1e-4))))), None);
+        assert_eq!(warn(&branch(None)), None);
+        let w = warn(&branch(Some(Ok(check(2e-3))))).expect("warning");
+        assert!(
+            w.contains("Omega = 1.950000") && w.contains("2.00e-3") && w.contains("3 orbits"),
+            "{w}"
+        );
+        let failed = Some(Err(FloquetError::Spectrum("did not converge".into())));
+        let w = warn(&branch(failed)).expect("warning");
+        assert!(w.contains("did not converge"), "{w}");
+    }
 }
