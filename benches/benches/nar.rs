@@ -14,7 +14,8 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use ssm_engine::pipeline::{run, Quiet};
+use ssm_engine::job::run;
+use ssm_engine::pipeline::Quiet;
 use ssm_engine::scene::SceneFile;
 use ssm_tests::{chain3_data, chain_eigenvalues, registry, shaw_pierre_data, tmp_dir};
 

@@ -10,24 +10,32 @@
 //! (series, Chebyshev tables, continuation) and `ssm-core` (model, spectrum,
 //! SSM, reduced-model answers, full-order model, reducers, comparisons).
 //!
-//! The folders follow the pipeline of a run ([`pipeline::run`]):
+//! The folders follow a run ([`job::run`]):
 //! - [`scene`]: the TOML scene format, validated with line numbers;
-//! - [`plan`]: a scene's sections resolved to the span-free specs of
-//!   `ssm_core::spec` (code builds specs directly: no TOML below `plan`);
+//! - [`job`]: a scene's run: its model built from `[model]` or by the
+//!   reducer of `[reduce]`, its plan resolved, the plan executed;
+//! - [`plan`]: what a run computes, as the span-free specs of
+//!   `ssm_core::spec` (code builds a [`plan::Plan`] directly), checked
+//!   against the model and costed against the machine's limits;
 //! - [`analyses`]: analyses added as vertical slices (one folder each:
 //!   spec, run, writer; one registration line), e.g. the damping curve;
+//! - [`pipeline`]: a plan run on a model, stage after stage
+//!   ([`pipeline::execute`]; it reads no scene type);
 //! - [`output`]: writers of `summary.json`, CSV and SVG from typed results
-//!   (they compute nothing), written atomically;
-//! - [`pipeline`]: running a scene, stage after stage (its model built from
-//!   `[model]` or by the reducer of `[reduce]`).
+//!   (they compute nothing), written atomically.
 //!
-//! Dependencies point one way: `pipeline` uses every stage, `output` reads
-//! the stages' result types, and no two files or folders import each other
-//! (checked by the suite's `layers::no_import_cycles_between_files_or_folders`).
+//! Dependencies point one way: `job` uses every stage, `pipeline` runs a
+//! plan, `output` reads the stages' result types, and no two files or
+//! folders import each other (checked by the suite's
+//! `layers::no_import_cycles_between_files_or_folders`; the suite's
+//! `layers::numerics_do_not_read_the_scene` keeps the pipeline free of scene
+//! types).
 
 #![warn(missing_docs)]
 
 pub mod analyses;
+mod error;
+pub mod job;
 pub mod output;
 pub mod pipeline;
 pub mod plan;

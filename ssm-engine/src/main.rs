@@ -11,11 +11,12 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ssm_core::fom::periodic::{OrbitInfo, ReferenceOrbit};
 use ssm_core::model::plugin::Registry;
+use ssm_engine::job::source::scene_inputs;
+use ssm_engine::job::{self, export};
 use ssm_engine::output;
 use ssm_engine::output::check_not_input;
 use ssm_engine::output::checkpoint::{create_first, Checkpoint};
-use ssm_engine::pipeline::source::scene_inputs;
-use ssm_engine::pipeline::{self, export, Progress};
+use ssm_engine::pipeline::Progress;
 use ssm_engine::scene::{ReportSection, SceneFile};
 use ssm_kernel::continuation::Ledger;
 
@@ -379,7 +380,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     if report && scene.scene.report.is_none() {
         scene.scene.report = Some(ReportSection { orders: None });
     }
-    let out = out.unwrap_or_else(|| pipeline::default_out_dir(&scene));
+    let out = out.unwrap_or_else(|| job::default_out_dir(&scene));
     // before anything is computed or written: the results must not replace
     // an input of the run
     let mut inputs = scene_inputs(&scene, &mut registry);
@@ -405,7 +406,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         journal: Journal::beside(&out),
         checkpoint,
     };
-    let result = pipeline::run(&scene, &mut registry, &progress);
+    let result = job::run(&scene, &mut registry, &progress);
     progress.spinner.finish();
     let journal = if resume.is_some() {
         progress.journal.settle_resumed()

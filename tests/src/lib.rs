@@ -97,7 +97,7 @@ pub fn run_scene_text(
 ) -> Result<ssm_engine::pipeline::JobResult, ssm_engine::pipeline::JobError> {
     let scene =
         ssm_engine::scene::SceneFile::parse(std::path::Path::new("test.toml"), text.to_owned())?;
-    ssm_engine::pipeline::run(&scene, &mut registry(), &ssm_engine::pipeline::Quiet)
+    ssm_engine::job::run(&scene, &mut registry(), &ssm_engine::pipeline::Quiet)
 }
 
 /// The line and `key: message` of the scene error `text` must produce.

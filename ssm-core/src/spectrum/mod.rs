@@ -101,7 +101,8 @@ pub enum SpectrumError {
 }
 
 /// Which solver produced a spectrum.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Method {
     /// Dense eigensolver.
     Dense,

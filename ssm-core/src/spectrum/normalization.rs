@@ -19,6 +19,22 @@ pub enum Normalization {
     Scale(f64),
 }
 
+/// As a scene writes it: `"unit"`, `"mass"` or `{ "scale": s }`.
+impl serde::Serialize for Normalization {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        match self {
+            Self::Unit => s.serialize_str("unit"),
+            Self::Mass => s.serialize_str("mass"),
+            Self::Scale(v) => {
+                let mut map = s.serialize_map(Some(1))?;
+                map.serialize_entry("scale", v)?;
+                map.end()
+            }
+        }
+    }
+}
+
 impl<'de> Deserialize<'de> for Normalization {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         struct Visitor;

@@ -5,10 +5,9 @@
 
 use std::time::Instant;
 
-use super::error::JobError;
-use super::{checks, reference, simulate, Stage};
+use super::{reference, simulate, JobError, Stage};
 use crate::output::summary::Timing;
-use crate::scene::SceneFile;
+use crate::plan::named_outputs;
 use ssm_core::compare::report::{report, Report, ReportInputs};
 use ssm_core::compare::validation::{validation, Validation};
 use ssm_core::fom::periodic::frc::ReferenceFrc;
@@ -30,7 +29,7 @@ pub(super) struct FullSystem {
     pub simulation: Option<Simulation>,
 }
 
-/// The full-system stages the scene of `stage` asks for, on the reduced
+/// The full-system stages the plan of `stage` asks for, on the reduced
 /// answers at `expansion` (its forced response `frc`); their measured errors
 /// go into `accuracy`, their seconds into `timing`.
 pub(super) fn full_system(
@@ -41,19 +40,13 @@ pub(super) fn full_system(
     timing: &mut Timing,
     warnings: &mut Vec<String>,
 ) -> Result<FullSystem, JobError> {
-    let (scene, sc, specs, system, sp) = (
-        stage.scene,
-        &stage.scene.scene,
-        stage.specs,
-        stage.system,
-        stage.sp,
-    );
+    let (plan, system, sp) = (stage.plan, stage.system, stage.sp);
     let (coordinates, progress) = (stage.coordinates, stage.progress);
     let tolerance = accuracy.tolerance;
-    let full_frc = match &sc.reference {
+    let full_frc = match &plan.reference {
         Some(sec) => {
             let (r, w) = reference::reference_stage(
-                scene,
+                plan,
                 sec,
                 system,
                 coordinates,
@@ -70,10 +63,12 @@ pub(super) fn full_system(
 
     let t = Instant::now();
     let mut compared = coordinates.to_vec();
-    let checked = match (&sc.validate, &specs.validation) {
-        (Some(vsec), Some(vspec)) => {
+    let checked = match &plan.validation {
+        Some(vspec) => {
             progress.stage("full-system validation");
-            compared = checks::validation_outputs(scene, system, vsec, coordinates)?;
+            if let Some(names) = &vspec.outputs {
+                compared = named_outputs(system, names, "validate.outputs")?;
+            }
             Some(validation(
                 expansion,
                 system,
@@ -84,7 +79,7 @@ pub(super) fn full_system(
                 frc.map(|f| f.rows.as_slice()),
             )?)
         }
-        _ => None,
+        None => None,
     };
     accuracy.measured = checked.as_ref().map_or_else(Vec::new, measured_errors);
     if let (Some(f), Some(r)) = (frc, &full_frc) {
@@ -93,27 +88,27 @@ pub(super) fn full_system(
     timing.validation = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let speed = match &sc.report {
-        Some(_) => {
+    let speed = match &plan.report {
+        Some(r) => {
             progress.stage("speed-against-error report");
-            let orders = report_orders(scene, expansion.order);
+            let orders = r.orders_up_to(expansion.order);
             let inputs = ReportInputs {
                 orders: &orders,
                 masters: &sp.masters,
                 others: stage.others,
-                resonance_tol: *sc.ssm.resonance_tol.get_ref(),
+                resonance_tol: plan.ssm.resonance_tol,
                 outputs: &compared,
-                forcing: specs.frc.as_ref(),
+                forcing: plan.frc.as_ref(),
                 validation: checked.as_ref(),
                 p0: checked
                     .as_ref()
                     .and_then(|v| v.transient.as_ref())
                     .map(|t| t.result.p0.clone()),
-                rtol: specs
+                rtol: plan
                     .validation
                     .as_ref()
                     .map_or(ValidationSpec::DEFAULT_RTOL, |v| v.rtol),
-                tolerance: *sc.ssm.tolerance.get_ref(),
+                tolerance: plan.ssm.tolerance,
                 reference: full_frc.as_ref(),
             };
             Some(report(system, &inputs)?)
@@ -122,16 +117,10 @@ pub(super) fn full_system(
     };
     timing.report = t.elapsed().as_secs_f64();
 
-    let simulation = match &sc.simulate {
+    let simulation = match &plan.simulate {
         Some(sec) => {
             progress.stage("sampling full-system runs");
-            Some(simulate::simulate(
-                scene,
-                sec,
-                system,
-                expansion,
-                coordinates,
-            )?)
+            Some(simulate::simulate(sec, system, expansion, coordinates)?)
         }
         None => None,
     };
@@ -174,24 +163,4 @@ fn measured_errors(v: &Validation) -> Vec<MeasuredError> {
         });
     }
     list
-}
-
-/// The orders of the report: those of `[report]`, else the odd orders from 3
-/// up to the expansion order `max`, which is always included.
-fn report_orders(scene: &SceneFile, max: usize) -> Vec<usize> {
-    scene
-        .scene
-        .report
-        .as_ref()
-        .and_then(|r| r.orders.as_ref())
-        .map_or_else(
-            || {
-                let mut o: Vec<usize> = (1..=max).filter(|k| k % 2 == 1 && *k >= 3).collect();
-                if o.last() != Some(&max) {
-                    o.push(max);
-                }
-                o
-            },
-            |o| o.get_ref().clone(),
-        )
 }

@@ -1,48 +1,40 @@
-//! Running a scene, one stage after the other: the model (built by a plugin
-//! or made by a reducer), the spectral stage, the SSM, the answers read off
-//! the reduced model (backbone, invariance error, transient, forced response),
-//! the full-system comparisons and the speed-against-error report. Each stage
-//! returns typed results; [`crate::output`] turns them into files.
+//! Running a [`Plan`] on a model, one stage after the other: the POD
+//! study, the spectral stage, the SSM, the answers read off the reduced
+//! model (backbone, invariance error, transient, forced response, the
+//! analyses of [`crate::analyses`]), the full-system comparisons and the
+//! speed-against-error report. Each stage returns typed results;
+//! [`crate::output`] turns them into files. Nothing here reads a scene: a
+//! plan comes from code or from [`crate::plan::resolve`].
 //!
 //! Adding an analysis: one folder under [`crate::analyses`] holding its spec,
 //! run and writer, and one line in its registry; the scene's
 //! `[analysis.<name>]` table reaches it through the plan and the one gate,
-//! and [`run`] needs no change.
+//! and [`execute`] needs no change.
 
-pub mod budget;
-mod checks;
-mod error;
-pub mod export;
 mod full_system;
 mod pod;
-mod pod_reducer;
-mod reduce;
 mod reference;
 mod simulate;
-pub mod source;
 mod spectral;
 
-use std::path::PathBuf;
 use std::time::Instant;
 
-pub use error::JobError;
+pub use crate::error::JobError;
 pub use spectral::Spectral;
 
 use crate::analyses::{self, Context, Finished};
 use crate::output::summary::{Summary, Timing};
 use crate::output::{pod_only_files, result_files, OutputSet, Products};
-use crate::plan::{self, AnswerSpecs};
-use crate::scene::SceneFile;
+use crate::plan::budget::{self, Limits};
+use crate::plan::{named_outputs, Plan};
 use crate::C64;
-use reduce::reduce_scene;
-use source::build_model;
 use ssm_core::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
 use ssm_core::compare::pod::PodStudy;
 use ssm_core::compare::report::Report;
 use ssm_core::compare::validation::Validation;
 use ssm_core::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
 use ssm_core::fom::periodic::OrbitInfo;
-use ssm_core::model::plugin::{PluginOrigin, Registry};
+use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::reduce::Reduction;
 use ssm_core::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
@@ -154,10 +146,22 @@ struct Reduced {
     frc_s: f64,
 }
 
+/// The model a plan runs on.
+#[derive(Debug)]
+pub struct Model {
+    /// The validated system the analyses run on.
+    pub system: System,
+    /// The reducer's record when a reducer made `system`.
+    pub reduction: Option<Reduction>,
+    /// The model as its plugin gave it, for a POD study (which projects it).
+    pub full: Option<ssm_api::Model>,
+    /// The plugin libraries that made it.
+    pub plugins: Vec<PluginOrigin>,
+}
+
 /// What every order tried shares.
 struct Stage<'a> {
-    scene: &'a SceneFile,
-    specs: &'a AnswerSpecs,
+    plan: &'a Plan,
     system: &'a System,
     sp: &'a Spectral,
     others: &'a [C64],
@@ -171,14 +175,13 @@ impl Stage<'_> {
     /// The SSM to `order`, the backbone, invariance error and transient of
     /// `[outputs]`, the forced response of `[forcing]`, and their estimates.
     fn at(&self, order: usize) -> Result<Reduced, JobError> {
-        let sc = &self.scene.scene;
-        let tolerance = *sc.ssm.tolerance.get_ref();
+        let tolerance = self.plan.ssm.tolerance;
         let (sys, masters) = (self.system, &self.sp.masters);
         self.progress.stage(&format!("SSM to order {order}"));
         let t = Instant::now();
         let options = SsmOptions {
             order,
-            resonance_tol: *sc.ssm.resonance_tol.get_ref(),
+            resonance_tol: self.plan.ssm.resonance_tol,
         };
         let expansion = ssm::compute(sys, masters, self.others, &options)?;
         let ssm_s = t.elapsed().as_secs_f64();
@@ -186,7 +189,7 @@ impl Stage<'_> {
         self.progress
             .stage("backbone, invariance error, transients");
         let t = Instant::now();
-        let specs = self.specs;
+        let specs = self.plan;
         let answers = Autonomous {
             invariance: specs
                 .invariance
@@ -262,7 +265,7 @@ impl Stage<'_> {
         warnings: &mut Vec<String>,
         timing: &mut Timing,
     ) -> Result<(Reduced, Accuracy), JobError> {
-        let ssm = &self.scene.scene.ssm;
+        let ssm = &self.plan.ssm;
         let (mut reduced, tried) = match &ssm.order {
             Some(_) => (self.at(ceiling)?, Vec::new()),
             None => self.choose(ceiling, warnings)?,
@@ -271,7 +274,7 @@ impl Stage<'_> {
         timing.results = reduced.results_s;
         timing.frc = reduced.frc_s;
         let accuracy = Accuracy {
-            tolerance: *ssm.tolerance.get_ref(),
+            tolerance: ssm.tolerance,
             order: reduced.expansion.order,
             chosen: ssm.order.is_none(),
             tried,
@@ -291,8 +294,8 @@ impl Stage<'_> {
         ceiling: usize,
         warnings: &mut Vec<String>,
     ) -> Result<(Reduced, OrdersTried), JobError> {
-        let tolerance = *self.scene.scene.ssm.tolerance.get_ref();
-        let named = self.scene.highest_named_order().max(self.analysis_orders);
+        let tolerance = self.plan.ssm.tolerance;
+        let named = self.plan.highest_named_order().max(self.analysis_orders);
         let mut order = named.max(3).min(ceiling);
         let mut tried = Vec::new();
         let mut best: Option<(f64, Reduced)> = None;
@@ -416,60 +419,56 @@ fn untrusted_warnings(estimates: &[AnswerEstimate], tolerance: f64) -> Vec<Strin
         .collect()
 }
 
-/// Runs a scene and assembles its outputs (nothing is written here).
-pub fn run(
-    scene: &SceneFile,
-    registry: &mut Registry,
+/// Runs `plan` on `model` within `limits` and assembles its outputs
+/// (nothing is written here); `started` is when the run began (the model's
+/// building counts in the total time). The plan is checked against the
+/// model first ([`Plan::check`]); the estimates that need the master modes
+/// run after the spectrum, before the SSM.
+pub fn execute(
+    plan: &Plan,
+    model: Model,
+    limits: &Limits,
     progress: &dyn Progress,
+    started: Instant,
 ) -> Result<JobResult, JobError> {
-    let t0 = Instant::now();
-    let sc = &scene.scene;
-    // the scene resolved to specs first: a mistake in an analysis's table
-    // is reported before any model is built
-    let specs = plan::answers(scene)?;
-    let analysis_orders = highest_analysis_order(&specs)?;
+    let t0 = started;
+    let Model {
+        system,
+        reduction,
+        full: full_model,
+        plugins,
+    } = model;
+    plan.check(&system, limits)?;
+    let analysis_orders = highest_analysis_order(plan)?;
     let mut timing = Timing::default();
-    progress.stage("building model");
-    registry.take_used();
-    let (system, reduction, full_model) = obtain_model(scene, registry)?;
-    let plugins = registry.take_used();
     let mut warnings = Vec::new();
     // one gate: every request is costed against the same limits before it
-    // runs ([pod] first, since it runs before the spectrum)
-    let limits = budget::Limits::of_machine();
-    let pod = pod_study(scene, &system, full_model.as_ref(), &limits, progress)?;
+    // runs (the POD study first, since it runs before the spectrum)
+    let pod = pod_study(plan, &system, full_model.as_ref(), progress)?;
     let pod = pod.map(|(study, w, seconds)| {
         warnings.extend(w);
         timing.pod = seconds;
         study
     });
-    if !scene.wants_ssm() {
+    if !plan.wants_ssm() {
         progress.stage("writing outputs");
         timing.total = t0.elapsed().as_secs_f64();
         let outputs = pod_only_files(&system, &plugins, pod.as_ref(), &warnings, timing)?;
         return Ok(JobResult::pod_only(system, pod, warnings, plugins, outputs));
     }
-    let coordinates = checks::coordinates(scene, &system)?;
+    let coordinates = named_outputs(&system, &plan.coordinates, "outputs.coordinates")?;
 
-    let ceiling = budget::check_spectrum(scene, &system, &limits)?;
+    let ceiling = budget::check_spectrum(plan, &system, limits)?;
     progress.stage("spectrum");
-    let sp = spectral::spectral(scene, &system, ceiling)?;
+    let sp = spectral::spectral(&plan.ssm, &plan.spectrum, &system, ceiling)?;
     timing.spectrum = sp.spectrum_s;
     timing.resonance_check = sp.resonance_s;
-    budget::check(scene, &system, &sp.masters, ceiling, &limits)?;
-    budget::check_analyses(
-        scene,
-        &specs.analyses,
-        &sp.masters,
-        ceiling,
-        &coordinates,
-        &limits,
-    )?;
+    budget::check(plan, &system, &sp.masters, ceiling, limits)?;
+    budget::check_analyses(plan, &sp.masters, ceiling, limits)?;
 
     let others: Vec<C64> = ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
     let stage = Stage {
-        scene,
-        specs: &specs,
+        plan,
         system: &system,
         sp: &sp,
         others: &others,
@@ -479,7 +478,7 @@ pub fn run(
     };
     warnings.extend(sp.warnings.iter().cloned());
     warnings.extend(reduction.iter().flat_map(reducer_warnings));
-    let tolerance = *sc.ssm.tolerance.get_ref();
+    let tolerance = plan.ssm.tolerance;
     let (reduced, mut accuracy) = stage.reduce(ceiling, &mut warnings, &mut timing)?;
     let Reduced {
         expansion,
@@ -513,7 +512,7 @@ pub fn run(
         .then(|| polar(&expansion).ok())
         .flatten();
     let names: Vec<String> = coordinates.iter().map(|o| o.name.clone()).collect();
-    let pairs = sc.ssm.master_pairs.get_ref();
+    let pairs = &plan.ssm.master_pairs;
     timing.total = t0.elapsed().as_secs_f64();
     let modal = sp.spectrum.modal_figures();
     let analysis_summaries: Vec<(&str, serde_json::Value)> =
@@ -568,9 +567,9 @@ pub fn run(
 
 /// The highest expansion order the analyses of `[analysis]` name (1
 /// without any).
-fn highest_analysis_order(specs: &AnswerSpecs) -> Result<usize, JobError> {
+fn highest_analysis_order(plan: &Plan) -> Result<usize, JobError> {
     let mut highest = 1;
-    for a in &specs.analyses {
+    for a in &plan.analyses {
         let orders = analyses::find(&a.name)?.orders(&a.spec)?;
         highest = orders.into_iter().fold(highest, usize::max);
     }
@@ -592,21 +591,19 @@ fn add_analysis_files(
     Ok(())
 }
 
-/// The `[pod]` study of the plugin's `model` (costed first), its warnings
-/// and seconds.
+/// The POD study of the plugin's `model` (costed by [`Plan::check`]), its
+/// warnings and seconds.
 fn pod_study(
-    scene: &SceneFile,
+    plan: &Plan,
     system: &System,
     model: Option<&ssm_api::Model>,
-    limits: &budget::Limits,
     progress: &dyn Progress,
 ) -> Result<Option<(PodStudy, Vec<String>, f64)>, JobError> {
-    let (Some(sec), Some(model)) = (&scene.scene.pod, model) else {
+    let (Some(spec), Some(model)) = (&plan.pod, model) else {
         return Ok(None);
     };
-    budget::check_pod(scene, system, limits)?;
     let t = Instant::now();
-    let (study, w) = pod::pod_stage(scene, sec, model, system, progress)?;
+    let (study, w) = pod::pod_stage(plan, spec, model, system, progress)?;
     Ok(Some((study, w, t.elapsed().as_secs_f64())))
 }
 
@@ -648,38 +645,4 @@ fn signal_backbones(sig: &ssm_api::Signals, name: Option<&str>) -> Vec<DataBackb
         })
         .collect();
     data_backbones(&series, sig.period)
-}
-
-/// The model the analyses run on: the plugin's model of `[model]`, or the
-/// model the reducer of `[reduce]` makes from it and/or the `[data]` signals;
-/// validated into a [`System`]. With `[pod]`, the plugin's model as it was
-/// given too (the POD reducer projects it).
-pub fn obtain_model(
-    scene: &SceneFile,
-    registry: &mut Registry,
-) -> Result<(System, Option<Reduction>, Option<ssm_api::Model>), JobError> {
-    let sc = &scene.scene;
-    let full = sc
-        .model
-        .as_ref()
-        .map(|m| build_model(scene, m, registry))
-        .transpose()?;
-    match &sc.reduce {
-        Some(red) => {
-            let (system, reduction) = reduce_scene(scene, red, full, registry)?;
-            Ok((system, Some(reduction), None))
-        }
-        None => {
-            let (plugin, model) = full.ok_or_else(|| {
-                scene.invalid(0..0, "model", "the scene has no [model] section".into())
-            })?;
-            let raw = sc.pod.as_ref().map(|_| model.clone());
-            Ok((System::from_model(&plugin, model)?, None, raw))
-        }
-    }
-}
-
-/// Default output directory of a scene: `./out/<scene name>`.
-pub fn default_out_dir(scene: &SceneFile) -> PathBuf {
-    PathBuf::from("out").join(scene.name())
 }

@@ -4,82 +4,36 @@
 
 use std::time::Instant;
 
-use toml::Spanned;
-
-use super::checks::named_outputs;
-use super::error::JobError;
 use super::spectral::spectral;
-use super::Progress;
-use crate::scene::{load_sampling, PodRun, PodSection, SceneFile};
+use super::{JobError, Progress};
+use crate::plan::{Plan, PlanError};
 use ssm_core::compare::pod::SsmRom;
 use ssm_core::compare::pod::{
     full_run, pod_case_run, pod_roms, CaseRun, LoadCase, PodStudy, StudySettings,
 };
 use ssm_core::compare::ssm_run::ssm_case_run;
-use ssm_core::model::system::{OutputMap, System};
+use ssm_core::fom::hht::load_sampling;
+use ssm_core::model::system::System;
 use ssm_core::reduce::pod::Truncation;
+use ssm_core::spec::{PodRunSpec, PodSpec, PodTruncations, SsmSpec};
 use ssm_core::ssm::{self, SsmOptions};
 
-/// The outputs `[pod]` compares (its `outputs`, else `[outputs]
-/// coordinates`), each checked to exist.
-fn pod_outputs<'a>(
-    scene: &SceneFile,
-    sys: &'a System,
-    sec: &PodSection,
-) -> Result<Vec<&'a OutputMap>, JobError> {
-    let (names, key) = match &sec.outputs {
-        Some(o) => (o, "pod.outputs"),
-        None => (&scene.scene.outputs.coordinates, "outputs.coordinates"),
-    };
-    if names.get_ref().is_empty() {
-        return Err(scene
-            .invalid(
-                sec.step.span(),
-                "pod.outputs",
-                "name the outputs to compare: [pod] outputs or [outputs] coordinates".into(),
-            )
-            .into());
-    }
-    named_outputs(scene, sys, names, key)
-}
-
-/// The load case of a `[pod]` run, its start states checked to exist.
-fn load_case(
-    scene: &SceneFile,
-    sys: &System,
-    run: &PodRun,
-    label: String,
-    span: std::ops::Range<usize>,
-    trained: bool,
-) -> Result<LoadCase, JobError> {
-    let start = run.given_start();
-    if let Some((name, _)) = start
-        .iter()
-        .find(|(n, _)| !sys.states.iter().any(|s| s.name.as_str() == n))
-    {
-        return Err(scene
-            .invalid(
-                span,
-                &format!("pod.{}", label.replace(' ', "")),
-                format!("model '{}' has no state '{name}'", sys.name),
-            )
-            .into());
-    }
-    Ok(LoadCase {
+/// The load case of a POD run.
+fn load_case(run: &PodRunSpec, label: String, trained: bool) -> LoadCase {
+    LoadCase {
         label,
         epsilon: run.epsilon,
-        omega: *run.omega.get_ref(),
+        omega: run.omega,
         t_end: run.t_end,
-        start,
+        start: run.start.clone(),
         trained,
-    })
+    }
 }
 
 /// The truncations of `sec`, labelled.
-fn truncations(sec: &PodSection) -> Vec<(String, Truncation)> {
-    if let Some(e) = &sec.energy {
-        return e
-            .get_ref()
+fn truncations(sec: &PodSpec) -> Vec<(String, Truncation)> {
+    match &sec.truncations {
+        PodTruncations::Energy(e) => e
             .iter()
             .map(|&fraction| {
                 (
@@ -87,34 +41,34 @@ fn truncations(sec: &PodSection) -> Vec<(String, Truncation)> {
                     Truncation::Energy { fraction },
                 )
             })
-            .collect();
+            .collect(),
+        PodTruncations::Drop(d) => d
+            .iter()
+            .map(|&decades| (format!("pod drop {decades}"), Truncation::Drop { decades }))
+            .collect(),
     }
-    sec.drop
-        .as_ref()
-        .map_or_else(|| vec![6.0], |d| d.get_ref().clone())
-        .into_iter()
-        .map(|decades| (format!("pod drop {decades}"), Truncation::Drop { decades }))
-        .collect()
 }
 
 /// The SSM models of `ssm_pairs`: for each set, the spectral stage with
 /// those master pairs and the SSM to the study's order.
-fn ssm_roms(scene: &SceneFile, sys: &System, sec: &PodSection) -> Result<Vec<SsmRom>, JobError> {
-    let Some(sets) = &sec.ssm_pairs else {
-        return Ok(Vec::new());
-    };
-    let order = sec.ssm_order(scene.scene.ssm.order.as_ref().map(|o| *o.get_ref()));
-    sets.get_ref()
+fn ssm_roms(plan: &Plan, sys: &System, sec: &PodSpec) -> Result<Vec<SsmRom>, JobError> {
+    let order = sec.ssm_order(plan.ssm.order);
+    sec.ssm_pairs
         .iter()
         .map(|pairs| {
             let t = Instant::now();
-            let mut with_pairs = scene.clone();
-            with_pairs.scene.ssm.master_pairs = Spanned::new(sets.span(), pairs.clone());
-            let sp = spectral(&with_pairs, sys, order)?;
+            let with_pairs = SsmSpec {
+                master_pairs: pairs.clone(),
+                ..plan.ssm.clone()
+            };
+            let sp = spectral(&with_pairs, &plan.spectrum, sys, order).map_err(|e| match e {
+                JobError::Plan(e) => JobError::Plan(PlanError::new("pod.ssm_pairs", e.problem)),
+                other => other,
+            })?;
             let others = ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
             let options = SsmOptions {
                 order,
-                resonance_tol: *scene.scene.ssm.resonance_tol.get_ref(),
+                resonance_tol: plan.ssm.resonance_tol,
             };
             let expansion = ssm::compute(sys, &sp.masters, &others, &options)?;
             Ok(SsmRom {
@@ -135,40 +89,26 @@ fn ssm_roms(scene: &SceneFile, sys: &System, sec: &PodSection) -> Result<Vec<Ssm
         .collect()
 }
 
-/// Runs the `[pod]` study of `scene` on the full plugin model `full_model`
-/// (validated into `sys`).
+/// Runs the POD study `sec` of `plan` on the full plugin model
+/// `full_model` (validated into `sys`; the outputs and the runs' states
+/// checked by [`Plan::check`]).
 pub fn pod_stage(
-    scene: &SceneFile,
-    sec: &PodSection,
+    plan: &Plan,
+    sec: &PodSpec,
     full_model: &ssm_api::Model,
     sys: &System,
     progress: &dyn Progress,
 ) -> Result<(PodStudy, Vec<String>), JobError> {
-    let outputs = pod_outputs(scene, sys, sec)?;
+    let outputs = crate::plan::pod_outputs(plan, sys)?;
     let settings = StudySettings {
-        step: *sec.step.get_ref(),
-        alpha: *sec.hht_alpha.get_ref(),
-        rank_tol: *sec.rank_tol.get_ref(),
-        jacobian_samples: *sec.jacobian_samples.get_ref(),
+        step: sec.step,
+        alpha: sec.hht_alpha,
+        rank_tol: sec.rank_tol,
+        jacobian_samples: sec.jacobian_samples,
     };
-    let train = load_case(
-        scene,
-        sys,
-        sec.train.get_ref(),
-        "train".into(),
-        sec.train.span(),
-        true,
-    )?;
-    let mut cases = vec![train];
-    for (k, run) in sec.test.get_ref().iter().enumerate() {
-        cases.push(load_case(
-            scene,
-            sys,
-            run,
-            format!("test {}", k + 1),
-            sec.test.span(),
-            false,
-        )?);
+    let mut cases = vec![load_case(&sec.train, "train".into(), true)];
+    for (k, run) in sec.tests.iter().enumerate() {
+        cases.push(load_case(run, format!("test {}", k + 1), false));
     }
     progress.stage("POD: training run of the full model");
     let training = full_run(sys, &cases[0], &settings, &outputs)?;
@@ -180,10 +120,10 @@ pub fn pod_stage(
         &truncations(sec),
         &settings,
     )?;
-    if sec.ssm_pairs.is_some() {
+    if !sec.ssm_pairs.is_empty() {
         progress.stage("POD: SSM models for comparison");
     }
-    let ssm = ssm_roms(scene, sys, sec)?;
+    let ssm = ssm_roms(plan, sys, sec)?;
     let mut warnings: Vec<String> = cases
         .iter()
         .filter_map(|c| {

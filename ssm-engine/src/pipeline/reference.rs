@@ -6,10 +6,8 @@
 
 use std::time::Instant;
 
-use super::checks::named_outputs;
-use super::error::JobError;
-use super::Progress;
-use crate::scene::{ReferenceSection, SceneFile, MAX_REFERENCE_COEFFICIENTS};
+use super::{JobError, Progress};
+use crate::plan::{named_outputs, Plan};
 use ssm_core::compare::seeds::ssm_seeds;
 use ssm_core::compare::validation::{frc_error_at, reference_points};
 use ssm_core::fom::periodic::frc::{ReferenceBranch, ReferenceFrc};
@@ -20,15 +18,16 @@ use ssm_core::fom::periodic::{
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::rom::accuracy::MeasuredError;
 use ssm_core::rom::forced_response::ForcedResponse;
+use ssm_core::spec::ReferenceSpec;
 use ssm_core::ssm::SsmExpansion;
 use ssm_kernel::continuation::{NoLedger, Stop};
 
-/// Runs `[reference]`, with seeds from the reduced model's forced response
-/// `reduced` where it starts from the SSM; returns the curves and the
-/// warnings.
+/// Runs the reference `sec` of `plan`, with seeds from the reduced model's
+/// forced response `reduced` where it starts from the SSM; returns the
+/// curves and the warnings.
 pub fn reference_stage(
-    scene: &SceneFile,
-    sec: &ReferenceSection,
+    plan: &Plan,
+    sec: &ReferenceSpec,
     system: &System,
     coordinates: &[&OutputMap],
     reduced: Option<(&SsmExpansion, &ForcedResponse)>,
@@ -37,54 +36,34 @@ pub fn reference_stage(
 ) -> Result<(ReferenceFrc, Vec<String>), JobError> {
     let t = Instant::now();
     let outputs: Vec<OutputMap> = match &sec.outputs {
-        Some(names) => named_outputs(scene, system, names, "reference.outputs")?
+        Some(names) => named_outputs(system, names, "reference.outputs")?
             .into_iter()
             .cloned()
             .collect(),
         None => coordinates.iter().map(|o| (*o).clone()).collect(),
     };
-    let h = *sec.harmonics.get_ref();
-    let coefficients = system.n_states() * (2 * h + 1);
-    if coefficients > MAX_REFERENCE_COEFFICIENTS {
-        return Err(scene
-            .invalid(
-                sec.harmonics.span(),
-                "reference.harmonics",
-                format!(
-                    "{} states x {} Fourier functions = {coefficients} unknowns per orbit exceed the limit {MAX_REFERENCE_COEFFICIENTS}: lower harmonics",
-                    system.n_states(),
-                    2 * h + 1
-                ),
-            )
-            .into());
-    }
-    if system.forcing.is_empty() {
-        return Err(scene
-            .invalid(
-                sec.epsilon.span(),
-                "reference",
-                format!(
-                    "model '{}' has no forcing Fext to drive a forced response",
-                    system.name
-                ),
-            )
-            .into());
-    }
+    let h = sec.harmonics;
+    let forced = plan.frc.is_some();
     let range = sec
-        .omega_range(scene)
-        .expect("the scene check requires a frequency range");
+        .omega_range(plan.frc.as_ref().map(|f| f.omega_range))
+        .ok_or_else(|| {
+            crate::plan::PlanError::new(
+                "reference.omega_range",
+                "give omega_range here or in [forcing]".into(),
+            )
+        })?;
     let mut warnings = Vec::new();
     let names: Vec<String> = outputs.iter().map(|o| o.name.clone()).collect();
     let ledger = progress.checkpoint().unwrap_or(&NoLedger);
     let mut branches = Vec::new();
     let mut samples = 0;
-    for &eps in sec.epsilon.get_ref() {
+    for &eps in &sec.epsilon {
         progress.stage(&format!("full-system reference, eps = {eps:e}"));
-        let seeds = match reduced.filter(|_| sec.from_ssm(scene)) {
+        let seeds = match reduced.filter(|_| sec.from_ssm(forced)) {
             Some((ssm, frc)) => ssm_seeds(ssm, frc, system.n_states(), eps, range, h),
             None => Vec::new(),
         };
-        if sec.from_ssm(scene) && seeds.is_empty() {
+        if sec.from_ssm(forced) && seeds.is_empty() {
             warnings.push(format!(
                 "[reference] eps = {eps}: no forced response of the reduced model at this amplitude to start from; the reference starts from rest only (add eps to [forcing] epsilon)", eps = ssm_kernel::number::short(eps)
             ));
@@ -93,14 +72,14 @@ pub fn reference_stage(
             epsilon: eps,
             omega_range: range,
             harmonics: h,
-            step: *sec.step.get_ref(),
-            tol: *sec.tol.get_ref(),
-            max_steps: *sec.max_steps.get_ref(),
+            step: sec.step,
+            tol: sec.tol,
+            max_steps: sec.max_steps,
             outputs: outputs.clone(),
             points_at: Vec::new(),
-            period_doubling: *sec.period_doubling.get_ref(),
+            period_doubling: sec.period_doubling,
             seeds,
-            stability: *sec.stability.get_ref(),
+            stability: sec.stability,
         };
         let (lo, hi) = range;
         let mut count = 0usize;
@@ -177,7 +156,7 @@ pub fn reference_stage(
 
 /// The amplitude responses of `[reference] amplitude_at`: what they share.
 struct AmplitudeResponses<'a> {
-    sec: &'a ReferenceSection,
+    sec: &'a ReferenceSpec,
     system: &'a System,
     outputs: &'a [OutputMap],
     names: &'a [String],
@@ -196,10 +175,10 @@ impl AmplitudeResponses<'_> {
         let (sec, system, outputs, names) = (self.sec, self.system, self.outputs, self.names);
         let (tolerance, progress) = (self.tolerance, self.progress);
         let ledger = progress.checkpoint().unwrap_or(&NoLedger);
-        let h = *sec.harmonics.get_ref();
+        let h = sec.harmonics;
         let mut amplitude = Vec::new();
         let eps_range = sec.amplitude_range();
-        for (k, &omega) in sec.amplitude_frequencies().iter().enumerate() {
+        for (k, &omega) in sec.amplitude_at.iter().enumerate() {
             progress.stage(&format!(
                 "full-system amplitude response, Omega = {omega}",
                 omega = ssm_kernel::number::short(omega)
@@ -208,12 +187,12 @@ impl AmplitudeResponses<'_> {
                 omega,
                 epsilon_range: eps_range,
                 harmonics: h,
-                step: *sec.step.get_ref(),
-                tol: *sec.tol.get_ref(),
-                max_steps: *sec.max_steps.get_ref(),
+                step: sec.step,
+                tol: sec.tol,
+                max_steps: sec.max_steps,
                 outputs: outputs.to_vec(),
                 points_at: Vec::new(),
-                stability: *sec.stability.get_ref(),
+                stability: sec.stability,
             };
             let mut count = 0usize;
             let mut runs = Runs::new(ledger, |o: &ReferenceOrbit| {

@@ -1,13 +1,14 @@
 //! The spectral stage of a run: the finite spectrum of the pencil with the
-//! scene's options (falling back to the sparse path where the dense one fails
+//! plan's options (falling back to the sparse path where the dense one fails
 //! on a stiff pencil), the master modes, and the non-resonance checks.
 
 use std::time::Instant;
 
-use super::error::JobError;
-use crate::scene::{SceneFile, SpectrumMethod};
+use super::JobError;
+use crate::plan::PlanError;
 use crate::C64;
 use ssm_core::model::system::System;
+use ssm_core::spec::{SpectrumSpec, SsmSpec};
 use ssm_core::spectrum::{
     self, check_resonances, MasterMode, Method, ResonanceReport, Spectrum, SpectrumError,
     SpectrumOptions,
@@ -34,42 +35,24 @@ pub struct Spectral {
     pub resonance_s: f64,
 }
 
-/// Runs the spectral stage of `scene` on `system`.
-pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spectral, JobError> {
-    let sc = &scene.scene;
+/// The spectral stage of the SSM `ssm` (its master pairs, scaling and
+/// resonance tolerance) with the solver of `spec` on `system`, the
+/// resonance checks up to `order`.
+pub fn spectral(
+    ssm: &SsmSpec,
+    spec: &SpectrumSpec,
+    system: &System,
+    order: usize,
+) -> Result<Spectral, JobError> {
     let t_spec = Instant::now();
     let mut warnings = Vec::new();
-    let pairs = sc.ssm.master_pairs.get_ref();
+    let pairs = &ssm.master_pairs;
     let max_pair = pairs.iter().copied().max().unwrap_or(1);
-    if let Some(m) = &sc.spectrum.modes {
-        let n = system.n_states();
-        if *m.get_ref() > n {
-            return Err(scene
-                .invalid(
-                    m.span(),
-                    "spectrum.modes",
-                    format!(
-                        "{} modes asked for, but the model has {n} states and so at most {n} finite eigenvalues",
-                        m.get_ref()
-                    ),
-                )
-                .into());
-        }
-    }
     let opts = SpectrumOptions {
-        method: match sc.spectrum.method {
-            SpectrumMethod::Auto => None,
-            SpectrumMethod::Dense => Some(Method::Dense),
-            SpectrumMethod::Sparse => Some(Method::Sparse),
-        },
-        modes: sc
-            .spectrum
-            .modes
-            .as_ref()
-            .map_or(2 * max_pair + 10, |m| *m.get_ref())
-            .max(2 * max_pair),
-        shift: sc.spectrum.shift.unwrap_or(0.0),
-        normalization: sc.ssm.normalization,
+        method: spec.method,
+        modes: spec.modes.unwrap_or(2 * max_pair + 10).max(2 * max_pair),
+        shift: spec.shift,
+        normalization: ssm.normalization,
     };
     let dynamics = Dynamics::from(system.time);
     let (pencil_a, pencil_b) = system.spectral_pencil();
@@ -79,13 +62,13 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
     }
     let coverage = match (spectrum.complete, dynamics) {
         (false, Dynamics::Flow) => {
-            let automatic = sc.spectrum.modes.is_none();
+            let automatic = spec.modes.is_none();
             let (widened, coverage) = cover_resonances(
                 pencil_a,
                 pencil_b,
                 &opts,
                 spectrum,
-                (pairs, order, *sc.ssm.resonance_tol.get_ref()),
+                (pairs, order, ssm.resonance_tol),
                 automatic,
             )?;
             spectrum = widened;
@@ -120,11 +103,9 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
     }
     let masters = spectrum::master_modes(system, &spectrum, pairs, opts.normalization).map_err(
         |e| match e {
-            SpectrumError::PairOutOfRange { .. } => JobError::Scene(scene.invalid(
-                sc.ssm.master_pairs.span(),
-                "ssm.master_pairs",
-                e.to_string(),
-            )),
+            SpectrumError::PairOutOfRange { .. } => {
+                JobError::Plan(PlanError::new("ssm.master_pairs", e.to_string()))
+            }
             other => JobError::Spectrum(other),
         },
     )?;
@@ -133,7 +114,7 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
     warnings.extend(repeated_masters(
         &spectrum.eigenvalues,
         &masters,
-        *sc.ssm.resonance_tol.get_ref(),
+        ssm.resonance_tol,
     ));
     let rates = match dynamics {
         Dynamics::Flow => spectrum.eigenvalues.clone(),
@@ -144,7 +125,7 @@ pub fn spectral(scene: &SceneFile, system: &System, order: usize) -> Result<Spec
         &rates,
         &master_indices,
         order,
-        *sc.ssm.resonance_tol.get_ref(),
+        ssm.resonance_tol,
         spectrum.complete,
     );
     let resonance_s = t_res.elapsed().as_secs_f64();

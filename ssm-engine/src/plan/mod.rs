@@ -1,144 +1,164 @@
-//! The scene resolved to what the numerics are asked to compute: each
-//! section of a validated [`SceneFile`] becomes its span-free
-//! [`ssm_core::spec`]. Nothing below this layer reads TOML or its spans; code
-//! that has no scene (a binding, a study, a test) builds the specs itself.
+//! What a run is asked to compute, free of the scene: a [`Plan`] of
+//! span-free specs ([`ssm_core::spec`]) that code builds directly (a
+//! binding, a study, a test) or [`resolve`]s from a scene, and every check
+//! of a plan against its model and every work and memory estimate
+//! ([`budget`]), before anything is allocated.
 //!
-//! The scene's checks against its model have run before (they name file,
-//! line and key); these conversions only drop the spans.
+//! This is the only layer that sees both the scene and the numerics: the
+//! pipeline below runs a plan and reads no scene type. A plan's errors
+//! ([`PlanError`]) name keys as a scene spells them; [`resolve`] turns them
+//! into scene errors at the key's file and line.
 
 mod analyses;
+pub mod budget;
+mod checks;
+mod convert;
+mod error;
 
-pub use analyses::{analyses, key_span, needs, PlannedAnalysis};
+pub use analyses::{needs, PlannedAnalysis};
+pub use checks::named_outputs;
+pub(crate) use checks::pod_outputs;
+pub use error::PlanError;
 
-use crate::scene::{
-    BackboneSection, ForcingSection, InvarianceErrorSection, SceneFile, SteadyStateSection,
-    TransientSection, ValidateSection,
-};
+use serde::{Deserialize, Serialize};
+
+use crate::scene::{SceneError, SceneFile};
+use budget::Limits;
+use ssm_core::model::system::System;
 use ssm_core::spec::{
-    BackboneSpec, FrcSpec, InvarianceSpec, SteadyStart, SteadyStateSpec, TransientSpec,
-    ValidationSpec, ValidationStart, ValidationTransientSpec,
+    BackboneSpec, FrcSpec, InvarianceSpec, PodSpec, ReferenceSpec, ReportSpec, SimulateSpec,
+    SpectrumSpec, SsmSpec, TransientSpec, ValidationSpec,
 };
 
-/// `[outputs.backbone]`.
-pub fn backbone(sec: &BackboneSection) -> BackboneSpec {
-    BackboneSpec {
-        rho_max: *sec.rho_max.get_ref(),
-        points: *sec.points.get_ref(),
-        orders: sec.orders.as_ref().map(|o| o.get_ref().clone()),
-    }
-}
-
-/// `[outputs.invariance_error]`.
-pub fn invariance(sec: &InvarianceErrorSection) -> InvarianceSpec {
-    InvarianceSpec {
-        radii: sec.radii.get_ref().clone(),
-        orders: sec.orders.get_ref().clone(),
-        n_alpha: *sec.n_alpha.get_ref(),
-        n_theta: *sec.n_theta.get_ref(),
-    }
-}
-
-/// `[outputs.transient]`.
-pub fn transient(sec: &TransientSection) -> TransientSpec {
-    TransientSpec {
-        rho0: sec.rho0.get_ref().clone(),
-        theta0: sec.theta0.as_ref().map(|t| t.get_ref().clone()),
-        t_end: *sec.t_end.get_ref(),
-        samples: *sec.samples.get_ref(),
-        order: sec.order.as_ref().map(|o| *o.get_ref()),
-        rtol: *sec.rtol.get_ref(),
-    }
-}
-
-/// `[forcing]` (its `omega_range` checked to hold two numbers).
-pub fn frc(sec: &ForcingSection) -> FrcSpec {
-    let range = sec.omega_range.get_ref();
-    FrcSpec {
-        epsilon: sec.epsilon.get_ref().clone(),
-        omega_range: [range[0], range[1]],
-        orders: sec.orders.as_ref().map(|o| o.get_ref().clone()),
-        resonance: sec.resonance.as_ref().map(|r| r.get_ref().clone()),
-        points: *sec.points.get_ref(),
-        rho_max: sec.rho_max.as_ref().map(|r| *r.get_ref()),
-        nonautonomous_order: sec.nonautonomous_order.as_ref().map(|k| *k.get_ref()),
-    }
-}
-
-/// `[validate.steady_state]`.
-pub fn steady_state(sec: &SteadyStateSection) -> SteadyStateSpec {
-    let omegas = match (&sec.omega, &sec.omega_range) {
-        (Some(o), _) => o.get_ref().clone(),
-        (None, Some(r)) if r.get_ref().len() == 2 => {
-            let r = r.get_ref();
-            SteadyStateSpec::uniform([r[0], r[1]], *sec.points.get_ref())
-        }
-        _ => Vec::new(),
-    };
-    SteadyStateSpec {
-        epsilon: *sec.epsilon.get_ref(),
-        omegas,
-        delta: *sec.delta.get_ref(),
-        max_periods: *sec.max_periods.get_ref(),
-        samples_per_period: *sec.samples_per_period.get_ref(),
-        max_period_multiple: *sec.max_period_multiple.get_ref(),
-        start: match sec.start.as_ref().map(|s| s.get_ref().as_str()) {
-            Some("ssm") => SteadyStart::Ssm,
-            _ => SteadyStart::Rest,
-        },
-    }
-}
-
-/// `[validate]`: the transient runs when `t_end` is given, from `rho0` on
-/// the SSM or else from the given `x0`/`v0` (none: the equilibrium).
-pub fn validation(sec: &ValidateSection) -> ValidationSpec {
-    let transient = sec.t_end.as_ref().map(|t_end| ValidationTransientSpec {
-        start: match &sec.rho0 {
-            Some(rho0) => ValidationStart::Ssm {
-                rho0: rho0.get_ref().clone(),
-                theta0: sec.theta0.as_ref().map(|t| t.get_ref().clone()),
-            },
-            None => ValidationStart::Given {
-                values: sec.given_start(),
-            },
-        },
-        t_end: *t_end.get_ref(),
-        samples: *sec.samples.get_ref(),
-        order: sec.order.as_ref().map(|o| *o.get_ref()),
-    });
-    ValidationSpec {
-        transient,
-        steady_state: sec.steady_state.as_ref().map(steady_state),
-        rtol: *sec.rtol.get_ref(),
-        atol: *sec.atol.get_ref(),
-    }
-}
-
-/// The outputs' specs of a scene, in one place for the pipeline.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct AnswerSpecs {
+/// Everything a run computes, as specs: the SSM and its spectrum, the
+/// answers read off the reduced model, the full-system comparisons, the
+/// sampled runs, the POD study and the analyses of
+/// [`crate::analyses::REGISTRY`]. Serializes to and from JSON (a field left
+/// out takes its documented default; unknown fields are refused).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plan {
+    /// The SSM (`[ssm]`).
+    #[serde(default)]
+    pub ssm: SsmSpec,
+    /// The eigensolver (`[spectrum]`).
+    #[serde(default)]
+    pub spectrum: SpectrumSpec,
+    /// The model's outputs the answers report (`[outputs] coordinates`).
+    #[serde(default)]
+    pub coordinates: Vec<String>,
     /// `[outputs.invariance_error]`.
+    #[serde(default)]
     pub invariance: Option<InvarianceSpec>,
     /// `[outputs.backbone]`.
+    #[serde(default)]
     pub backbone: Option<BackboneSpec>,
     /// `[outputs.transient]`.
+    #[serde(default)]
     pub transient: Option<TransientSpec>,
     /// `[forcing]`.
+    #[serde(default)]
     pub frc: Option<FrcSpec>,
     /// `[validate]`.
+    #[serde(default)]
     pub validation: Option<ValidationSpec>,
+    /// `[reference]`.
+    #[serde(default)]
+    pub reference: Option<ReferenceSpec>,
+    /// `[report]`.
+    #[serde(default)]
+    pub report: Option<ReportSpec>,
+    /// `[simulate]`.
+    #[serde(default)]
+    pub simulate: Option<SimulateSpec>,
+    /// `[pod]`.
+    #[serde(default)]
+    pub pod: Option<PodSpec>,
     /// `[analysis.<name>]`: the analyses of [`crate::analyses::REGISTRY`].
+    #[serde(default)]
     pub analyses: Vec<PlannedAnalysis>,
 }
 
-/// Every answer `scene` asks of the reduced model, as specs.
-pub fn answers(scene: &SceneFile) -> Result<AnswerSpecs, crate::scene::SceneError> {
-    let sc = &scene.scene;
-    Ok(AnswerSpecs {
-        invariance: sc.outputs.invariance_error.as_ref().map(invariance),
-        backbone: sc.outputs.backbone.as_ref().map(backbone),
-        transient: sc.outputs.transient.as_ref().map(transient),
-        frc: sc.forcing.as_ref().map(frc),
-        validation: sc.validate.as_ref().map(validation),
-        analyses: analyses(scene)?,
-    })
+impl Plan {
+    /// Whether the plan asks for an SSM answer: any plan without a POD
+    /// study, and one with a POD study and any other request (the SSM
+    /// models of the study's `ssm_pairs` are the study's own).
+    pub fn wants_ssm(&self) -> bool {
+        self.pod.is_none()
+            || self.invariance.is_some()
+            || self.backbone.is_some()
+            || self.transient.is_some()
+            || self.frc.is_some()
+            || self.validation.is_some()
+            || self.report.is_some()
+            || self.simulate.is_some()
+            || self.reference.is_some()
+            || !self.analyses.is_empty()
+    }
+
+    /// The highest expansion order an answer names itself (`orders` lists,
+    /// `order` keys, `nonautonomous_order + 1`); 1 when none does. A chosen
+    /// SSM order is never below it.
+    pub fn highest_named_order(&self) -> usize {
+        let lists = [
+            self.frc.as_ref().and_then(|f| f.orders.as_ref()),
+            self.invariance.as_ref().map(|i| &i.orders),
+            self.backbone.as_ref().and_then(|b| b.orders.as_ref()),
+            self.report.as_ref().and_then(|r| r.orders.as_ref()),
+        ];
+        let singles = [
+            self.transient.as_ref().and_then(|t| t.order),
+            self.validation
+                .as_ref()
+                .and_then(|v| v.transient.as_ref())
+                .and_then(|t| t.order),
+        ];
+        let na = self
+            .frc
+            .as_ref()
+            .and_then(|f| f.nonautonomous_order)
+            .map(|k| k + 1);
+        lists
+            .iter()
+            .flatten()
+            .flat_map(|o| o.iter().copied())
+            .chain(singles.into_iter().flatten())
+            .chain(na)
+            .fold(1, usize::max)
+    }
+
+    /// Checks the plan against `system` and, for what can be costed
+    /// before the spectrum (the POD study, the dense spectrum, the SSM
+    /// order), against `limits`: the named outputs and states exist, the
+    /// model can be validated and forced as asked, and the requests fit.
+    /// The pipeline runs these checks on every plan it is given; the
+    /// estimates that need the master modes run after the spectrum
+    /// ([`budget::check`]).
+    pub fn check(&self, system: &System, limits: &Limits) -> Result<(), PlanError> {
+        checks::check(self, system)?;
+        budget::check_pod(self, system, limits)?;
+        budget::check_spectrum(self, system, limits)?;
+        Ok(())
+    }
+}
+
+/// The plan of a scene whose model is `system`: its sections as specs,
+/// checked against the model and `limits`; every error names the scene's
+/// file, line and key.
+pub fn resolve(scene: &SceneFile, system: &System, limits: &Limits) -> Result<Plan, SceneError> {
+    let plan = of_scene(scene)?;
+    // what only the scene can tell: which table a given start came from
+    checks::given_tables(scene, system)?;
+    plan.check(system, limits).map_err(|e| e.in_scene(scene))?;
+    Ok(plan)
+}
+
+/// The plan of a scene before its model is built (its sections as specs,
+/// the analyses' tables read and checked): what a scene asks is known, and
+/// its mistakes reported, before any plugin runs. [`resolve`] adds the
+/// checks against the model.
+pub fn of_scene(scene: &SceneFile) -> Result<Plan, SceneError> {
+    let mut plan = convert::plan(scene);
+    plan.analyses = analyses::analyses(scene, &plan.ssm)?;
+    Ok(plan)
 }

@@ -16,6 +16,7 @@ use toml::Spanned;
 
 use ssm_core::spec::{BackboneSpec, FrcSpec, InvarianceSpec, TransientSpec};
 
+mod locate;
 mod names;
 mod pod;
 mod reduce;
@@ -262,10 +263,10 @@ fn default_master_pairs() -> Spanned<Vec<usize>> {
     Spanned::new(0..0, vec![1])
 }
 fn default_resonance_tol() -> Spanned<f64> {
-    Spanned::new(0..0, 0.02)
+    Spanned::new(0..0, ssm_core::spec::SsmSpec::DEFAULT_RESONANCE_TOL)
 }
 fn default_tolerance() -> Spanned<f64> {
-    Spanned::new(0..0, 0.01)
+    Spanned::new(0..0, ssm_core::spec::SsmSpec::DEFAULT_TOLERANCE)
 }
 
 impl Default for SsmSection {
@@ -283,17 +284,12 @@ impl Default for SsmSection {
 /// The highest expansion order the engine chooses by itself when `[ssm]`
 /// names none: beyond it, on a model whose answers still miss the accuracy
 /// target, the expansion is usually outside its convergence radius.
-pub const AUTO_MAX_ORDER: usize = 15;
+pub const AUTO_MAX_ORDER: usize = ssm_core::spec::SsmSpec::AUTO_MAX_ORDER;
 
 impl SsmSection {
     /// The highest order any answer may use: `order`, or [`AUTO_MAX_ORDER`].
     pub fn max_order(&self) -> usize {
         self.order.as_ref().map_or(AUTO_MAX_ORDER, |o| *o.get_ref())
-    }
-
-    /// Where `order` is written (the empty span without one).
-    pub fn order_span(&self) -> std::ops::Range<usize> {
-        self.order.as_ref().map_or(0..0, Spanned::span)
     }
 }
 
@@ -562,35 +558,6 @@ pub(crate) fn given_values<'a>(
 }
 
 impl SceneFile {
-    /// The highest expansion order an answer of the scene names itself
-    /// (`orders` lists, `order` keys, `nonautonomous_order + 1`); 1 when none
-    /// does. A chosen `[ssm] order` is never below it.
-    pub fn highest_named_order(&self) -> usize {
-        let sc = &self.scene;
-        let lists = [
-            sc.forcing.as_ref().and_then(|f| f.orders.as_ref()),
-            sc.outputs.invariance_error.as_ref().map(|i| &i.orders),
-            sc.outputs.backbone.as_ref().and_then(|b| b.orders.as_ref()),
-            sc.report.as_ref().and_then(|r| r.orders.as_ref()),
-        ];
-        let singles = [
-            sc.outputs.transient.as_ref().and_then(|t| t.order.as_ref()),
-            sc.validate.as_ref().and_then(|v| v.order.as_ref()),
-        ];
-        let na = sc
-            .forcing
-            .as_ref()
-            .and_then(|f| f.nonautonomous_order.as_ref())
-            .map(|k| *k.get_ref() + 1);
-        lists
-            .iter()
-            .flatten()
-            .flat_map(|o| o.get_ref().iter().copied())
-            .chain(singles.iter().flatten().map(|o| *o.get_ref()))
-            .chain(na)
-            .fold(1, usize::max)
-    }
-
     fn check_orders(&self, orders: &Spanned<Vec<usize>>, key: &str) -> Result<(), SceneError> {
         let max = self.scene.ssm.max_order();
         if orders.get_ref().is_empty() {

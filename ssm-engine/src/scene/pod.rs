@@ -9,48 +9,14 @@ use ssm_kernel::number::short;
 use toml::Spanned;
 
 use super::{SceneError, SceneFile, AUTO_MAX_ORDER};
+use ssm_core::spec::PodSpec;
 
 /// Most reduced models (truncations plus SSM pair sets).
 pub const MAX_POD_ROMS: usize = 16;
 /// Most test runs.
 pub const MAX_POD_TESTS: usize = 32;
 
-/// Fewest HHT steps per forcing period without a warning. HHT is a
-/// second-order Newmark method: on an undamped oscillation of frequency
-/// `Omega` its period is too long by about `(Omega h)^2 / 12` relative
-/// (Hilber, Hughes & Taylor 1977; Hughes, *The Finite Element Method*
-/// (1987), Sect. 9.3), which is 0.8 % at 20 steps per period (`Omega h =
-/// 2 pi / 20`) and grows fourfold at each halving of the steps: beyond a
-/// few percent of phase per period the reduced and full responses compared
-/// differ by the integrator, not by the reduction.
-pub const MIN_STEPS_PER_PERIOD: f64 = 20.0;
-
-/// What the fixed HHT step `step` makes of a load of frequency `omega`: an
-/// error above the step's Nyquist frequency `pi / step` (fewer than two
-/// steps per period: the load is sampled as a slower one, aliased), a
-/// warning below [`MIN_STEPS_PER_PERIOD`] steps per period, nothing for
-/// `omega = 0` (a free run) or finer steps.
-pub fn load_sampling(step: f64, omega: f64) -> Result<Option<String>, String> {
-    if omega <= 0.0 {
-        return Ok(None);
-    }
-    let per_period = 2.0 * std::f64::consts::PI / (omega * step);
-    if omega * step > std::f64::consts::PI {
-        return Err(format!(
-            "omega = {omega} is above the Nyquist frequency pi / step = {:.6} of the HHT step {step} ({per_period:.3} steps per forcing period; at least 2 are needed, {MIN_STEPS_PER_PERIOD} for a phase error below 1 % per period): the step cannot resolve the load; lower step to at most {:.3e}",
-            std::f64::consts::PI / step,
-            2.0 * std::f64::consts::PI / (MIN_STEPS_PER_PERIOD * omega)
-        ));
-    }
-    if per_period < MIN_STEPS_PER_PERIOD {
-        return Ok(Some(format!(
-            "omega = {omega} gets {per_period:.1} HHT steps of {step} per forcing period, fewer than {MIN_STEPS_PER_PERIOD}: the integrator's period error, about (omega step)^2 / 12 = {:.1e} per period, is part of every response compared; lower step to at most {:.3e}",
-            (omega * step).powi(2) / 12.0,
-            2.0 * std::f64::consts::PI / (MIN_STEPS_PER_PERIOD * omega)
-        )));
-    }
-    Ok(None)
-}
+pub use ssm_core::fom::hht::{load_sampling, MIN_STEPS_PER_PERIOD};
 
 /// `[pod]`: the reducer's settings, the runs, the models compared.
 #[derive(Debug, Clone, Deserialize)]
@@ -120,13 +86,13 @@ impl PodRun {
 }
 
 fn default_rank_tol() -> Spanned<f64> {
-    Spanned::new(0..0, 1e-8)
+    Spanned::new(0..0, PodSpec::DEFAULT_RANK_TOL)
 }
 fn default_jacobian_samples() -> Spanned<usize> {
-    Spanned::new(0..0, 64)
+    Spanned::new(0..0, PodSpec::DEFAULT_JACOBIAN_SAMPLES)
 }
 fn default_alpha() -> Spanned<f64> {
-    Spanned::new(0..0, -0.1)
+    Spanned::new(0..0, PodSpec::DEFAULT_HHT_ALPHA)
 }
 fn no_frequency() -> Spanned<f64> {
     Spanned::new(0..0, 0.0)
@@ -135,37 +101,7 @@ fn no_tests() -> Spanned<Vec<PodRun>> {
     Spanned::new(0..0, Vec::new())
 }
 
-impl PodSection {
-    /// The SSM expansion order of the compared SSM models.
-    pub fn ssm_order(&self, scene_order: Option<usize>) -> usize {
-        self.ssm_order
-            .as_ref()
-            .map(|o| *o.get_ref())
-            .or(scene_order)
-            .unwrap_or(5)
-    }
-}
-
 impl SceneFile {
-    /// Whether the scene asks for an SSM answer: any scene without `[pod]`,
-    /// and a `[pod]` scene with a backbone, invariance error, transient,
-    /// forcing, validation, report, simulation or reference (the SSM models of `[pod]
-    /// ssm_pairs` are the study's own).
-    pub fn wants_ssm(&self) -> bool {
-        let sc = &self.scene;
-        let o = &sc.outputs;
-        sc.pod.is_none()
-            || o.invariance_error.is_some()
-            || o.backbone.is_some()
-            || o.transient.is_some()
-            || sc.forcing.is_some()
-            || sc.validate.is_some()
-            || sc.report.is_some()
-            || sc.simulate.is_some()
-            || sc.reference.is_some()
-            || !sc.analysis.is_empty()
-    }
-
     pub(super) fn check_pod(&self) -> Result<(), SceneError> {
         let Some(p) = &self.scene.pod else {
             return Ok(());

@@ -7,6 +7,7 @@ use ssm_kernel::number::{list, short};
 use toml::Spanned;
 
 use super::{number_or_list, SceneError, SceneFile};
+use ssm_core::spec::ReferenceSpec;
 
 /// Most forcing amplitudes (one branch each).
 pub const MAX_REFERENCE_CURVES: usize = 8;
@@ -66,13 +67,13 @@ pub struct ReferenceSection {
 }
 
 fn default_harmonics() -> Spanned<usize> {
-    Spanned::new(0..0, 9)
+    Spanned::new(0..0, ReferenceSpec::DEFAULT_HARMONICS)
 }
 fn default_step() -> Spanned<f64> {
-    Spanned::new(0..0, 0.5)
+    Spanned::new(0..0, ReferenceSpec::DEFAULT_STEP)
 }
 fn default_tol() -> Spanned<f64> {
-    Spanned::new(0..0, 1e-10)
+    Spanned::new(0..0, ReferenceSpec::DEFAULT_TOL)
 }
 fn default_period_doubling() -> Spanned<bool> {
     Spanned::new(0..0, true)
@@ -81,36 +82,10 @@ fn default_stability() -> Spanned<bool> {
     Spanned::new(0..0, true)
 }
 fn default_max_steps() -> Spanned<usize> {
-    Spanned::new(0..0, 5000)
+    Spanned::new(0..0, ReferenceSpec::DEFAULT_MAX_STEPS)
 }
 
 impl ReferenceSection {
-    /// Whether branches also start from the reduced model's forced response:
-    /// `start = "ssm"`, or no `start` and a `[forcing]` section.
-    pub fn from_ssm(&self, scene: &SceneFile) -> bool {
-        match self.start.as_ref().map(|s| s.get_ref().as_str()) {
-            Some(s) => s == "ssm",
-            None => scene.scene.forcing.is_some(),
-        }
-    }
-
-    /// The frequencies of the amplitude responses (none by default).
-    pub fn amplitude_frequencies(&self) -> &[f64] {
-        self.amplitude_at.as_ref().map_or(&[], |a| a.get_ref())
-    }
-
-    /// The amplitude responses' range: this section's `amplitude_range`,
-    /// else `[0, the largest epsilon]`.
-    pub fn amplitude_range(&self) -> (f64, f64) {
-        match self.amplitude_range.as_ref().map(|r| r.get_ref()) {
-            Some(r) if r.len() == 2 => (r[0], r[1]),
-            _ => (
-                0.0,
-                self.epsilon.get_ref().iter().copied().fold(0.0, f64::max),
-            ),
-        }
-    }
-
     /// The frequency range: this section's, else `[forcing]`'s.
     pub fn omega_range(&self, scene: &SceneFile) -> Option<(f64, f64)> {
         self.omega_range

@@ -6,6 +6,7 @@ use ssm_kernel::number::short;
 use toml::Spanned;
 
 use super::{SceneError, SceneFile};
+use ssm_core::spec::SimulateSpec;
 
 /// Most samples per run (a CSV of this many rows is already ~100 MB per output).
 pub const MAX_SAMPLES: usize = 2_000_000;
@@ -69,10 +70,10 @@ fn one() -> Spanned<u64> {
     Spanned::new(0..0, 1)
 }
 fn default_rtol() -> Spanned<f64> {
-    Spanned::new(0..0, 1e-10)
+    Spanned::new(0..0, SimulateSpec::DEFAULT_RTOL)
 }
 fn default_atol() -> Spanned<f64> {
-    Spanned::new(0..0, 1e-12)
+    Spanned::new(0..0, SimulateSpec::DEFAULT_ATOL)
 }
 
 impl SimulateRun {

@@ -36,7 +36,7 @@ fn run_in(dir: &Path, text: &str) -> Result<ssm_engine::pipeline::JobResult, Str
     let result = ssm_engine::scene::SceneFile::parse(&dir.join("scene.toml"), text.to_owned())
         .map_err(|e| e.to_string())
         .and_then(|scene| {
-            ssm_engine::pipeline::run(
+            ssm_engine::job::run(
                 &scene,
                 &mut ssm_tests::registry(),
                 &ssm_engine::pipeline::Quiet,
@@ -199,7 +199,7 @@ fn the_fuzz_base_scenes_run() {
     for text in [MODEL_FOLDER_SCENE, DATA_SCENE] {
         let scene = ssm_engine::scene::SceneFile::parse(&dir.join("scene.toml"), text.to_owned())
             .expect("scene");
-        let r = ssm_engine::pipeline::run(
+        let r = ssm_engine::job::run(
             &scene,
             &mut ssm_tests::registry(),
             &ssm_engine::pipeline::Quiet,

@@ -4,9 +4,9 @@
 //!   full-order model, reducers, comparisons); neither depends, even
 //!   indirectly, on `toml`, a plot or command-line crate, the plugin kit or
 //!   the front end
-//!   (`ssm-engine`), and no file of theirs (nor of the engine's analyses)
-//!   names the scene's types or spans: they take the span-free specs of
-//!   `ssm_core::spec`;
+//!   (`ssm-engine`), and no file of theirs (nor of the engine's analyses
+//!   and pipeline) names the scene's types or spans: they take the
+//!   span-free specs of `ssm_core::spec` (a plan);
 //! - no two files and no two folders import each other, directly or around
 //!   a longer loop, in any crate of the engine, `ssm-api` and
 //!   `ssm-model-files`.
@@ -16,9 +16,15 @@ use std::path::{Path, PathBuf};
 
 use ssm_tests::repo_root;
 
-/// Source folders of the numerics: the kernel, the core and the engine's
-/// analyses (vertical slices whose numerics take specs, not scene tables).
-const NUMERICS: [&str; 3] = ["ssm-kernel/src", "ssm-core/src", "ssm-engine/src/analyses"];
+/// Source folders that must not read the scene: the kernel, the core, the
+/// engine's analyses (vertical slices whose numerics take specs, not scene
+/// tables) and the engine's pipeline (which runs a plan).
+const NUMERICS: [&str; 4] = [
+    "ssm-kernel/src",
+    "ssm-core/src",
+    "ssm-engine/src/analyses",
+    "ssm-engine/src/pipeline",
+];
 
 /// Crates the core crates must not reach through any dependency.
 const FRONT_END_CRATES: [&str; 6] = [

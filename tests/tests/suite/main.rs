@@ -28,6 +28,7 @@ mod outputs;
 mod pendulum;
 mod periodic;
 mod plan;
+mod plan_run;
 mod plugin_boundary;
 mod pod;
 mod pod_chain;

@@ -1,6 +1,8 @@
 //! The plan layer: a scene's sections resolve to the span-free specs of
 //! `ssm_core::spec`, whose JSON form takes the same documented defaults
-//! (one source for each default) and survives a round trip.
+//! (one source for each default) and survives a round trip; a plan built in
+//! code runs through the pipeline without a scene and gives the scene's
+//! answers; a plan's errors point at the scene's lines.
 
 use ssm_core::spec::{
     BackboneSpec, FrcSpec, InvarianceSpec, SteadyStart, SteadyStateSpec, TransientSpec,
@@ -19,10 +21,10 @@ const SCENE: &str = "[model]\nplugin = \"duffing\"\n\
 [validate]\nrho0 = [0.1]\nt_end = 20.0\n\
 [validate.steady_state]\nepsilon = 0.01\nomega_range = [0.9, 1.1]\npoints = 3\nstart = \"ssm\"\n";
 
-fn resolved() -> plan::AnswerSpecs {
+fn resolved() -> plan::Plan {
     let scene = SceneFile::parse(std::path::Path::new("scene.toml"), SCENE.to_owned())
         .expect("the scene parses");
-    plan::answers(&scene).expect("the scene resolves")
+    plan::of_scene(&scene).expect("the scene resolves")
 }
 
 #[test]
@@ -79,6 +81,7 @@ fn specs_round_trip_through_json() {
     round(specs.transient.as_ref().unwrap());
     round(specs.frc.as_ref().unwrap());
     round(specs.validation.as_ref().unwrap());
+    round(&specs);
     // given starts by name, too
     round(&ValidationStart::Given {
         values: vec![("x".into(), 0.1), ("x_dot".into(), -0.2)],

@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use ssm_core::model::plugin::Registry;
-use ssm_engine::pipeline::{self, JobError, Quiet};
+use ssm_engine::job;
+use ssm_engine::pipeline::{JobError, Quiet};
 use ssm_engine::scene::{SceneError, SceneFile};
 use ssm_tests::{plugin_path, run_zoo_in, run_zoo_with, scene_error};
 
@@ -333,7 +334,7 @@ fn steady_state_from_the_ssm_prediction_reaches_the_upper_branch() {
         );
         let scene = SceneFile::parse(Path::new("duffing.toml"), text).unwrap();
         let mut reg = Registry::discover(&[plugin_path("duffing")]).unwrap();
-        let r = pipeline::run(&scene, &mut reg, &Quiet).unwrap();
+        let r = job::run(&scene, &mut reg, &Quiet).unwrap();
         let csv = String::from_utf8(r.outputs.get("steady_state.csv").unwrap().to_vec()).unwrap();
         let frc = String::from_utf8(r.outputs.get("frc.csv").unwrap().to_vec()).unwrap();
         let amp: f64 = csv
@@ -427,7 +428,7 @@ fn transient_from_given_displacements() {
     );
     let scene = SceneFile::parse(Path::new("given.toml"), text).unwrap();
     let mut reg = Registry::discover(&[plugin_path("spatial-oscillator")]).unwrap();
-    let r = pipeline::run(&scene, &mut reg, &Quiet).unwrap();
+    let r = job::run(&scene, &mut reg, &Quiet).unwrap();
     let s: serde_json::Value =
         serde_json::from_slice(r.outputs.get("summary.json").unwrap()).unwrap();
     let v = &s["validation"]["transient"];
@@ -447,7 +448,7 @@ fn transient_from_given_displacements() {
     // a state that does not exist is named
     let bad = format!("{BASE}[validate]\nx0 = {{ x9 = 0.1 }}\nt_end = 1.0\n");
     let scene = SceneFile::parse(Path::new("bad.toml"), bad).unwrap();
-    match pipeline::run(&scene, &mut reg, &Quiet) {
+    match job::run(&scene, &mut reg, &Quiet) {
         Err(JobError::Scene(SceneError::Invalid {
             line, key, message, ..
         })) => {

@@ -1,11 +1,12 @@
-//! Work and memory of a scene's requests, estimated before any of it starts.
+//! Work and memory of a plan's requests, estimated before any of it starts.
 //!
-//! Every request whose cost grows with a scene value (the expansion order,
+//! Every request whose cost grows with a plan's value (the expansion order,
 //! numbers of points and samples, integration times, period counts, the size
 //! of a dense pencil) is costed here from the model's size and spectrum. A
-//! request that would not finish within [`Limits`] is refused with a scene
-//! error at its key, naming the estimate, the limit and what to change,
-//! instead of hanging, exhausting memory or overflowing an allocation.
+//! request that would not finish within [`Limits`] is refused with a
+//! [`PlanError`] at its key (a scene's line), naming the estimate, the limit
+//! and what to change, instead of hanging, exhausting memory or overflowing
+//! an allocation.
 //!
 //! The estimates count elementary operations from the size of each algorithm
 //! (multi-indices, series products, sparse solves, integration steps) and
@@ -15,14 +16,12 @@
 
 mod runs;
 
-use std::ops::Range;
-
 pub use runs::{check_pod, check_pod_reducer};
 
-use super::error::JobError;
-use crate::scene::{SceneError, SceneFile, ValidateSection, AUTO_MAX_ORDER};
+use super::{Plan, PlanError};
 use ssm_core::model::system::System;
-use ssm_core::spectrum::{MasterMode, DENSE_LIMIT};
+use ssm_core::spec::{FrcSpec, ReferenceSpec, SsmSpec, ValidationSpec};
+use ssm_core::spectrum::{MasterMode, Method, DENSE_LIMIT};
 use ssm_core::ssm::Dynamics;
 use ssm_kernel::number::short;
 
@@ -73,32 +72,29 @@ impl Limits {
 
 /// The work of each analysis of `[analysis]` on an SSM of the masters'
 /// pairs to `order` within `limits`; a refusal names the key that sets the
-/// size, at its line of the scene.
+/// size.
 pub fn check_analyses(
-    scene: &SceneFile,
-    planned: &[crate::plan::PlannedAnalysis],
+    plan: &Plan,
     masters: &[MasterMode],
     order: usize,
-    outputs: &[&ssm_core::model::system::OutputMap],
     limits: &Limits,
-) -> Result<(), JobError> {
+) -> Result<(), PlanError> {
     let sizes = crate::analyses::Sizes {
         multi_indices: multi_indices(2 * masters.len().max(1), order),
-        outputs: outputs.len(),
+        outputs: plan.coordinates.len(),
     };
-    for a in planned {
-        let work = crate::analyses::find(&a.name)?.work(&a.spec, &sizes)?;
+    for a in &plan.analyses {
+        let key = format!("analysis.{}", a.name);
+        let fail = |e: crate::analyses::AnalysisError| PlanError::new(&key, e.to_string());
+        let work = crate::analyses::find(&a.name)
+            .map_err(fail)?
+            .work(&a.spec, &sizes)
+            .map_err(fail)?;
         let cost = Cost {
             ops: work.ops,
             bytes: work.bytes,
         };
-        let table = scene
-            .scene
-            .analysis
-            .get(&a.name)
-            .map_or(0..0, toml::Spanned::span);
-        let span = crate::plan::key_span(scene, table, work.key);
-        ensure(scene, span, work.key, work.what, &cost, limits, work.advice)?;
+        ensure(work.key, work.what, &cost, limits, work.advice)?;
     }
     Ok(())
 }
@@ -153,23 +149,20 @@ impl Sizes {
     }
 }
 
-/// `Ok` when `cost` is within `limits`, else the refusal of the request at
-/// `span` of `key`.
+/// `Ok` when `cost` is within `limits`, else the refusal of the request of
+/// `key`.
 fn ensure(
-    scene: &SceneFile,
-    span: Range<usize>,
     key: &str,
     what: String,
     cost: &Cost,
     limits: &Limits,
     advice: &str,
-) -> Result<(), SceneError> {
+) -> Result<(), PlanError> {
     if within(cost, limits) {
         return Ok(());
     }
     let secs = cost.ops / OPS_PER_SECOND;
-    Err(scene.invalid(
-            span,
+    Err(PlanError::new(
             key,
             format!(
                 "{what} needs about {} and {} of memory; this run allows {} ({TIME_LIMIT_VAR}) and {} (3/4 of the {}): {advice}",
@@ -180,23 +173,6 @@ fn ensure(
                 limits.memory_source,
             ),
         ))
-}
-
-/// The position of the line that opens `header` (e.g. `[reference]`), for
-/// a key left at its default; the start of the file without one.
-fn section(scene: &SceneFile, header: &str) -> Range<usize> {
-    let at = scene
-        .text
-        .match_indices(header)
-        .map(|(i, _)| i)
-        .find(|&i| {
-            scene.text[..i]
-                .trim_end_matches([' ', '\t'])
-                .ends_with('\n')
-                || i == 0
-        })
-        .unwrap_or(0);
-    at..at
 }
 
 fn duration(s: f64) -> String {
@@ -231,17 +207,12 @@ fn within(cost: &Cost, limits: &Limits) -> bool {
 /// `N x N` pencil, about `70 N^3` operations on 6 dense complex matrices) and
 /// the SSM order (see [`order_ceiling`]); returns the highest order the run
 /// may compute.
-pub fn check_spectrum(
-    scene: &SceneFile,
-    system: &System,
-    limits: &Limits,
-) -> Result<usize, JobError> {
-    use crate::scene::SpectrumMethod;
+pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<usize, PlanError> {
     let n = system.n_states() as f64;
-    let dense = match scene.scene.spectrum.method {
-        SpectrumMethod::Dense => true,
-        SpectrumMethod::Auto => system.n_states() <= DENSE_LIMIT,
-        SpectrumMethod::Sparse => false,
+    let dense = match plan.spectrum.method {
+        Some(Method::Dense) => true,
+        None => system.n_states() <= DENSE_LIMIT,
+        Some(Method::Sparse) => false,
     };
     let cost = Cost {
         ops: 70.0 * n.powi(3),
@@ -249,8 +220,6 @@ pub fn check_spectrum(
     };
     if dense {
         ensure(
-            scene,
-            section(scene, "[spectrum]"),
             "spectrum.method",
             format!("the dense spectrum of {n} states"),
             &cost,
@@ -258,8 +227,8 @@ pub fn check_spectrum(
             "use method = \"sparse\" with the modes you need",
         )?;
     }
-    let pairs = scene.scene.ssm.master_pairs.get_ref().len().max(1);
-    order_ceiling(scene, system, pairs, limits)
+    let pairs = plan.ssm.master_pairs.len().max(1);
+    order_ceiling(plan, system, pairs, limits)
 }
 
 /// The highest SSM order of the run, with `pairs` master pairs: the scene's
@@ -269,53 +238,49 @@ pub fn check_spectrum(
 /// before the spectral stage, since the eq. (53) resonance check there
 /// enumerates the multi-indices up to this order.
 pub fn order_ceiling(
-    scene: &SceneFile,
+    plan: &Plan,
     system: &System,
     pairs: usize,
     limits: &Limits,
-) -> Result<usize, JobError> {
-    if let Some(o) = &scene.scene.ssm.order {
-        check_order(scene, system, pairs, *o.get_ref(), limits)?;
-        return Ok(*o.get_ref());
+) -> Result<usize, PlanError> {
+    if let Some(o) = plan.ssm.order {
+        check_order(plan, system, pairs, o, limits)?;
+        return Ok(o);
     }
-    let floor = scene.highest_named_order().max(3);
-    let top = (floor..=AUTO_MAX_ORDER.max(floor))
+    let floor = plan.highest_named_order().max(3);
+    let top = (floor..=SsmSpec::AUTO_MAX_ORDER.max(floor))
         .rev()
         .filter(|o| o % 2 == 1 || *o == floor)
-        .find(|&o| within(&order_cost(scene, system, pairs, o), limits));
+        .find(|&o| within(&order_cost(plan, system, pairs, o), limits));
     match top {
         Some(o) => Ok(o),
-        None => check_order(scene, system, pairs, floor, limits).map(|()| floor),
+        None => check_order(plan, system, pairs, floor, limits).map(|()| floor),
     }
 }
 
 /// The SSM to `order` with `pairs` master pairs, rebuilt by the report.
-fn order_cost(scene: &SceneFile, system: &System, pairs: usize, order: usize) -> Cost {
-    let sc = &scene.scene;
-    let forced = sc.forcing.is_some() || sc.validate.is_some();
+fn order_cost(plan: &Plan, system: &System, pairs: usize, order: usize) -> Cost {
+    let forced = plan.frc.is_some() || plan.validation.is_some();
     let mut ssm = ssm_cost(&Sizes::of(system), pairs, order, forced);
-    if let Some(r) = &sc.report {
+    if let Some(r) = &plan.report {
         // the report rebuilds the SSM at each of its orders (at most `order`;
         // a given list counts with its length)
-        ssm.ops *= r.orders.as_ref().map_or(order, |o| o.get_ref().len()) as f64;
+        ssm.ops *= r.orders.as_ref().map_or(order, Vec::len) as f64;
     }
     ssm
 }
 
 /// The SSM order against the limits, with `pairs` master pairs.
 fn check_order(
-    scene: &SceneFile,
+    plan: &Plan,
     system: &System,
     pairs: usize,
     order: usize,
     limits: &Limits,
-) -> Result<(), JobError> {
-    let sc = &scene.scene;
+) -> Result<(), PlanError> {
     let sizes = Sizes::of(system);
-    let ssm = order_cost(scene, system, pairs, order);
+    let ssm = order_cost(plan, system, pairs, order);
     ensure(
-        scene,
-        sc.ssm.order_span(),
         "ssm.order",
         format!(
             "an SSM of order {order} with {pairs} master pair(s) of a {}-state model",
@@ -323,7 +288,7 @@ fn check_order(
         ),
         &ssm,
         limits,
-        if sc.ssm.order.is_some() {
+        if plan.ssm.order.is_some() {
             "lower the order"
         } else {
             "no [ssm] order was given and this is the lowest the answers need: lower the orders they name, or the master pairs"
@@ -363,18 +328,17 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
 /// Checks every request of `scene` against `limits`, once the model and its
 /// master modes are known and before the SSM is computed to `order`.
 pub fn check(
-    scene: &SceneFile,
+    plan: &Plan,
     system: &System,
     masters: &[MasterMode],
     order: usize,
     limits: &Limits,
-) -> Result<(), JobError> {
-    let sc = &scene.scene;
-    check_reference(scene, system, limits)?;
+) -> Result<(), PlanError> {
+    check_reference(plan, system, limits)?;
     let sizes = Sizes::of(system);
     let pairs = masters.len().max(1);
     let nvar = 2 * pairs;
-    check_order(scene, system, pairs, order, limits)?;
+    check_order(plan, system, pairs, order, limits)?;
     let n_idx = multi_indices(nvar, order);
     let omega = masters
         .iter()
@@ -389,19 +353,16 @@ pub fn check(
         Dynamics::Map { .. } => periods(t_end),
         Dynamics::Flow => periods(t_end) * STEPS_PER_PERIOD,
     };
-    let out = &sc.outputs;
-    let coords = out.coordinates.get_ref().len() as f64;
-    if let Some(ie) = &out.invariance_error {
-        let points = (*ie.n_alpha.get_ref() as f64).powi(pairs as i32 - 1)
-            * (*ie.n_theta.get_ref() as f64).powi(pairs as i32);
-        let evaluations = points * (ie.radii.get_ref().len() * ie.orders.get_ref().len()) as f64;
+    let coords = plan.coordinates.len() as f64;
+    if let Some(ie) = &plan.invariance {
+        let points =
+            (ie.n_alpha as f64).powi(pairs as i32 - 1) * (ie.n_theta as f64).powi(pairs as i32);
+        let evaluations = points * (ie.radii.len() * ie.orders.len()) as f64;
         let cost = Cost {
             ops: evaluations * (4.0 * n_idx * sizes.states + 4.0 * sizes.factors),
             bytes: points * (16.0 * nvar as f64 + 64.0),
         };
         ensure(
-                scene,
-                ie.n_theta.span(),
                 "outputs.invariance_error.n_theta",
                 format!("the invariance error on {points:.1e} points per radius and order (n_alpha^(pairs-1) n_theta^pairs with {pairs} pairs)"),
                 &cost,
@@ -409,16 +370,14 @@ pub fn check(
                 "lower n_alpha and n_theta",
         )?;
     }
-    if let Some(bb) = &out.backbone {
-        let points = *bb.points.get_ref() as f64;
-        let orders = bb.orders.as_ref().map_or(1, |o| o.get_ref().len()) as f64;
+    if let Some(bb) = &plan.backbone {
+        let points = bb.points as f64;
+        let orders = bb.orders.as_ref().map_or(1, Vec::len) as f64;
         let cost = Cost {
             ops: points * orders * 4.0 * n_idx * (coords + 1.0),
             bytes: points * orders * 8.0 * (coords + 6.0),
         };
         ensure(
-            scene,
-            bb.points.span(),
             "outputs.backbone.points",
             format!("a backbone of {points:.1e} points"),
             &cost,
@@ -426,10 +385,10 @@ pub fn check(
             "lower the number of points",
         )?;
     }
-    if let Some(tr) = &out.transient {
-        let t_end = *tr.t_end.get_ref();
+    if let Some(tr) = &plan.transient {
+        let t_end = tr.t_end;
         let n = steps(t_end);
-        let samples = *tr.samples.get_ref() as f64;
+        let samples = tr.samples as f64;
         let stored = match system.time {
             ssm_api::TimeKind::Map { .. } => n.max(samples),
             ssm_api::TimeKind::Flow => samples,
@@ -438,22 +397,18 @@ pub fn check(
             ops: n * 7.0 * 4.0 * n_idx.min(1e3) * nvar as f64 + stored * 4.0 * n_idx * coords,
             bytes: stored * (16.0 * nvar as f64 + 8.0 * coords + 96.0),
         };
-        let (span, key, what) = if n * 1e3 > stored {
+        let (key, what) = if n * 1e3 > stored {
             (
-                tr.t_end.span(),
                 "outputs.transient.t_end",
                 format!("a reduced transient over {:.1e} periods", periods(t_end)),
             )
         } else {
             (
-                tr.samples.span(),
                 "outputs.transient.samples",
                 format!("a reduced transient of {samples:.1e} samples"),
             )
         };
         ensure(
-            scene,
-            span,
             key,
             what,
             &cost,
@@ -461,20 +416,23 @@ pub fn check(
             "shorten the transient or take fewer samples",
         )?;
     }
-    if let Some(s) = &sc.simulate {
-        let length = *s.period.get_ref() * (*s.samples.get_ref() as f64 - 1.0);
-        runs::check_simulate(scene, s, &sizes, (steps(length), periods(length)), limits)?;
+    if let Some(s) = &plan.simulate {
+        let length = s.period * (s.samples as f64 - 1.0);
+        let outputs = s.outputs.as_ref().map_or(coords, |o| o.len() as f64);
+        let scale = (steps(length), periods(length));
+        runs::check_simulate(s, outputs, &sizes, scale, limits)?;
     }
-    if let Some(f) = &sc.forcing {
-        check_forcing(scene, f, masters, n_idx, coords, limits)?;
+    if let Some(f) = &plan.frc {
+        let top = plan.ssm.order.unwrap_or(0);
+        check_forcing(f, top, masters, n_idx, coords, limits)?;
     }
-    if let Some(v) = &sc.validate {
+    if let Some(v) = &plan.validation {
         let scale = Scale {
             n_idx,
             nvar,
             coords,
         };
-        check_validate(scene, v, &sizes, &scale, &steps, &periods, limits)?;
+        check_validate(v, &sizes, &scale, &steps, &periods, limits)?;
     }
     Ok(())
 }
@@ -493,27 +451,24 @@ struct Scale {
 /// The full-system transient and steady states of `[validate]` (`steps`
 /// and `periods` of a time span on the model).
 fn check_validate(
-    scene: &SceneFile,
-    v: &ValidateSection,
+    v: &ValidationSpec,
     sizes: &Sizes,
     scale: &Scale,
     steps: &dyn Fn(f64) -> f64,
     periods: &dyn Fn(f64) -> f64,
     limits: &Limits,
-) -> Result<(), JobError> {
+) -> Result<(), PlanError> {
     let Scale {
         n_idx,
         nvar,
         coords,
     } = *scale;
-    let coords = v
-        .outputs
-        .as_ref()
-        .map_or(coords, |o| o.get_ref().len() as f64);
+    let coords = v.outputs.as_ref().map_or(coords, |o| o.len() as f64);
     let step = sizes.sparse_solve();
-    if let Some(t_end) = &v.t_end {
-        let n = steps(*t_end.get_ref());
-        let samples = *v.samples.get_ref() as f64;
+    if let Some(tr) = &v.transient {
+        let t_end = tr.t_end;
+        let n = steps(t_end);
+        let samples = tr.samples as f64;
         // each sample: the integrator stops there (dense output at worst a
         // step), the reduced model is lifted through W, and the distance
         // to the SSM is a Newton projection (about ten evaluations of W
@@ -523,18 +478,16 @@ fn check_validate(
             ops: n.max(samples) * step + samples * per_sample,
             bytes: samples * 8.0 * (3.0 * sizes.states + 4.0 * coords),
         };
-        let (span, key) = if n * step > samples * per_sample {
-            (t_end.span(), "validate.t_end")
+        let key = if n * step > samples * per_sample {
+            "validate.t_end"
         } else {
-            (v.samples.span(), "validate.samples")
+            "validate.samples"
         };
         ensure(
-            scene,
-            span,
             key,
             format!(
                 "the full-system transient over {:.1e} periods with {samples:.1e} samples",
-                periods(*t_end.get_ref())
+                periods(t_end)
             ),
             &cost,
             limits,
@@ -542,12 +495,9 @@ fn check_validate(
         )?;
     }
     if let Some(ss) = &v.steady_state {
-        let freqs = ss
-            .omega
-            .as_ref()
-            .map_or(*ss.points.get_ref(), |o| o.get_ref().len()) as f64;
-        let periods = *ss.max_periods.get_ref() as f64 * *ss.max_period_multiple.get_ref() as f64;
-        let per_period = STEPS_PER_PERIOD.max(*ss.samples_per_period.get_ref() as f64);
+        let freqs = ss.omegas.len() as f64;
+        let periods = ss.max_periods as f64 * ss.max_period_multiple as f64;
+        let per_period = STEPS_PER_PERIOD.max(ss.samples_per_period as f64);
         // frequencies run in parallel on the machine's cores
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
         let cost = Cost {
@@ -555,8 +505,6 @@ fn check_validate(
             bytes: freqs * (8.0 * sizes.states * per_period + 1e3),
         };
         ensure(
-            scene,
-            ss.max_periods.span(),
             "validate.steady_state.max_periods",
             format!(
                 "steady states at {freqs:.0} frequencies over up to {periods:.1e} periods each"
@@ -575,27 +523,21 @@ fn check_validate(
 /// sampled from the harmonic table of [`ssm_core::rom::forced_multi`], whose
 /// slots grow with the resonance ratios times the order.
 fn check_forcing(
-    scene: &SceneFile,
-    f: &crate::scene::ForcingSection,
+    f: &FrcSpec,
+    ssm_order: usize,
     masters: &[MasterMode],
     n_idx: f64,
     coords: f64,
     limits: &Limits,
-) -> Result<(), JobError> {
+) -> Result<(), PlanError> {
     let pairs = masters.len().max(1);
     let nvar = 2.0 * pairs as f64;
-    let points = *f.points.get_ref() as f64;
-    let orders = f.orders.as_ref().map_or(&[][..], |o| o.get_ref());
-    let curves = (f.epsilon.get_ref().len() * orders.len().max(1)) as f64;
-    let top = orders
-        .iter()
-        .copied()
-        .max()
-        .unwrap_or(0)
-        .max(scene.scene.ssm.order.as_ref().map_or(0, |o| *o.get_ref()));
+    let points = f.points as f64;
+    let orders = f.orders.as_deref().unwrap_or(&[]);
+    let curves = (f.epsilon.len() * orders.len().max(1)) as f64;
+    let top = orders.iter().copied().max().unwrap_or(0).max(ssm_order);
     let (slots, samples) = if pairs > 1 {
-        let ratios =
-            ssm_core::rom::forced_response::resonance_ratios(&crate::plan::frc(f), masters);
+        let ratios = ssm_core::rom::forced_response::resonance_ratios(f, masters);
         ssm_core::rom::forced_multi::harmonic_table(&ratios, top.max(1))
     } else {
         (0.0, 0.0)
@@ -614,19 +556,17 @@ fn check_forcing(
         ops: curves * points * per_point + table.ops,
         bytes: curves * points * 8.0 * (16.0 + 4.0 * nvar + coords) + table.bytes,
     };
-    let (span, key, what) = match &f.resonance {
+    let (key, what) = match &f.resonance {
         Some(r) if table.bytes * 2.0 > cost.bytes || table.ops * 2.0 > cost.ops => (
-            r.span(),
             "forcing.resonance",
             format!(
                 "forced response curves at resonance ratios {} ({} harmonics sampled at {} phases)",
-                ssm_kernel::number::list(r.get_ref()),
+                ssm_kernel::number::list(r),
                 short(slots),
                 short(samples)
             ),
         ),
         _ => (
-            f.points.span(),
             "forcing.points",
             format!(
                 "{} forced response curve(s) of {} points",
@@ -636,8 +576,6 @@ fn check_forcing(
         ),
     };
     ensure(
-        scene,
-        span,
         key,
         what,
         &cost,
@@ -648,7 +586,6 @@ fn check_forcing(
             "use ratios near the master pairs' frequencies over Omega (small integers or fractions)"
         },
     )
-    .map_err(Into::into)
 }
 
 /// Continuation steps assumed per reference branch when `max_steps` allows
@@ -680,16 +617,12 @@ const REFERENCE_CALIBRATION: f64 = 0.5;
 /// `(2H+1)^2` block per nonzero of the pencil, eliminated at `(2H+1)^3` each)
 /// and one Floquet analysis: up to the dense Hill limit one Hill
 /// eigenproblem (`(N (2H+1))^3`), above it the monodromy matrix.
-pub fn check_reference(
-    scene: &SceneFile,
-    system: &System,
-    limits: &Limits,
-) -> Result<(), JobError> {
-    let Some(r) = &scene.scene.reference else {
+pub fn check_reference(plan: &Plan, system: &System, limits: &Limits) -> Result<(), PlanError> {
+    let Some(r) = &plan.reference else {
         return Ok(());
     };
     let sizes = Sizes::of(system);
-    let k = 2.0 * *r.harmonics.get_ref() as f64 + 1.0;
+    let k = 2.0 * r.harmonics as f64 + 1.0;
     let nu = sizes.states * k;
     let factor = 2.0 * (sizes.nnz + sizes.factors) * k.powi(3);
     // multipliers: the dense Hill eigenproblem, or the monodromy matrix (16
@@ -700,7 +633,7 @@ pub fn check_reference(
     // three passes of a block of 16: some 64 solves per step)
     let n = sizes.states;
     let stage_steps = 8.0 * (k - 1.0);
-    let hill = if !*r.stability.get_ref() {
+    let hill = if !r.stability {
         0.0
     } else if nu <= ssm_core::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64 {
         nu.powi(3)
@@ -711,25 +644,19 @@ pub fn check_reference(
     };
     // the kept LUs of the period's steps (9 blocks of the pencil's pattern
     // and fill each)
-    let kept_lus = if *r.stability.get_ref()
-        && nu > ssm_core::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64
-    {
-        stage_steps * 9.0 * (sizes.nnz + sizes.factors) * 16.0
-    } else {
-        0.0
-    };
-    let branches = (r.epsilon.get_ref().len() + r.amplitude_frequencies().len()) as f64;
+    let kept_lus =
+        if r.stability && nu > ssm_core::fom::periodic::floquet::MAX_HILL_COEFFICIENTS as f64 {
+            stage_steps * 9.0 * (sizes.nnz + sizes.factors) * 16.0
+        } else {
+            0.0
+        };
+    let branches = (r.epsilon.len() + r.amplitude_at.len()) as f64;
     // a branch's scaled arclength is of order ten: small steps take more
-    let max_steps = *r.max_steps.get_ref() as f64;
-    let by_step = REFERENCE_STEPS.max(10.0 / *r.step.get_ref());
+    let max_steps = r.max_steps as f64;
+    let by_step = REFERENCE_STEPS.max(10.0 / r.step);
     let steps = max_steps.min(by_step);
     // each orbit's amplitudes of every output (a sum over the harmonics)
-    let outputs = r
-        .outputs
-        .as_ref()
-        .map_or(scene.scene.outputs.coordinates.get_ref().len(), |o| {
-            o.get_ref().len()
-        }) as f64;
+    let outputs = r.outputs.as_ref().unwrap_or(&plan.coordinates).len() as f64;
     let cost = Cost {
         ops: REFERENCE_CALIBRATION * branches * steps * (5.0 * factor + hill)
             + branches * steps * outputs * 8.0 * nu,
@@ -740,32 +667,22 @@ pub fn check_reference(
     };
     // the key that drives the cost: the number of steps when it exceeds a
     // typical branch's (max_steps when it caps the steps a small step asks
-    // for, unless only step was given), else the harmonics
-    let caps = max_steps <= by_step && (!r.max_steps.span().is_empty() || r.step.span().is_empty());
-    let (span, key, advice) = if steps > REFERENCE_STEPS && caps {
-        (r.max_steps.span(), "reference.max_steps", "lower max_steps")
+    // for, unless only step was changed from its default), else the
+    // harmonics
+    let caps = max_steps <= by_step
+        && (r.max_steps != ReferenceSpec::DEFAULT_MAX_STEPS
+            || r.step == ReferenceSpec::DEFAULT_STEP);
+    let (key, advice) = if steps > REFERENCE_STEPS && caps {
+        ("reference.max_steps", "lower max_steps")
     } else if steps > REFERENCE_STEPS {
-        (
-            r.step.span(),
-            "reference.step",
-            "raise step (fewer, longer steps)",
-        )
+        ("reference.step", "raise step (fewer, longer steps)")
     } else {
         (
-            r.harmonics.span(),
             "reference.harmonics",
             "lower harmonics, or give fewer epsilon or amplitude_at",
         )
     };
-    // a default value has no span of its own: point at the section
-    let span = if span.is_empty() {
-        section(scene, "[reference]")
-    } else {
-        span
-    };
     ensure(
-        scene,
-        span,
         key,
         format!(
             "the full-system reference ({branches:.0} branches of up to {steps:.0} orbits with {nu:.0} Fourier coefficients)"
@@ -774,5 +691,4 @@ pub fn check_reference(
         limits,
         advice,
     )
-    .map_err(Into::into)
 }

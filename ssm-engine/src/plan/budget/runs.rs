@@ -3,11 +3,10 @@
 //! "pod"`) and `[simulate]`. Each is costed before it allocates anything;
 //! the refusal names the key of the part that dominates the estimate.
 
-use std::ops::Range;
-
-use super::{ensure, section, ssm_cost, Cost, Limits, Sizes, OPS_PER_SECOND};
-use crate::scene::{PodSection, SceneError, SceneFile};
+use super::{ensure, ssm_cost, Cost, Limits, Sizes, OPS_PER_SECOND};
+use crate::plan::{Plan, PlanError};
 use ssm_core::model::system::System;
+use ssm_core::spec::SimulateSpec;
 use ssm_kernel::number::short;
 
 /// Newton iterations assumed per fixed HHT step (the iteration matrix is
@@ -49,22 +48,18 @@ fn hht_bytes(s: &Sizes) -> f64 {
     2.0 * (8.0 * s.states + 40.0) + 8.0
 }
 
-/// One part of a request's cost and the key that drives it.
+/// One part of a request's cost, the key that drives it and the key a
+/// refusal points at.
 struct Part {
     cost: Cost,
-    span: Range<usize>,
     key: String,
+    at: String,
     advice: &'static str,
 }
 
 /// Refuses `what` when the parts together exceed `limits`, at the key of
 /// the part that takes the largest share of the time or memory allowed.
-fn refuse_parts(
-    scene: &SceneFile,
-    what: String,
-    parts: &[Part],
-    limits: &Limits,
-) -> Result<(), SceneError> {
+fn refuse_parts(what: String, parts: &[Part], limits: &Limits) -> Result<(), PlanError> {
     let total = Cost {
         ops: parts.iter().map(|p| p.cost.ops).sum(),
         bytes: parts.iter().map(|p| p.cost.bytes).sum(),
@@ -76,15 +71,10 @@ fn refuse_parts(
     else {
         return Ok(());
     };
-    ensure(
-        scene,
-        top.span.clone(),
-        &top.key,
-        what,
-        &total,
-        limits,
-        top.advice,
-    )
+    ensure(&top.key, what, &total, limits, top.advice).map_err(|e| PlanError {
+        at: top.at.clone(),
+        ..e
+    })
 }
 
 /// What a POD reduction is made from: the fixed step, the training run's
@@ -109,12 +99,7 @@ fn mechanical(system: &System) -> (f64, f64) {
 /// SVD of the velocity snapshots (`n x K`, `K` steps) and the SVDs of the
 /// stacked projected constraint Jacobian (`m x r J`, `r <= min(n, K)`
 /// reduced coordinates, `J` samples) and of each of its `J` blocks.
-fn reduction_parts(
-    system: &System,
-    t: &Training,
-    snapshots: (Range<usize>, String),
-    samples: (Range<usize>, String),
-) -> [Part; 2] {
+fn reduction_parts(system: &System, t: &Training, snapshots: &str, samples: &str) -> [Part; 2] {
     let (n, m) = mechanical(system);
     let k = t.t_end / t.step + 1.0;
     let svd = Cost {
@@ -130,14 +115,14 @@ fn reduction_parts(
     [
         Part {
             cost: svd,
-            span: snapshots.0,
-            key: snapshots.1,
+            key: snapshots.to_owned(),
+            at: snapshots.to_owned(),
             advice: "lengthen the step or shorten the training run (fewer snapshots)",
         },
         Part {
             cost: stack,
-            span: samples.0,
-            key: samples.1,
+            key: samples.to_owned(),
+            at: samples.to_owned(),
             advice: "lower jacobian_samples",
         },
     ]
@@ -150,36 +135,29 @@ fn reduction_parts(
 /// the full model's step, plus the lift to the full states, which are
 /// stored); the SSM models of `ssm_pairs` and their runs, lifted through
 /// `W` at every step end.
-pub fn check_pod(scene: &SceneFile, system: &System, limits: &Limits) -> Result<(), SceneError> {
-    let Some(p) = &scene.scene.pod else {
+pub fn check_pod(plan: &Plan, system: &System, limits: &Limits) -> Result<(), PlanError> {
+    let Some(p) = &plan.pod else {
         return Ok(());
     };
     let sizes = Sizes::of(system);
-    let step = *p.step.get_ref();
-    let runs: Vec<&crate::scene::PodRun> = std::iter::once(p.train.get_ref())
-        .chain(p.test.get_ref())
-        .collect();
+    let step = p.step;
+    let runs: Vec<_> = std::iter::once(&p.train).chain(&p.tests).collect();
     let steps: Vec<f64> = runs.iter().map(|r| r.t_end / step + 1.0).collect();
     let all: f64 = steps.iter().sum();
     let longest_test = steps[1..].iter().copied().fold(0.0, f64::max);
-    let pod_models = truncation_count(p);
-    let sets = p.ssm_pairs.as_ref().map_or(&[][..], |s| s.get_ref());
-    let outputs = p
-        .outputs
-        .as_ref()
-        .map_or(scene.scene.outputs.coordinates.get_ref().len(), |o| {
-            o.get_ref().len()
-        }) as f64;
+    let pod_models = p.truncations.len() as f64;
+    let sets = &p.ssm_pairs;
+    let outputs = p.outputs.as_ref().unwrap_or(&plan.coordinates).len() as f64;
     let models = pod_models + sets.len() as f64;
-    let step_key = (p.step.span(), "pod.step".to_owned());
+    let step_key = "pod.step";
     let full = Part {
         cost: Cost {
             ops: all * hht_step(&sizes),
             bytes: (steps[0] + longest_test) * hht_bytes(&sizes)
                 + all * (8.0 + (1.0 + models) * (8.0 * outputs + 40.0)),
         },
-        span: step_key.0.clone(),
-        key: step_key.1.clone(),
+        key: step_key.to_owned(),
+        at: step_key.to_owned(),
         advice: "lengthen the step or shorten the runs (t_end)",
     };
     let (n, _) = mechanical(system);
@@ -189,28 +167,18 @@ pub fn check_pod(scene: &SceneFile, system: &System, limits: &Limits) -> Result<
             ops: pod_models * all * (REDUCED_RUN * hht_step(&sizes) + 4.0 * n * r),
             bytes: steps[0].max(longest_test) * 2.0 * hht_bytes(&sizes),
         },
-        span: step_key.0.clone(),
-        key: step_key.1.clone(),
+        key: step_key.to_owned(),
+        at: step_key.to_owned(),
         advice: "lengthen the step, shorten the runs (t_end) or give fewer truncations",
     };
     let training = Training {
         step,
         t_end: runs[0].t_end,
-        jacobian_samples: *p.jacobian_samples.get_ref() as f64,
+        jacobian_samples: p.jacobian_samples as f64,
         truncations: pod_models,
     };
-    let samples_span = if p.jacobian_samples.span().is_empty() {
-        section(scene, "[pod]")
-    } else {
-        p.jacobian_samples.span()
-    };
-    let [svd, stack] = reduction_parts(
-        system,
-        &training,
-        step_key,
-        (samples_span, "pod.jacobian_samples".to_owned()),
-    );
-    let order = p.ssm_order(scene.scene.ssm.order.as_ref().map(|o| *o.get_ref()));
+    let [svd, stack] = reduction_parts(system, &training, step_key, "pod.jacobian_samples");
+    let order = p.ssm_order(plan.ssm.order);
     let forced = runs.iter().any(|r| r.epsilon != 0.0);
     let ssm = sets.iter().fold(
         Cost {
@@ -227,10 +195,10 @@ pub fn check_pod(scene: &SceneFile, system: &System, limits: &Limits) -> Result<
             }
         },
     );
-    let (ssm_span, ssm_key) = match (&p.ssm_order, &p.ssm_pairs) {
-        (Some(o), _) => (o.span(), "pod.ssm_order"),
-        (None, Some(s)) => (s.span(), "pod.ssm_pairs"),
-        (None, None) => (section(scene, "[pod]"), "pod.ssm_pairs"),
+    let ssm_key = if p.ssm_order.is_some() {
+        "pod.ssm_order"
+    } else {
+        "pod.ssm_pairs"
     };
     let parts = [
         full,
@@ -239,13 +207,12 @@ pub fn check_pod(scene: &SceneFile, system: &System, limits: &Limits) -> Result<
         stack,
         Part {
             cost: ssm,
-            span: ssm_span,
             key: ssm_key.to_owned(),
+            at: ssm_key.to_owned(),
             advice: "lower ssm_order or give fewer ssm_pairs",
         },
     ];
     refuse_parts(
-        scene,
         format!(
             "the [pod] study ({} full-model HHT run(s) of up to {} steps of a {}-state model, {} reduced model(s) run on each)",
             runs.len(),
@@ -258,55 +225,19 @@ pub fn check_pod(scene: &SceneFile, system: &System, limits: &Limits) -> Result<
     )
 }
 
-/// Reduced models of `[pod]`'s truncations (one by default).
-fn truncation_count(p: &PodSection) -> f64 {
-    match (&p.energy, &p.drop) {
-        (Some(e), _) => e.get_ref().len() as f64,
-        (None, Some(d)) => d.get_ref().len() as f64,
-        (None, None) => 1.0,
-    }
-}
-
-/// The span of the line `key = ...` of the table whose header (or inline
-/// value) is at `table` (a `[reduce.params]` table keeps no spans of its own
-/// keys): the lines up to the next table header are searched; the table's
-/// own span without such a line.
-fn key_in(scene: &SceneFile, table: Range<usize>, key: &str) -> Range<usize> {
-    let text = scene.text.get(table.start..).unwrap_or("");
-    let mut at = table.start;
-    for (k, line) in text.split_inclusive('\n').enumerate() {
-        let trimmed = line.trim_start();
-        if k > 0 && trimmed.starts_with('[') {
-            break;
-        }
-        if let Some(rest) = trimmed.strip_prefix(key) {
-            if rest.trim_start().starts_with('=') {
-                let start = at + (line.len() - trimmed.len());
-                return start..start + trimmed.trim_end().len();
-            }
-        }
-        at += line.len();
-    }
-    table
-}
-
 /// Refuses the engine's `pod` reducer (`[reduce] reducer = "pod"`) when its
 /// training run of `system` (`t_end / step` HHT steps, the states stored)
 /// and its POD reduction (`reduction_parts`) would not finish within
-/// `limits`; `params` is the span of `[reduce.params]`.
+/// `limits`; a refusal names `reduce.params.step` or
+/// `reduce.params.jacobian_samples`.
 pub fn check_pod_reducer(
-    scene: &SceneFile,
     system: &System,
-    params: Range<usize>,
     (step, t_end, jacobian_samples): (f64, f64, usize),
     limits: &Limits,
-) -> Result<(), SceneError> {
+) -> Result<(), PlanError> {
     let sizes = Sizes::of(system);
     let steps = t_end / step + 1.0;
-    let step_key = (
-        key_in(scene, params.clone(), "step"),
-        "reduce.params.step".to_owned(),
-    );
+    let step_key = "reduce.params.step";
     let training = Training {
         step,
         t_end,
@@ -316,23 +247,19 @@ pub fn check_pod_reducer(
     let [svd, stack] = reduction_parts(
         system,
         &training,
-        step_key.clone(),
-        (
-            key_in(scene, params, "jacobian_samples"),
-            "reduce.params.jacobian_samples".to_owned(),
-        ),
+        step_key,
+        "reduce.params.jacobian_samples",
     );
     let run = Part {
         cost: Cost {
             ops: steps * hht_step(&sizes),
             bytes: steps * hht_bytes(&sizes),
         },
-        span: step_key.0,
-        key: step_key.1,
+        key: step_key.to_owned(),
+        at: step_key.to_owned(),
         advice: "lengthen the step or shorten the training run (t_end)",
     };
     refuse_parts(
-        scene,
         format!(
             "the pod reducer's training run ({} HHT steps of a {}-state model) and its POD",
             short(steps.floor()),
@@ -358,42 +285,29 @@ const RADAU_STEP: f64 = 4.0;
 /// [`RADAU_STEP`] sparse solves each; runs share the machine's cores;
 /// memory for the sampled outputs of every run.
 pub(super) fn check_simulate(
-    scene: &SceneFile,
-    sec: &crate::scene::SimulateSection,
+    sec: &SimulateSpec,
+    outputs: f64,
     sizes: &Sizes,
     (steps, periods): (f64, f64),
     limits: &Limits,
-) -> Result<(), SceneError> {
-    let runs = sec.run.get_ref().len() as f64;
-    let samples = *sec.samples.get_ref() as f64;
-    let outputs = sec
-        .outputs
-        .as_ref()
-        .map_or(scene.scene.outputs.coordinates.get_ref().len(), |o| {
-            o.get_ref().len()
-        }) as f64;
+) -> Result<(), PlanError> {
+    let runs = sec.runs.len() as f64;
+    let samples = sec.samples as f64;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
     let per_run = steps.max(samples) * RADAU_STEP * sizes.sparse_solve() + samples * 8.0 * outputs;
     let cost = Cost {
         ops: per_run * runs / cores.min(runs).max(1.0),
         bytes: runs * samples * (8.0 * outputs + 8.0) + cores.min(runs) * 64.0 * sizes.states,
     };
-    let (span, key, advice) = if steps > samples {
+    let (key, advice) = if steps > samples {
         (
-            sec.period.span(),
             "simulate.period",
             "shorten the runs: a smaller period or fewer samples",
         )
     } else {
-        (
-            sec.samples.span(),
-            "simulate.samples",
-            "take fewer samples (or fewer runs)",
-        )
+        ("simulate.samples", "take fewer samples (or fewer runs)")
     };
     ensure(
-        scene,
-        span,
         key,
         format!(
             "{} full-system run(s) of {} samples over {} periods of the fastest master mode",

@@ -2,8 +2,8 @@
 //! against the scene, its input assembled from `[model]` and `[data]`, and
 //! the reduced model validated with its outputs lifted.
 
-use super::error::ReduceError;
 use super::source::{params_toml, plugin_error, resolve, SourceError};
+use super::ReduceError;
 use crate::scene::{ReduceSection, SceneFile};
 use ssm_core::model::plugin::{PluginLoadError, Registry};
 use ssm_core::model::system::System;

@@ -1,13 +1,13 @@
 //! The engine's own reducers, named in `[reduce]` without a plugin: `pod`,
 //! the POD reduction with generalized constraint reduction
-//! ([`super::pod_model`]) of the `[model]` from an HHT training run, whose
+//! ([`ssm_core::reduce::pod_model`]) of the `[model]` from an HHT training run, whose
 //! reduced model the analyses then run on (e.g. its SSM).
 
 use serde::Deserialize;
 use ssm_api::Diagnostic;
 
-use super::budget::{check_pod_reducer, Limits};
-use super::error::ReduceError;
+use super::ReduceError;
+use crate::plan::budget::{check_pod_reducer, Limits};
 use crate::scene::{load_sampling, ReduceSection, SceneFile};
 use ssm_core::fom::hht::{integrate, HhtOptions};
 use ssm_core::fom::{given_start, DaeProblem};
@@ -156,12 +156,11 @@ pub fn engine_reduce(
     }
     let sys = System::from_model(&plugin, model.clone())?;
     check_pod_reducer(
-        scene,
         &sys,
-        red.params.span(),
         (params.step, params.t_end, params.jacobian_samples),
         &Limits::of_machine(),
-    )?;
+    )
+    .map_err(|e| e.in_scene(scene))?;
     let start = crate::scene::given_values([&params.x0, &params.v0].into_iter().flatten());
     if let Some((name, _)) = start
         .iter()

@@ -6,6 +6,13 @@
 
 use serde::{Deserialize, Serialize};
 
+mod runs;
+
+pub use runs::{
+    PodRunSpec, PodSpec, PodTruncations, ReferenceSpec, ReferenceStart, ReportSpec, SimulateSpec,
+    SpectrumSpec, SsmSpec,
+};
+
 /// A spec that cannot be computed: the key (as the scene spells it) and
 /// what is wrong with its value.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -390,6 +397,9 @@ pub struct ValidationSpec {
     /// Absolute tolerance of the full-system integrator (default 1e-10).
     #[serde(default = "ValidationSpec::default_atol")]
     pub atol: f64,
+    /// Outputs compared (`None`: the plan's coordinates).
+    #[serde(default)]
+    pub outputs: Option<Vec<String>>,
 }
 
 impl ValidationSpec {

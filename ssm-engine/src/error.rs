@@ -1,6 +1,6 @@
-//! What stops a run.
+//! What stops a run: one error type for every stage, from the scene to the
+//! files written.
 
-use super::source::SourceError;
 use crate::output::plot::PlotError;
 use crate::output::OutputError;
 use crate::scene::SceneError;
@@ -70,43 +70,8 @@ pub enum JobError {
     /// An analysis of `[analysis]` could not be planned or run.
     #[error(transparent)]
     Analysis(#[from] crate::analyses::AnalysisError),
-}
-
-impl From<SourceError> for JobError {
-    fn from(e: SourceError) -> Self {
-        match e {
-            SourceError::Scene(e) => Self::Scene(e),
-            SourceError::Plugin(e) => Self::Plugin(e),
-        }
-    }
-}
-
-impl From<ReduceError> for JobError {
-    fn from(e: ReduceError) -> Self {
-        match e {
-            ReduceError::Source(e) => e.into(),
-            ReduceError::Signals(e) => Self::Signals(e),
-            ReduceError::Model(e) => Self::Model(e),
-        }
-    }
-}
-
-/// Why a reduced model could not be had.
-#[derive(Debug, thiserror::Error)]
-pub enum ReduceError {
-    /// The scene or the reducer's plugin failed.
+    /// The plan cannot run on its model or within the limits (a scene's
+    /// run reports it as a [`JobError::Scene`] at the key's line).
     #[error(transparent)]
-    Source(#[from] SourceError),
-    /// A `[data]` file cannot be used.
-    #[error("data: {0}")]
-    Signals(#[from] SignalsError),
-    /// The reduced model is inconsistent.
-    #[error(transparent)]
-    Model(#[from] ModelError),
-}
-
-impl From<SceneError> for ReduceError {
-    fn from(e: SceneError) -> Self {
-        Self::Source(SourceError::Scene(e))
-    }
+    Plan(#[from] crate::plan::PlanError),
 }

@@ -1,0 +1,206 @@
+//! Plans without scenes: a plan built in code runs through
+//! `pipeline::execute` and writes what the same scene writes; a whole
+//! plan, every section in it, survives JSON; a plan's error names its key,
+//! and a scene's run turns it into the line of that key.
+
+use std::path::Path;
+use std::time::Instant;
+
+use ssm_core::spec::{
+    BackboneSpec, FrcSpec, PodTruncations, ReferenceStart, SsmSpec, ValidationStart,
+};
+use ssm_engine::pipeline::{self, JobError, JobResult, Model, Quiet};
+use ssm_engine::plan::budget::Limits;
+use ssm_engine::plan::{self, Plan};
+use ssm_engine::scene::SceneFile;
+
+/// The Duffing oscillator's backbone and forced response at order 5.
+const DUFFING: &str = "[model]\nplugin = \"duffing\"\n[ssm]\norder = 5\n\
+[outputs]\ncoordinates = [\"x\"]\n[outputs.backbone]\nrho_max = 0.3\n\
+[forcing]\nepsilon = [0.01, 0.02]\nomega_range = [0.9, 1.3]\npoints = 60\n";
+
+/// The plan of [`DUFFING`], written in code.
+fn duffing_plan() -> Plan {
+    Plan {
+        ssm: SsmSpec {
+            order: Some(5),
+            ..SsmSpec::default()
+        },
+        coordinates: vec!["x".into()],
+        backbone: Some(BackboneSpec::up_to(0.3)),
+        frc: Some(FrcSpec {
+            points: 60,
+            ..FrcSpec::new(vec![0.01, 0.02], [0.9, 1.3])
+        }),
+        ..Plan::default()
+    }
+}
+
+fn execute(plan: &Plan, system: ssm_core::model::system::System) -> Result<JobResult, JobError> {
+    let model = Model {
+        system,
+        reduction: None,
+        full: None,
+        plugins: Vec::new(),
+    };
+    pipeline::execute(plan, model, &Limits::of_machine(), &Quiet, Instant::now())
+}
+
+/// `summary.json` without what differs between two runs of the same
+/// computation (timings, the plugin libraries recorded).
+fn summary_without_run_facts(job: &JobResult) -> serde_json::Value {
+    let mut v: serde_json::Value =
+        serde_json::from_slice(job.outputs.get("summary.json").expect("a summary")).expect("json");
+    let map = v.as_object_mut().expect("an object");
+    map.remove("timing_s");
+    map.remove("plugins");
+    v
+}
+
+/// A determinism check of the two doors (the same code takes the same
+/// steps): the plan built in code and the scene's plan give the same
+/// files, byte for byte, and the same summary but for its timings and
+/// plugin record. The answers themselves are checked against closed forms
+/// and other methods elsewhere (`frc`, `ssm_autonomous`).
+#[test]
+fn a_plan_built_in_code_writes_what_its_scene_writes() {
+    let scene = SceneFile::parse(Path::new("duffing.toml"), DUFFING.to_owned()).expect("parses");
+    let from_scene = plan::of_scene(&scene).expect("resolves");
+    assert_eq!(from_scene, duffing_plan());
+    let by_scene = ssm_tests::run_scene_text(DUFFING).expect("the scene runs");
+    let by_code =
+        execute(&duffing_plan(), ssm_tests::system("duffing", "", "")).expect("the plan runs");
+    let names =
+        |j: &JobResult| -> Vec<String> { j.outputs.files.iter().map(|(n, _)| n.clone()).collect() };
+    assert_eq!(names(&by_scene), names(&by_code));
+    assert!(names(&by_code).iter().any(|n| n == "backbone.csv"));
+    assert!(names(&by_code).iter().any(|n| n == "frc.csv"));
+    for (name, contents) in &by_code.outputs.files {
+        if name != "summary.json" {
+            assert_eq!(
+                Some(contents.as_slice()),
+                by_scene.outputs.get(name),
+                "{name} differs"
+            );
+        }
+    }
+    assert_eq!(
+        summary_without_run_facts(&by_code),
+        summary_without_run_facts(&by_scene)
+    );
+}
+
+/// A scene with every section that is not an answer of the reduced model.
+const EVERY_SECTION: &str = "[model]\nplugin = \"duffing\"\n\
+[ssm]\nmaster_pairs = [1]\ntolerance = 0.02\nnormalization = { scale = 2.0 }\n\
+[spectrum]\nmethod = \"sparse\"\nmodes = 4\nshift = 0.5\n\
+[outputs]\ncoordinates = [\"x\"]\n\
+[forcing]\nepsilon = 0.01\nomega_range = [0.9, 1.1]\n\
+[reference]\nepsilon = [0.01, 0.02]\nharmonics = 5\nstart = \"rest\"\n\
+amplitude_at = [1.0]\namplitude_range = [0.0, 0.05]\n\
+[report]\norders = [3, 5]\n\
+[simulate]\nperiod = 0.1\nsamples = 100\nnoise = 0.01\n\
+[[simulate.run]]\nrho0 = [0.1]\n[[simulate.run]]\nx0 = { x = 0.1 }\nv0 = { x_dot = 0.2 }\n\
+[pod]\nstep = 0.01\nenergy = [1e-3, 1e-5]\nssm_pairs = [[1]]\n\
+[pod.train]\nepsilon = 0.1\nomega = 1.0\nt_end = 10.0\n\
+[[pod.test]]\nt_end = 5.0\nx0 = { x = 0.2 }\n";
+
+#[test]
+fn a_whole_plan_round_trips_through_json() {
+    let scene =
+        SceneFile::parse(Path::new("every.toml"), EVERY_SECTION.to_owned()).expect("parses");
+    let plan = plan::of_scene(&scene).expect("resolves");
+    // the sections arrived, with the values the scene gave
+    assert_eq!(plan.ssm.tolerance, 0.02);
+    assert_eq!(
+        plan.ssm.normalization,
+        ssm_core::spectrum::Normalization::Scale(2.0)
+    );
+    assert_eq!(plan.spectrum.modes, Some(4));
+    let r = plan.reference.as_ref().expect("reference");
+    assert_eq!(r.harmonics, 5);
+    assert_eq!(r.start, Some(ReferenceStart::Rest));
+    assert!(!r.from_ssm(true));
+    assert_eq!(r.omega_range(Some([0.9, 1.1])), Some((0.9, 1.1)));
+    assert_eq!(r.amplitude_range(), (0.0, 0.05));
+    assert_eq!(plan.report.as_ref().unwrap().orders_up_to(7), vec![3, 5]);
+    let s = plan.simulate.as_ref().expect("simulate");
+    assert!(matches!(s.runs[0], ValidationStart::Ssm { .. }));
+    assert!(
+        matches!(&s.runs[1], ValidationStart::Given { values } if values.len() == 2),
+        "{:?}",
+        s.runs[1]
+    );
+    let p = plan.pod.as_ref().expect("pod");
+    assert_eq!(p.truncations, PodTruncations::Energy(vec![1e-3, 1e-5]));
+    assert_eq!(p.tests[0].start, vec![("x".to_owned(), 0.2)]);
+    let text = serde_json::to_string_pretty(&plan).expect("serializes");
+    let back: Plan = serde_json::from_str(&text).expect("parses back");
+    assert_eq!(back, plan, "{text}");
+    // the defaults of a plan written as JSON are the scene's
+    let minimal: Plan = serde_json::from_str(r#"{"coordinates": ["x"]}"#).expect("json");
+    let bare = SceneFile::parse(
+        Path::new("bare.toml"),
+        "[model]\nplugin = \"duffing\"\n[outputs]\ncoordinates = [\"x\"]\n".into(),
+    )
+    .expect("parses");
+    assert_eq!(minimal, plan::of_scene(&bare).expect("resolves"));
+    let e = serde_json::from_str::<Plan>(r#"{"sssm": {}}"#).expect_err("a misspelt key");
+    assert!(e.to_string().contains("sssm"), "{e}");
+}
+
+/// A plan's mistakes against its model are typed errors naming the key,
+/// before anything runs; through a scene they point at the key's line.
+#[test]
+fn plan_errors_name_the_key_and_the_scene_line() {
+    let sys = || ssm_tests::system("duffing", "", "");
+    let mut plan = duffing_plan();
+    plan.coordinates = vec!["x".into(), "y".into()];
+    match execute(&plan, sys()) {
+        Err(JobError::Plan(e)) => {
+            assert_eq!(e.key, "outputs.coordinates");
+            assert!(e.problem.contains("no output 'y'"), "{e}");
+        }
+        other => panic!("expected a plan error, got {other:?}"),
+    }
+    let mut plan = duffing_plan();
+    plan.reference = Some(ssm_core::spec::ReferenceSpec {
+        harmonics: 1_000_000,
+        ..ssm_core::spec::ReferenceSpec::new(vec![0.01])
+    });
+    match execute(&plan, sys()) {
+        Err(JobError::Plan(e)) => assert_eq!(e.key, "reference.harmonics", "{e}"),
+        other => panic!("expected a plan error, got {other:?}"),
+    }
+    // the same mistake in a scene: its line
+    let text = DUFFING.replace("coordinates = [\"x\"]", "coordinates = [\"x\", \"y\"]");
+    let (line, msg) = ssm_tests::scene_error(&text);
+    assert_eq!(line, 6, "{msg}");
+    assert!(msg.starts_with("outputs.coordinates: "), "{msg}");
+}
+
+/// Where a key path is written: its value's line; a default's, the line of
+/// the nearest table on its path; `[n]` the n-th of an array of tables.
+#[test]
+fn keys_are_located_in_the_scene_text() {
+    let scene =
+        SceneFile::parse(Path::new("every.toml"), EVERY_SECTION.to_owned()).expect("parses");
+    let line = |path: &str| ssm_engine::scene::line_of(&scene.text, scene.locate(path).start);
+    let line_of = |needle: &str| {
+        EVERY_SECTION
+            .lines()
+            .position(|l| l.starts_with(needle))
+            .expect("the needle")
+            + 1
+    };
+    assert_eq!(line("reference.harmonics"), line_of("harmonics = 5"));
+    // a default: the table's header
+    assert_eq!(line("reference.step"), line_of("[reference]"));
+    assert_eq!(line("simulate.run[2]"), line_of("[[simulate.run]]") + 2);
+    assert_eq!(line("simulate.run[2].v0"), line_of("v0 = "));
+    assert_eq!(line("pod.train.t_end"), line_of("[pod.train]") + 3);
+    assert_eq!(line("pod.test[1]"), line_of("[[pod.test]]"));
+    // nothing of it written: the start of the file
+    assert_eq!(line("validate.t_end"), 1);
+    assert_eq!(line("simulate.run[9]"), line_of("[[simulate.run]]"));
+}
