@@ -380,6 +380,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     if report && scene.scene.report.is_none() {
         scene.scene.report = Some(ReportSection { orders: None });
     }
+    // every value checked before anything is written
+    ssm_engine::plan::of_scene(&scene)?;
     let out = out.unwrap_or_else(|| job::default_out_dir(&scene));
     // before anything is computed or written: the results must not replace
     // an input of the run

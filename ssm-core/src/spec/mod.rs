@@ -6,26 +6,55 @@
 
 use serde::{Deserialize, Serialize};
 
+mod check;
 mod runs;
 
+pub use check::{
+    MAX_HARMONICS, MAX_POD_ROMS, MAX_POD_TESTS, MAX_REFERENCE_CURVES, MAX_REFERENCE_STEPS,
+    MAX_SIMULATE_SAMPLES,
+};
 pub use runs::{
     PodRunSpec, PodSpec, PodTruncations, ReferenceSpec, ReferenceStart, ReportSpec, SimulateSpec,
     SpectrumSpec, SsmSpec,
 };
 
-/// A spec that cannot be computed: the key (as the scene spells it) and
-/// what is wrong with its value.
+/// A spec that cannot be computed: the key (as the scene spells it), where a
+/// scene's message points when not at the key itself, and what is wrong
+/// with its value.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{key}: {problem}")]
 pub struct SpecError {
     /// The key, e.g. `forcing.omega_range`.
-    pub key: &'static str,
+    pub key: String,
+    /// The key path whose place a scene's message points at, when it is not
+    /// `key` (e.g. `ssm.master_pairs` for a backbone asked of two pairs).
+    pub at: Option<String>,
     /// What is wrong.
     pub problem: String,
 }
 
-fn spec_error(key: &'static str, problem: String) -> SpecError {
-    SpecError { key, problem }
+impl SpecError {
+    /// A problem of `key`.
+    pub fn new(key: impl Into<String>, problem: String) -> Self {
+        Self {
+            key: key.into(),
+            at: None,
+            problem,
+        }
+    }
+
+    /// A problem of `key`, pointed at `at`.
+    pub fn at(key: impl Into<String>, at: impl Into<String>, problem: String) -> Self {
+        Self {
+            key: key.into(),
+            at: Some(at.into()),
+            problem,
+        }
+    }
+}
+
+fn spec_error(key: &str, problem: String) -> SpecError {
+    SpecError::new(key, problem)
 }
 
 /// Backbone curves `omega(rho)` of the master pair, one per expansion order
@@ -207,12 +236,7 @@ impl FrcSpec {
             ));
         }
         if let Some(orders) = &self.orders {
-            if orders.is_empty() || orders.iter().any(|&o| o == 0 || o > ssm_order) {
-                return Err(spec_error(
-                    "forcing.orders",
-                    format!("needs at least one order, each from 1 to the SSM's order {ssm_order}, found {orders:?}"),
-                ));
-            }
+            check::orders(orders, ssm_order, "forcing.orders")?;
         }
         if let Some(r) = &self.resonance {
             if r.len() != pairs || r.iter().any(|x| !(x.is_finite() && *x > 0.0)) {

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::analyses::{self, AnalysisError, Needs};
 use crate::scene::{SceneError, SceneFile};
-use ssm_core::spec::SsmSpec;
+use ssm_core::spec::{SpecError, SsmSpec};
 
 /// An analysis of [`crate::analyses::REGISTRY`] with its spec, read and
 /// checked (every default filled in): what a plan ships.
@@ -47,7 +47,8 @@ pub(super) fn analyses(
                 .map_err(|e| scene.invalid(at.clone(), &key, format!("cannot be read: {e}")))?;
             let spec = entry.spec(json, &needs).map_err(|e| match &e {
                 AnalysisError::Spec { source, .. } => {
-                    scene.invalid(scene.locate(source.key), source.key, source.problem.clone())
+                    let at = source.at.as_ref().unwrap_or(&source.key);
+                    scene.invalid(scene.locate(at), &source.key, source.problem.clone())
                 }
                 _ => fail(at.clone(), &key, e),
             })?;
@@ -57,4 +58,19 @@ pub(super) fn analyses(
             })
         })
         .collect()
+}
+
+/// The analyses of a plan (built in code, their specs as JSON) read and
+/// checked against the SSM `ssm`, as a scene's tables are.
+pub(super) fn check(planned: &[PlannedAnalysis], ssm: &SsmSpec) -> Result<(), SpecError> {
+    let needs = needs(ssm);
+    for a in planned {
+        let key = format!("analysis.{}", a.name);
+        let entry = analyses::find(&a.name).map_err(|e| SpecError::new(&key, e.to_string()))?;
+        entry.spec(a.spec.clone(), &needs).map_err(|e| match e {
+            AnalysisError::Spec { source, .. } => source,
+            other => SpecError::new(&key, other.to_string()),
+        })?;
+    }
+    Ok(())
 }

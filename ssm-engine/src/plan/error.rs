@@ -20,6 +20,17 @@ pub struct PlanError {
     pub problem: String,
 }
 
+impl From<ssm_core::spec::SpecError> for PlanError {
+    fn from(e: ssm_core::spec::SpecError) -> Self {
+        let at = e.at.unwrap_or_else(|| e.key.clone());
+        Self {
+            key: e.key,
+            at,
+            problem: e.problem,
+        }
+    }
+}
+
 impl PlanError {
     /// A problem of `key`, at `key`.
     pub fn new(key: &str, problem: String) -> Self {

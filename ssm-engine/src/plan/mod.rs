@@ -27,7 +27,7 @@ use budget::Limits;
 use ssm_core::model::system::System;
 use ssm_core::spec::{
     BackboneSpec, FrcSpec, InvarianceSpec, PodSpec, ReferenceSpec, ReportSpec, SimulateSpec,
-    SpectrumSpec, SsmSpec, TransientSpec, ValidationSpec,
+    SpecError, SpectrumSpec, SsmSpec, TransientSpec, ValidationSpec,
 };
 
 /// Everything a run computes, as specs: the SSM and its spectrum, the
@@ -127,6 +127,43 @@ impl Plan {
             .fold(1, usize::max)
     }
 
+    /// Checks every spec's values (the checks of `ssm_core::spec`, with the
+    /// plan's master pairs and highest order) and the analyses' specs: what
+    /// a scene's sections are checked for, with the same keys and messages.
+    pub fn validate(&self) -> Result<(), SpecError> {
+        self.ssm.check()?;
+        self.spectrum.check()?;
+        let (pairs, max_order) = (self.ssm.master_pairs.len(), self.ssm.max_order());
+        if let Some(s) = &self.invariance {
+            s.check(max_order)?;
+        }
+        if let Some(s) = &self.backbone {
+            s.check(pairs, max_order)?;
+        }
+        if let Some(s) = &self.transient {
+            s.check(pairs, max_order)?;
+        }
+        if let Some(s) = &self.frc {
+            s.check(pairs, max_order)?;
+        }
+        if let Some(s) = &self.validation {
+            s.check(pairs, max_order, self.frc.is_some())?;
+        }
+        if let Some(s) = &self.reference {
+            s.check(self.frc.as_ref().map(|f| f.omega_range))?;
+        }
+        if let Some(s) = &self.report {
+            s.check(max_order)?;
+        }
+        if let Some(s) = &self.simulate {
+            s.check(pairs)?;
+        }
+        if let Some(s) = &self.pod {
+            s.check()?;
+        }
+        analyses::check(&self.analyses, &self.ssm)
+    }
+
     /// Checks the plan against `system` and, for what can be costed
     /// before the spectrum (the POD study, the dense spectrum, the SSM
     /// order), against `limits`: the named outputs and states exist, the
@@ -135,6 +172,7 @@ impl Plan {
     /// estimates that need the master modes run after the spectrum
     /// ([`budget::check`]).
     pub fn check(&self, system: &System, limits: &Limits) -> Result<(), PlanError> {
+        self.validate().map_err(PlanError::from)?;
         checks::check(self, system)?;
         budget::check_pod(self, system, limits)?;
         budget::check_spectrum(self, system, limits)?;
@@ -159,6 +197,13 @@ pub fn resolve(scene: &SceneFile, system: &System, limits: &Limits) -> Result<Pl
 /// checks against the model.
 pub fn of_scene(scene: &SceneFile) -> Result<Plan, SceneError> {
     let mut plan = convert::plan(scene);
+    plan.validate().map_err(|e| {
+        scene.invalid(
+            scene.locate(e.at.as_ref().unwrap_or(&e.key)),
+            &e.key,
+            e.problem,
+        )
+    })?;
     plan.analyses = analyses::analyses(scene, &plan.ssm)?;
     Ok(plan)
 }

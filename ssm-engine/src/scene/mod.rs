@@ -6,7 +6,6 @@
 //! by `ssm-engine --help` and in `docs/scenes.md`; a test keeps them equal):
 #![doc = concat!("```toml\n", include_str!("format.toml"), "```")]
 
-use ssm_kernel::number::short;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -478,62 +477,29 @@ impl SceneFile {
         }
     }
 
-    /// Checks that need no model.
+    /// The checks of the scene's shape that its specs cannot make (which
+    /// keys go together, lists of two numbers, names of starts); the
+    /// values are checked by the specs' own checks when the scene is
+    /// resolved (`ssm_engine::plan::of_scene`), at the same keys and lines.
     fn check_generic(&self) -> Result<(), SceneError> {
-        let ssm = &self.scene.ssm;
-        if ssm.master_pairs.get_ref().is_empty() {
-            return Err(self.invalid(
-                ssm.master_pairs.span(),
-                "ssm.master_pairs",
-                "at least one master pair is needed".into(),
-            ));
-        }
-        let mut sorted = ssm.master_pairs.get_ref().clone();
-        sorted.sort_unstable();
-        sorted.dedup();
-        if sorted.len() != ssm.master_pairs.get_ref().len() || sorted[0] == 0 {
-            return Err(self.invalid(
-                ssm.master_pairs.span(),
-                "ssm.master_pairs",
-                "pairs are 1-based and must not repeat".into(),
-            ));
-        }
-        if let Some(o) = ssm.order.as_ref().filter(|o| *o.get_ref() < 1) {
-            return Err(self.invalid(o.span(), "ssm.order", "must be at least 1".into()));
-        }
-        let tol = *ssm.resonance_tol.get_ref();
-        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
-            return Err(self.invalid(
-                ssm.resonance_tol.span(),
-                "ssm.resonance_tol",
-                format!("must lie in (0, 1), found {}", short(tol)),
-            ));
-        }
-        let tol = *ssm.tolerance.get_ref();
-        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
-            return Err(self.invalid(
-                ssm.tolerance.span(),
-                "ssm.tolerance",
-                format!(
-                    "must lie in (0, 1) (a relative error, 0.01 = 1 %), found {}",
-                    short(tol)
-                ),
-            ));
-        }
         self.check_model_source()?;
         self.check_unique_names()?;
-        self.check_outputs()?;
-        self.check_forcing()?;
+        if let Some(f) = &self.scene.forcing {
+            let r = f.omega_range.get_ref();
+            if r.len() != 2 {
+                return Err(self.invalid(
+                    f.omega_range.span(),
+                    "forcing.omega_range",
+                    format!(
+                        "must be [Omega_min, Omega_max] with 0 < Omega_min < Omega_max, found {r:?}"
+                    ),
+                ));
+            }
+        }
         self.check_validate()?;
         self.check_simulate()?;
         self.check_pod()?;
-        self.check_reference()?;
-        if let Some(m) = &self.scene.spectrum.modes {
-            if *m.get_ref() == 0 {
-                return Err(self.invalid(m.span(), "spectrum.modes", "must be at least 1".into()));
-            }
-        }
-        Ok(())
+        self.check_reference()
     }
 }
 
@@ -555,176 +521,6 @@ pub(crate) fn given_values<'a>(
             })
         })
         .collect()
-}
-
-impl SceneFile {
-    fn check_orders(&self, orders: &Spanned<Vec<usize>>, key: &str) -> Result<(), SceneError> {
-        let max = self.scene.ssm.max_order();
-        if orders.get_ref().is_empty() {
-            return Err(self.invalid(orders.span(), key, "at least one order is needed".into()));
-        }
-        if let Some(&bad) = orders.get_ref().iter().find(|&&o| o < 1 || o > max) {
-            return Err(self.invalid(
-                orders.span(),
-                key,
-                format!("order {bad} is outside 1..={max} ([ssm] order)"),
-            ));
-        }
-        Ok(())
-    }
-
-    fn check_forcing(&self) -> Result<(), SceneError> {
-        let Some(f) = &self.scene.forcing else {
-            return Ok(());
-        };
-        let eps = f.epsilon.get_ref();
-        if eps.is_empty() || eps.iter().any(|e| !(e.is_finite() && *e > 0.0)) {
-            return Err(self.invalid(
-                f.epsilon.span(),
-                "forcing.epsilon",
-                "needs at least one forcing amplitude, each positive".into(),
-            ));
-        }
-        let r = f.omega_range.get_ref();
-        if r.len() != 2 || !(r[0].is_finite() && r[1].is_finite() && 0.0 < r[0] && r[0] < r[1]) {
-            return Err(self.invalid(
-                f.omega_range.span(),
-                "forcing.omega_range",
-                format!(
-                    "must be [Omega_min, Omega_max] with 0 < Omega_min < Omega_max, found {r:?}"
-                ),
-            ));
-        }
-        if let Some(o) = &f.orders {
-            self.check_orders(o, "forcing.orders")?;
-        }
-        let pairs = self.scene.ssm.master_pairs.get_ref().len();
-        if let Some(res) = &f.resonance {
-            let v = res.get_ref();
-            if v.len() != pairs || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
-                return Err(self.invalid(
-                    res.span(),
-                    "forcing.resonance",
-                    format!("needs one positive ratio per master pair ({pairs}), found {v:?}"),
-                ));
-            }
-        }
-        self.check_at_least(&f.points, 2, "forcing.points")?;
-        if let Some(rm) = &f.rho_max {
-            self.check_positive(rm, "forcing.rho_max")?;
-        }
-        if let Some(k) = &f.nonautonomous_order {
-            let max = self.scene.ssm.max_order().saturating_sub(1);
-            if *k.get_ref() > max {
-                return Err(self.invalid(
-                    k.span(),
-                    "forcing.nonautonomous_order",
-                    format!("must be at most [ssm] order - 1 = {max}"),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    fn check_positive(&self, v: &Spanned<f64>, key: &str) -> Result<(), SceneError> {
-        let x = *v.get_ref();
-        if !(x.is_finite() && x > 0.0) {
-            return Err(self.invalid(
-                v.span(),
-                key,
-                format!("must be a positive number, found {}", short(x)),
-            ));
-        }
-        Ok(())
-    }
-
-    fn check_at_least(&self, v: &Spanned<usize>, min: usize, key: &str) -> Result<(), SceneError> {
-        if *v.get_ref() < min {
-            return Err(self.invalid(v.span(), key, format!("must be at least {min}")));
-        }
-        Ok(())
-    }
-
-    fn check_outputs(&self) -> Result<(), SceneError> {
-        let out = &self.scene.outputs;
-        let pairs = self.scene.ssm.master_pairs.get_ref().len();
-        if let Some(ie) = &out.invariance_error {
-            self.check_orders(&ie.orders, "outputs.invariance_error.orders")?;
-            if ie.radii.get_ref().is_empty()
-                || ie
-                    .radii
-                    .get_ref()
-                    .iter()
-                    .any(|r| !(r.is_finite() && *r > 0.0))
-            {
-                return Err(self.invalid(
-                    ie.radii.span(),
-                    "outputs.invariance_error.radii",
-                    "give one or more positive radii".into(),
-                ));
-            }
-            self.check_at_least(&ie.n_alpha, 2, "outputs.invariance_error.n_alpha")?;
-            self.check_at_least(&ie.n_theta, 1, "outputs.invariance_error.n_theta")?;
-        }
-        if let Some(bb) = &out.backbone {
-            if pairs != 1 {
-                return Err(self.invalid(
-                    self.scene.ssm.master_pairs.span(),
-                    "outputs.backbone",
-                    format!("backbone curves need exactly one master pair, found {pairs}"),
-                ));
-            }
-            self.check_positive(&bb.rho_max, "outputs.backbone.rho_max")?;
-            self.check_at_least(&bb.points, 2, "outputs.backbone.points")?;
-            if let Some(o) = &bb.orders {
-                self.check_orders(o, "outputs.backbone.orders")?;
-            }
-        }
-        if let Some(tr) = &out.transient {
-            if tr.rho0.get_ref().len() != pairs
-                || tr
-                    .rho0
-                    .get_ref()
-                    .iter()
-                    .any(|r| !(r.is_finite() && *r >= 0.0))
-            {
-                return Err(self.invalid(
-                    tr.rho0.span(),
-                    "outputs.transient.rho0",
-                    format!("give {pairs} non-negative amplitude(s), one per master pair"),
-                ));
-            }
-            if let Some(th) = &tr.theta0 {
-                if th.get_ref().len() != pairs || th.get_ref().iter().any(|t| !t.is_finite()) {
-                    return Err(self.invalid(
-                        th.span(),
-                        "outputs.transient.theta0",
-                        format!("give {pairs} finite phase(s), one per master pair"),
-                    ));
-                }
-            }
-            self.check_positive(&tr.t_end, "outputs.transient.t_end")?;
-            self.check_at_least(&tr.samples, 2, "outputs.transient.samples")?;
-            self.check_positive(&tr.rtol, "outputs.transient.rtol")?;
-            if *tr.rtol.get_ref() >= 1e-2 {
-                return Err(self.invalid(
-                    tr.rtol.span(),
-                    "outputs.transient.rtol",
-                    format!(
-                        "must be below 1e-2 (found {}): a looser tolerance lets the step size grow past the oscillation and the transient is wrong",
-                        short(*tr.rtol.get_ref())
-                    ),
-                ));
-            }
-            if let Some(o) = &tr.order {
-                self.check_orders(
-                    &Spanned::new(o.span(), vec![*o.get_ref()]),
-                    "outputs.transient.order",
-                )?;
-            }
-        }
-        Ok(())
-    }
 }
 
 /// 1-based line of byte offset `pos` in `text`.

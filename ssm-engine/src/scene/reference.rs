@@ -3,20 +3,15 @@
 //! model's forced response curves.
 
 use serde::Deserialize;
-use ssm_kernel::number::{list, short};
 use toml::Spanned;
 
 use super::{number_or_list, SceneError, SceneFile};
 use ssm_core::spec::ReferenceSpec;
 
-/// Most forcing amplitudes (one branch each).
-pub const MAX_REFERENCE_CURVES: usize = 8;
-/// Most harmonics.
-pub const MAX_HARMONICS: usize = 64;
+pub use ssm_core::spec::{MAX_HARMONICS, MAX_REFERENCE_CURVES, MAX_REFERENCE_STEPS};
+
 /// Most Fourier coefficients `N (2H + 1)` of one orbit.
 pub const MAX_REFERENCE_COEFFICIENTS: usize = 400_000;
-/// Most continuation steps of one branch.
-pub const MAX_REFERENCE_STEPS: usize = 100_000;
 
 /// `[reference]`: forced responses of the full system.
 #[derive(Debug, Clone, Deserialize)]
@@ -85,167 +80,53 @@ fn default_max_steps() -> Spanned<usize> {
     Spanned::new(0..0, ReferenceSpec::DEFAULT_MAX_STEPS)
 }
 
-impl ReferenceSection {
-    /// The frequency range: this section's, else `[forcing]`'s.
-    pub fn omega_range(&self, scene: &SceneFile) -> Option<(f64, f64)> {
-        self.omega_range
-            .as_ref()
-            .map(|r| r.get_ref())
-            .or(scene
-                .scene
-                .forcing
-                .as_ref()
-                .map(|f| f.omega_range.get_ref()))
-            .and_then(|r| (r.len() == 2).then(|| (r[0], r[1])))
-    }
-}
-
 impl SceneFile {
+    /// `[reference]`'s shape: ranges of two numbers, a non-empty
+    /// `amplitude_at` when given, a known start.
     pub(super) fn check_reference(&self) -> Result<(), SceneError> {
         let Some(r) = &self.scene.reference else {
             return Ok(());
         };
-        let eps = r.epsilon.get_ref();
-        if eps.is_empty()
-            || eps.len() > MAX_REFERENCE_CURVES
-            || eps.iter().any(|e| !(e.is_finite() && *e > 0.0))
-        {
+        if let Some(o) = r.omega_range.as_ref().filter(|o| o.get_ref().len() != 2) {
             return Err(self.invalid(
-                r.epsilon.span(),
-                "reference.epsilon",
+                o.span(),
+                "reference.omega_range",
                 format!(
-                    "give 1 to {MAX_REFERENCE_CURVES} positive, finite forcing amplitudes, found {eps:?}"
+                    "give [Omega_min, Omega_max], found {} numbers",
+                    o.get_ref().len()
                 ),
             ));
         }
-        let span = r
-            .omega_range
+        if let Some(at) = r.amplitude_at.as_ref().filter(|a| a.get_ref().is_empty()) {
+            return Err(self.invalid(
+                at.span(),
+                "reference.amplitude_at",
+                format!(
+                    "give 1 to {MAX_REFERENCE_CURVES} positive, finite forcing frequencies, found []"
+                ),
+            ));
+        }
+        if let Some(range) = r
+            .amplitude_range
             .as_ref()
-            .map_or(r.epsilon.span(), |o| o.span());
-        match (
-            r.omega_range.as_ref().map(|o| o.get_ref()),
-            r.omega_range(self),
-        ) {
-            (Some(v), _) if v.len() != 2 => {
-                return Err(self.invalid(
-                    span,
-                    "reference.omega_range",
-                    format!("give [Omega_min, Omega_max], found {} numbers", v.len()),
-                ))
-            }
-            (_, None) => {
-                return Err(self.invalid(
-                    span,
-                    "reference.omega_range",
-                    "give omega_range here or in [forcing]".into(),
-                ))
-            }
-            (_, Some((lo, hi))) if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) => {
-                return Err(self.invalid(
-                    span,
-                    "reference.omega_range",
-                    format!(
-                        "must be positive, finite and increasing, found {}",
-                        list(&[lo, hi])
-                    ),
-                ))
-            }
-            _ => {}
-        }
-        let h = *r.harmonics.get_ref();
-        if !(1..=MAX_HARMONICS).contains(&h) {
+            .filter(|a| a.get_ref().len() != 2)
+        {
             return Err(self.invalid(
-                r.harmonics.span(),
-                "reference.harmonics",
-                format!("must lie in 1..={MAX_HARMONICS}, found {h}"),
-            ));
-        }
-        let step = *r.step.get_ref();
-        if !(step.is_finite() && (1e-4..=10.0).contains(&step)) {
-            return Err(self.invalid(
-                r.step.span(),
-                "reference.step",
-                format!("must lie in [1e-4, 10] (scaled arclength; 0.5 crosses a resonance peak in about 100 steps), found {}", short(step)),
-            ));
-        }
-        let tol = *r.tol.get_ref();
-        if !(tol.is_finite() && (1e-14..=1e-3).contains(&tol)) {
-            return Err(self.invalid(
-                r.tol.span(),
-                "reference.tol",
-                format!("must lie in [1e-14, 1e-3], found {}", short(tol)),
-            ));
-        }
-        if let Some(st) = &r.start {
-            match st.get_ref().as_str() {
-                "rest" => {}
-                "ssm" if self.scene.forcing.is_some() => {}
-                "ssm" => {
-                    return Err(self.invalid(
-                        st.span(),
-                        "reference.start",
-                        "start = \"ssm\" starts from the reduced model's forced response: add [forcing]".into(),
-                    ))
-                }
-                other => {
-                    return Err(self.invalid(
-                        st.span(),
-                        "reference.start",
-                        format!("unknown start \"{other}\"; expected \"rest\" or \"ssm\""),
-                    ))
-                }
-            }
-        }
-        self.check_amplitude_responses(r)?;
-        let steps = *r.max_steps.get_ref();
-        if !(1..=MAX_REFERENCE_STEPS).contains(&steps) {
-            return Err(self.invalid(
-                r.max_steps.span(),
-                "reference.max_steps",
-                format!("must lie in 1..={MAX_REFERENCE_STEPS}, found {steps}"),
-            ));
-        }
-        Ok(())
-    }
-
-    /// `amplitude_at` and `amplitude_range`.
-    fn check_amplitude_responses(&self, r: &ReferenceSection) -> Result<(), SceneError> {
-        if let Some(at) = &r.amplitude_at {
-            let w = at.get_ref();
-            if w.is_empty()
-                || w.len() > MAX_REFERENCE_CURVES
-                || w.iter().any(|v| !(v.is_finite() && *v > 0.0))
-            {
-                return Err(self.invalid(
-                    at.span(),
-                    "reference.amplitude_at",
-                    format!(
-                        "give 1 to {MAX_REFERENCE_CURVES} positive, finite forcing frequencies, found {w:?}"
-                    ),
-                ));
-            }
-        }
-        if let Some(range) = &r.amplitude_range {
-            let v = range.get_ref();
-            let message = if r.amplitude_at.is_none() {
-                Some("traces the amplitude responses of amplitude_at: give the frequencies in amplitude_at".to_owned())
-            } else if v.len() != 2 {
-                Some(format!(
+                range.span(),
+                "reference.amplitude_range",
+                format!(
                     "give [eps_min, eps_max], found {} numbers",
-                    v.len()
-                ))
-            } else if !(v[0].is_finite() && v[1].is_finite() && v[0] >= 0.0 && v[1] > v[0]) {
-                Some(format!(
-                    "must be finite, non-negative and increasing, found {}",
-                    list(&v[..2])
-                ))
-            } else {
-                None
-            };
-            if let Some(m) = message {
-                return Err(self.invalid(range.span(), "reference.amplitude_range", m));
-            }
+                    range.get_ref().len()
+                ),
+            ));
         }
-        Ok(())
+        match r.start.as_ref().map(|st| (st, st.get_ref().as_str())) {
+            Some((st, other)) if other != "rest" && other != "ssm" => Err(self.invalid(
+                st.span(),
+                "reference.start",
+                format!("unknown start \"{other}\"; expected \"rest\" or \"ssm\""),
+            )),
+            _ => Ok(()),
+        }
     }
 }

@@ -2,14 +2,13 @@
 //! input of data-driven reducers (e.g. the NAR identifier).
 
 use serde::Deserialize;
-use ssm_kernel::number::short;
 use toml::Spanned;
 
 use super::{SceneError, SceneFile};
 use ssm_core::spec::SimulateSpec;
 
 /// Most samples per run (a CSV of this many rows is already ~100 MB per output).
-pub const MAX_SAMPLES: usize = 2_000_000;
+pub const MAX_SAMPLES: usize = ssm_core::spec::MAX_SIMULATE_SAMPLES;
 
 /// `[simulate]`: the full model integrated from given starts and sampled
 /// uniformly; each run becomes `simulation_<k>.csv` (header `t,<outputs>`).
@@ -84,108 +83,26 @@ impl SimulateRun {
 }
 
 impl SceneFile {
+    /// `[[simulate.run]]`'s shape: each run starts on the SSM (`rho0`,
+    /// `theta0`) or at given values (`x0`, `v0`), not both, with `theta0`
+    /// only beside `rho0`.
     pub(super) fn check_simulate(&self) -> Result<(), SceneError> {
         let Some(s) = &self.scene.simulate else {
             return Ok(());
         };
-        self.check_positive(&s.period, "simulate.period")?;
-        let n = *s.samples.get_ref();
-        if !(2..=MAX_SAMPLES).contains(&n) {
-            return Err(self.invalid(
-                s.samples.span(),
-                "simulate.samples",
-                format!("must be 2 to {MAX_SAMPLES}, found {n}"),
-            ));
-        }
-        let span = *s.period.get_ref() * (n - 1) as f64;
-        if !span.is_finite() {
-            return Err(self.invalid(
-                s.period.span(),
-                "simulate.period",
-                format!("the runs would last {span} (period times samples - 1): not a time"),
-            ));
-        }
-        let noise = *s.noise.get_ref();
-        if !(noise.is_finite() && (0.0..=1.0).contains(&noise)) {
-            return Err(self.invalid(
-                s.noise.span(),
-                "simulate.noise",
-                format!("must lie in [0, 1] (relative to each output's largest value; 0.01 = 1 %), found {}", short(noise)),
-            ));
-        }
-        for (tol, key) in [(&s.rtol, "simulate.rtol"), (&s.atol, "simulate.atol")] {
-            self.check_positive(tol, key)?;
-        }
-        if let Some(alpha) = &s.hht_alpha {
-            let a = *alpha.get_ref();
-            if !(-1.0 / 3.0..=0.0).contains(&a) {
-                return Err(self.invalid(
-                    alpha.span(),
-                    "simulate.hht_alpha",
-                    format!(
-                        "must lie in [-1/3, 0] (0: no numerical damping), found {}",
-                        short(a)
-                    ),
-                ));
-            }
-        }
-        if let Some(o) = &s.outputs {
-            if o.get_ref().is_empty() {
-                return Err(self.invalid(
-                    o.span(),
-                    "simulate.outputs",
-                    "name at least one output, or leave the key out for [outputs] coordinates"
-                        .into(),
-                ));
-            }
-        }
-        let runs = s.run.get_ref();
-        if runs.is_empty() {
-            return Err(self.invalid(
-                s.run.span(),
-                "simulate.run",
-                "give at least one [[simulate.run]] with x0/v0 or rho0".into(),
-            ));
-        }
-        let pairs = self.scene.ssm.master_pairs.get_ref().len();
-        for (k, r) in runs.iter().enumerate() {
+        for (k, r) in s.run.get_ref().iter().enumerate() {
             let key = format!("simulate.run[{}]", k + 1);
             let given = r.x0.is_some() || r.v0.is_some();
-            let bad = |m: String| self.invalid(s.run.span(), &key, m);
-            match (&r.rho0, given) {
-                (Some(_), true) => {
-                    return Err(bad(
-                        "give either rho0 (a start on the SSM) or x0/v0, not both".into(),
-                    ))
-                }
+            let problem = match (&r.rho0, given) {
+                (Some(_), true) => Some("give either rho0 (a start on the SSM) or x0/v0, not both"),
                 (None, false) => {
-                    return Err(bad(
-                        "give x0/v0 (displacements, velocities) or rho0 (a start on the SSM)"
-                            .into(),
-                    ))
+                    Some("give x0/v0 (displacements, velocities) or rho0 (a start on the SSM)")
                 }
-                (Some(rho), false) => {
-                    if rho.len() != pairs || rho.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
-                        return Err(bad(format!(
-                            "rho0: give {pairs} non-negative amplitude(s), one per master pair"
-                        )));
-                    }
-                    if let Some(th) = &r.theta0 {
-                        if th.len() != pairs || th.iter().any(|t| !t.is_finite()) {
-                            return Err(bad(format!("theta0: give {pairs} finite phase(s)")));
-                        }
-                    }
-                }
-                (None, true) => {
-                    if r.theta0.is_some() {
-                        return Err(bad("theta0 goes with rho0, not with x0/v0".into()));
-                    }
-                    if let Some((name, _)) =
-                        r.given_start().into_iter().find(|(_, v)| !v.is_finite())
-                    {
-                        return Err(bad(format!("'{name}' must be a finite number")));
-                    }
-                }
+                (None, true) if r.theta0.is_some() => Some("theta0 goes with rho0, not with x0/v0"),
+                _ => None,
+            };
+            if let Some(m) = problem {
+                return Err(self.invalid(self.locate(&key), &key, m.into()));
             }
         }
         Ok(())

@@ -49,7 +49,10 @@ fn help_shows_the_engine_scene_format() {
 #[test]
 fn the_documented_format_is_a_scene_the_parser_accepts() {
     // every key shown uncommented exists and has the documented type
-    SceneFile::parse(Path::new("format.toml"), FORMAT.to_owned())
+    let scene = SceneFile::parse(Path::new("format.toml"), FORMAT.to_owned())
+        .unwrap_or_else(|e| panic!("the documented scene format is refused: {e}"));
+    // and every value shown meets its spec's checks
+    ssm_engine::plan::of_scene(&scene)
         .unwrap_or_else(|e| panic!("the documented scene format is refused: {e}"));
     // and a key that does not exist is refused, so the check above means something
     let bad = FORMAT.replace("order = 13 ", "orderr = 13");

@@ -204,3 +204,162 @@ fn keys_are_located_in_the_scene_text() {
     assert_eq!(line("validate.t_end"), 1);
     assert_eq!(line("simulate.run[9]"), line_of("[[simulate.run]]"));
 }
+
+/// A plan built in code meets the checks a scene's sections meet, each bad
+/// value a typed error at its key before anything runs (the scene's checks
+/// of these values are the specs' own, so the keys and messages agree).
+#[test]
+fn hand_built_plans_are_checked_like_scenes() {
+    use ssm_core::spec::{
+        InvarianceSpec, PodRunSpec, PodSpec, ReferenceSpec, SimulateSpec, SpectrumSpec,
+        TransientSpec,
+    };
+    let base = duffing_plan;
+    let transient = TransientSpec {
+        rho0: vec![0.1],
+        theta0: None,
+        t_end: 10.0,
+        samples: 11,
+        order: None,
+        rtol: 1e-9,
+    };
+    let pod_run = PodRunSpec {
+        epsilon: 0.0,
+        omega: 0.0,
+        t_end: 1.0,
+        start: Vec::new(),
+    };
+    let pod: PodSpec =
+        serde_json::from_str(r#"{"step": 0.01, "train": {"t_end": 1.0}}"#).expect("a pod spec");
+    let cases: Vec<(&str, Plan)> = vec![
+        ("ssm.tolerance", {
+            let mut p = base();
+            p.ssm.tolerance = 2.0;
+            p
+        }),
+        ("ssm.master_pairs", {
+            let mut p = base();
+            p.ssm.master_pairs = vec![1, 1];
+            p
+        }),
+        ("spectrum.modes", {
+            let mut p = base();
+            p.spectrum = SpectrumSpec {
+                modes: Some(0),
+                ..SpectrumSpec::default()
+            };
+            p
+        }),
+        ("outputs.backbone.rho_max", {
+            let mut p = base();
+            p.backbone = Some(BackboneSpec::up_to(f64::NAN));
+            p
+        }),
+        ("outputs.backbone.orders", {
+            let mut p = base();
+            p.backbone.as_mut().unwrap().orders = Some(vec![7]);
+            p
+        }),
+        ("outputs.invariance_error.radii", {
+            let mut p = base();
+            p.invariance = Some(InvarianceSpec {
+                radii: vec![],
+                orders: vec![3],
+                n_alpha: 4,
+                n_theta: 4,
+            });
+            p
+        }),
+        ("outputs.transient.rtol", {
+            let mut p = base();
+            p.transient = Some(TransientSpec {
+                rtol: 0.5,
+                ..transient.clone()
+            });
+            p
+        }),
+        ("outputs.transient.rho0", {
+            let mut p = base();
+            p.transient = Some(TransientSpec {
+                rho0: vec![0.1, 0.2],
+                ..transient.clone()
+            });
+            p
+        }),
+        ("forcing.points", {
+            let mut p = base();
+            p.frc.as_mut().unwrap().points = 1;
+            p
+        }),
+        ("reference.harmonics", {
+            let mut p = base();
+            p.reference = Some(ReferenceSpec {
+                harmonics: 0,
+                ..ReferenceSpec::new(vec![0.01])
+            });
+            p
+        }),
+        ("reference.omega_range", {
+            let mut p = base();
+            p.frc = None;
+            p.reference = Some(ReferenceSpec::new(vec![0.01]));
+            p
+        }),
+        ("simulate.noise", {
+            let mut p = base();
+            p.simulate = Some(SimulateSpec {
+                period: 0.1,
+                samples: 10,
+                outputs: None,
+                noise: 2.0,
+                seed: 1,
+                rtol: 1e-10,
+                atol: 1e-12,
+                hht_alpha: None,
+                runs: vec![ValidationStart::Ssm {
+                    rho0: vec![0.1],
+                    theta0: None,
+                }],
+            });
+            p
+        }),
+        ("pod.step", {
+            let mut p = base();
+            p.pod = Some(PodSpec {
+                step: -1.0,
+                ..pod.clone()
+            });
+            p
+        }),
+        ("pod.test[1]", {
+            let mut p = base();
+            p.pod = Some(PodSpec {
+                tests: vec![PodRunSpec {
+                    t_end: f64::INFINITY,
+                    ..pod_run.clone()
+                }],
+                ..pod.clone()
+            });
+            p
+        }),
+        ("analysis.damping.rho_max", {
+            let mut p = base();
+            p.analyses = vec![plan::PlannedAnalysis {
+                name: "damping".into(),
+                spec: serde_json::json!({"rho_max": -1.0}),
+            }];
+            p
+        }),
+    ];
+    for (key, plan) in cases {
+        match plan.validate() {
+            Err(e) => assert_eq!(e.key, key, "{e}"),
+            Ok(()) => panic!("{key}: the bad value was accepted"),
+        }
+        match execute(&plan, ssm_tests::system("duffing", "", "")) {
+            Err(JobError::Plan(e)) => assert_eq!(e.key, key, "{e}"),
+            other => panic!("{key}: expected a plan error, got {other:?}"),
+        }
+    }
+    base().validate().expect("the sound plan passes");
+}

@@ -45,7 +45,7 @@ pub type DampingSpec = BackboneSpec;
 /// Checks `spec` against `needs` (one master pair, orders the run can
 /// compute).
 pub fn check(spec: &DampingSpec, needs: &Needs) -> Result<(), SpecError> {
-    let fail = |key, problem: String| Err(SpecError { key, problem });
+    let fail = |key: &str, problem: String| Err(SpecError::new(key, problem));
     if needs.pairs != 1 {
         return fail(
             "analysis.damping",
