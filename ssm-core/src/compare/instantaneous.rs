@@ -99,7 +99,7 @@ fn peak(y: &[f64], a: usize, b: usize) -> f64 {
 }
 
 /// The zero-crossing backbone of `y` (sampling period `dt`).
-pub fn zero_crossing_backbone(y: &[f64], dt: f64) -> Vec<(f64, f64)> {
+pub(crate) fn zero_crossing_backbone(y: &[f64], dt: f64) -> Vec<(f64, f64)> {
     let up = upward_crossings(y, dt);
     up.windows(2)
         .filter(|c| c[1] > c[0])
@@ -112,7 +112,7 @@ pub fn zero_crossing_backbone(y: &[f64], dt: f64) -> Vec<(f64, f64)> {
 
 /// The Hilbert-transform backbone of `y` (sampling period `dt`): the
 /// `(amplitude, omega)` of each [`hilbert_cycles`] cycle.
-pub fn hilbert_backbone(y: &[f64], dt: f64) -> Vec<(f64, f64)> {
+pub(crate) fn hilbert_backbone(y: &[f64], dt: f64) -> Vec<(f64, f64)> {
     hilbert_cycles(y, dt)
         .iter()
         .map(|c| (c.amplitude, c.omega))

@@ -115,7 +115,7 @@ impl TransientValidation {
 
     /// Relative error over all outputs at sample `j` (the largest over outputs
     /// of `|full - rom|` divided by that output's largest `|full|`).
-    pub fn relative_error_at(&self, j: usize) -> f64 {
+    pub(crate) fn relative_error_at(&self, j: usize) -> f64 {
         (0..self.full.len())
             .map(|k| {
                 let scale = self.full[k].iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -131,7 +131,7 @@ impl TransientValidation {
 }
 
 /// States that carry the motion (displacements and velocities).
-pub fn physical_states(sys: &System) -> Vec<usize> {
+pub(crate) fn physical_states(sys: &System) -> Vec<usize> {
     sys.states
         .iter()
         .enumerate()
@@ -358,7 +358,7 @@ pub fn transient(
 /// The reduced coordinates of the SSM point nearest the consistent state `z`
 /// (physical states): the linear modal projection `p_j = u_j^* B z` refined by
 /// [`manifold_distance`]; returns `p0` and the distance relative to `|z|`.
-pub fn nearest_on_ssm(
+pub(crate) fn nearest_on_ssm(
     ssm: &SsmExpansion,
     sys: &System,
     order: usize,

@@ -155,7 +155,7 @@ pub struct RomRun {
 }
 
 /// Errors of `rom` against `full` (time-major outputs at the same `times`).
-pub fn error_figures(times: &[f64], full: &[Vec<f64>], rom: &[Vec<f64>]) -> ErrorFigures {
+pub(crate) fn error_figures(times: &[f64], full: &[Vec<f64>], rom: &[Vec<f64>]) -> ErrorFigures {
     let n_out = full.first().map_or(0, Vec::len);
     let peaks: Vec<f64> = (0..n_out)
         .map(|o| full.iter().map(|y| y[o].abs()).fold(0.0, f64::max))
@@ -194,7 +194,7 @@ pub fn error_figures(times: &[f64], full: &[Vec<f64>], rom: &[Vec<f64>]) -> Erro
 }
 
 /// The values of `outputs` at the state `z`.
-pub fn output_values(outputs: &[&OutputMap], z: &[f64]) -> Vec<f64> {
+pub(crate) fn output_values(outputs: &[&OutputMap], z: &[f64]) -> Vec<f64> {
     outputs
         .iter()
         .map(|o| o.weights.iter().map(|&(s, w)| w * z[s]).sum())

@@ -217,7 +217,10 @@ pub fn rows(sys: &System, inp: &ReportInputs<'_>) -> Result<Vec<ReportRow>, Repo
 }
 
 /// Full-system costs `(what, seconds)` of the references.
-pub fn full_costs(v: Option<&Validation>, reference: Option<&ReferenceFrc>) -> Vec<FullCost> {
+pub(crate) fn full_costs(
+    v: Option<&Validation>,
+    reference: Option<&ReferenceFrc>,
+) -> Vec<FullCost> {
     let mut out = Vec::new();
     if let Some(r) = reference {
         let orbits: usize = r.branches.iter().map(|b| b.orbits.len()).sum();

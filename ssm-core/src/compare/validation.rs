@@ -336,7 +336,7 @@ fn ssm_starts(
 /// The FRC amplitude of output `k` at `omega` on the curve `(order, epsilon)`:
 /// linear interpolation on every branch segment that crosses `omega`, the
 /// crossing nearest `near` (the reference from rest sits on one branch).
-pub fn frc_amplitude_at(
+pub(crate) fn frc_amplitude_at(
     rows: &[FrcRow],
     order: usize,
     epsilon: f64,

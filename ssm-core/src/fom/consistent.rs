@@ -69,7 +69,7 @@ pub fn given_start(p: &DaeProblem, values: &[(String, f64)]) -> Result<Vec<f64>,
 /// held at their given values where the constraints allow: they weigh `1e6`
 /// in the position metric, so the other coordinates take up the correction
 /// (a displaced slider moves its pendulums along).
-pub fn consistent_initial_keeping(
+pub(crate) fn consistent_initial_keeping(
     p: &DaeProblem,
     t0: f64,
     guess: &[f64],

@@ -63,7 +63,8 @@ pub mod radau;
 pub mod sample;
 pub mod steady;
 
-pub use consistent::{consistent_initial, consistent_initial_keeping, given_start, Consistent};
+pub(crate) use consistent::consistent_initial_keeping;
+pub use consistent::{consistent_initial, given_start, Consistent};
 pub use problem::DaeProblem;
 pub use radau::{Radau, RadauOptions, RadauStats};
 pub use sample::{add_noise, sample_run, Integrator, SampledRun, Simulation};

@@ -153,7 +153,7 @@ impl<'a> DaeProblem<'a> {
     }
 
     /// `B` in the pattern's order.
-    pub fn b_values(&self) -> &[f64] {
+    pub(crate) fn b_values(&self) -> &[f64] {
         &self.b_vals
     }
 
@@ -165,7 +165,7 @@ impl<'a> DaeProblem<'a> {
     }
 
     /// Name of state `i`.
-    pub fn state_name(&self, i: usize) -> &str {
+    pub(crate) fn state_name(&self, i: usize) -> &str {
         self.sys.states[i].name.as_str()
     }
 
@@ -191,7 +191,7 @@ impl<'a> DaeProblem<'a> {
     /// The forcing `Fext(z, Omega t)` alone (per unit amplitude): the
     /// derivative of [`DaeProblem::rhs`] in `eps`. Empty (zero) for a problem
     /// prepared with `epsilon = 0`.
-    pub fn forcing_rhs(&self, t: f64, z: &[f64], out: &mut [f64]) {
+    pub(crate) fn forcing_rhs(&self, t: f64, z: &[f64], out: &mut [f64]) {
         out.iter_mut().for_each(|o| *o = 0.0);
         for h in &self.forcing {
             let (s, c) = (h.multiple * self.omega * t).sin_cos();
@@ -201,7 +201,7 @@ impl<'a> DaeProblem<'a> {
     }
 
     /// The autonomous part `A z + F(z)` (no forcing).
-    pub fn autonomous_rhs(&self, z: &[f64], out: &mut [f64]) {
+    pub(crate) fn autonomous_rhs(&self, z: &[f64], out: &mut [f64]) {
         out.iter_mut().for_each(|o| *o = 0.0);
         let a = self.sys.a.as_ref();
         for (j, zj) in z.iter().enumerate() {
@@ -213,7 +213,7 @@ impl<'a> DaeProblem<'a> {
     }
 
     /// `J = A + DF(z) + eps DFext(z, Omega t)` in the pattern's order.
-    pub fn jacobian(&self, t: f64, z: &[f64], vals: &mut [f64]) {
+    pub(crate) fn jacobian(&self, t: f64, z: &[f64], vals: &mut [f64]) {
         vals.copy_from_slice(&self.a_vals);
         jac_into(&self.f, z, 1.0, vals);
         for h in &self.forcing {

@@ -294,11 +294,6 @@ impl<'p, 'a> Radau<'p, 'a> {
         &self.y
     }
 
-    /// Step size of the last accepted step.
-    pub fn last_step(&self) -> f64 {
-        self.h_old
-    }
-
     /// `f0 = f(t, z)`, the derivative at the step start used by the error estimate.
     fn eval(&mut self, t: f64, z: &[f64]) -> Result<(), SimError> {
         let mut out = std::mem::take(&mut self.f0);

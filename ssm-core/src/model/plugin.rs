@@ -105,7 +105,7 @@ enum RootModule {
 }
 
 /// The largest plugin library loaded: 1 GiB.
-pub const LIBRARY: Limit = Limit {
+pub(crate) const LIBRARY: Limit = Limit {
     bytes: 1 << 30,
     what: "a plugin library",
 };

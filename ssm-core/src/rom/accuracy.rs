@@ -41,7 +41,7 @@ use crate::C64;
 
 /// Phases of a master pair sampled per turn (resolves harmonics up to 16,
 /// beyond any order used in practice: order `O` has harmonics up to `O`).
-pub const PHASES: usize = 32;
+pub(crate) const PHASES: usize = 32;
 
 /// What a modal residual does to the motion of one master pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -261,7 +261,7 @@ pub fn transient_error(
 /// Fig. 22 it estimated 11 % where the full system measured 0.24 %); the
 /// order change overstates where the series converges fast (the pendulum
 /// slider at O(13): 5.3e-3 against 1.1e-4 measured).
-pub fn order_change(values: &[Vec<f64>], lower: &[Vec<f64>]) -> f64 {
+pub(crate) fn order_change(values: &[Vec<f64>], lower: &[Vec<f64>]) -> f64 {
     let outputs = values.first().map_or(0, Vec::len);
     (0..outputs)
         .map(|k| relative_gap(values.iter().zip(lower).map(|(a, b)| (a[k], b[k]))))
@@ -271,7 +271,7 @@ pub fn order_change(values: &[Vec<f64>], lower: &[Vec<f64>]) -> f64 {
 /// The largest `|a - b|` over the samples `(a, b)` of one output, relative
 /// to the largest `|a|` (absolute where `a` is zero throughout): the metric
 /// of the full-system transient comparison and of [`order_change`].
-pub fn relative_gap(samples: impl Iterator<Item = (f64, f64)>) -> f64 {
+pub(crate) fn relative_gap(samples: impl Iterator<Item = (f64, f64)>) -> f64 {
     let (scale, gap) = samples.fold((0.0f64, 0.0f64), |(s, g), (a, b)| {
         (s.max(a.abs()), g.max((a - b).abs()))
     });

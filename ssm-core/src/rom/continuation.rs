@@ -352,7 +352,11 @@ impl RotatingFrame {
     /// held (the null vector of `other`'s `[F_y F_Omega]`, regular at
     /// folds). `None` when the corrector does not converge: this frame has
     /// no branch near `point`.
-    pub fn nearest_point(&self, other: &RotatingFrame, point: &BranchPoint) -> Option<BranchPoint> {
+    pub(crate) fn nearest_point(
+        &self,
+        other: &RotatingFrame,
+        point: &BranchPoint,
+    ) -> Option<BranchPoint> {
         let n = point.q.len() * 2;
         let mut u: Vec<f64> = point.q.iter().flat_map(|q| [q.re, q.im]).collect();
         let j = other.jacobian(&u, point.omega);

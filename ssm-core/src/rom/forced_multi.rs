@@ -198,7 +198,7 @@ fn order_change(frame: &RotatingFrame, lower: &RotatingFrame, a: f64, row: &FrcR
 }
 
 /// FRCs of several pairs for every `(order, epsilon)` of `sec`.
-pub fn forced_response_multi(
+pub(crate) fn forced_response_multi(
     ssm: &SsmExpansion,
     sys: &System,
     masters: &[MasterMode],

@@ -72,7 +72,7 @@ struct Context<'a> {
 /// FRCs of one master pair for every `(order, epsilon)` of `sec`, each with
 /// the non-autonomous order of the scene or, without one, the lowest that
 /// meets `tolerance`.
-pub fn forced_response_one_pair(
+pub(crate) fn forced_response_one_pair(
     ssm: &SsmExpansion,
     sys: &System,
     masters: &[MasterMode],

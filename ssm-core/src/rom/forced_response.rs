@@ -22,7 +22,7 @@ use crate::ssm::{Dynamics, SsmExpansion};
 /// External resonance ratios chosen from the forcing frequency (eq. 16): the
 /// pair whose frequency is nearest `omega` gets `r = 1`; the others the
 /// nearest fraction `k/d`, `d <= 3`, of their frequency ratio to it.
-pub fn auto_ratios(masters: &[MasterMode], omega: f64) -> Vec<f64> {
+pub(crate) fn auto_ratios(masters: &[MasterMode], omega: f64) -> Vec<f64> {
     let main = masters
         .iter()
         .min_by(|a, b| {

@@ -187,7 +187,7 @@ impl OnePair {
 
     /// `eps^2 |s|^2 / rho^2 - alpha^2`: the squared distance of `Omega` from
     /// the backbone; a fixed point exists where it is non-negative.
-    pub fn discriminant(&self, rho: f64) -> f64 {
+    pub(crate) fn discriminant(&self, rho: f64) -> f64 {
         let a = self.g(rho * rho).0.re;
         (self.force / rho).powi(2) - a * a
     }

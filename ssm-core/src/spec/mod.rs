@@ -273,7 +273,7 @@ impl FrcSpec {
     }
 
     /// The same curves at the single order `order`.
-    pub fn at_order(&self, order: usize) -> Self {
+    pub(crate) fn at_order(&self, order: usize) -> Self {
         Self {
             orders: Some(vec![order]),
             ..self.clone()

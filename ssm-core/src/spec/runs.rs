@@ -35,7 +35,9 @@ pub struct SsmSpec {
 }
 
 impl SsmSpec {
-    /// The highest expansion order the engine chooses by itself.
+    /// The highest expansion order the engine chooses by itself: beyond it,
+    /// on a model whose answers still miss the accuracy target, the
+    /// expansion is usually outside its convergence radius.
     pub const AUTO_MAX_ORDER: usize = 15;
     /// `resonance_tol` when none is asked for.
     pub const DEFAULT_RESONANCE_TOL: f64 = 0.02;

@@ -40,7 +40,7 @@ use super::SpectrumError;
 use crate::C64;
 
 /// Relative singular-value threshold for the numerical rank of `T^k`.
-pub const RANK_TOL: f64 = 1e-12;
+pub(crate) const RANK_TOL: f64 = 1e-12;
 
 /// Largest index of a pencil this path accepts.
 const MAX_INDEX: usize = 6;
@@ -158,7 +158,7 @@ fn eigenvalues_on(t: &Mat<f64>, q: &Mat<f64>, shift: f64) -> Result<Vec<C64>, Sp
 /// QR basis whether the structure was known or just found, so that they do
 /// not depend on which earlier pencil set it (a branch resumed from a
 /// checkpoint computes the same numbers as the uninterrupted one).
-pub fn finite_eigenvalues_with(
+pub(crate) fn finite_eigenvalues_with(
     a: SparseColMatRef<'_, usize, f64>,
     b: SparseColMatRef<'_, usize, f64>,
     shift: f64,

@@ -57,7 +57,7 @@ pub enum KrylovError {
 /// `apply` (`y <- T x`) on `n`-vectors, from the start vector `v0`
 /// (conjugate pairs kept whole: one more than `wanted` when a pair would be
 /// cut). Each meets `||T x - theta x|| <= tol |theta|` for its Ritz vector.
-pub fn largest_eigenvalues(
+pub(crate) fn largest_eigenvalues(
     apply: &dyn Fn(ColRef<'_, f64>, MatMut<'_, f64>),
     n: usize,
     v0: ColRef<'_, f64>,

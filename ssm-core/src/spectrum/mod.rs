@@ -241,14 +241,14 @@ fn diagnose_singular_shift(
 const REAL_TOL: f64 = 1e-10;
 
 /// True when `l` is (numerically) real.
-pub fn is_real(l: C64) -> bool {
+pub(crate) fn is_real(l: C64) -> bool {
     l.im.abs() <= REAL_TOL * l.norm().max(f64::MIN_POSITIVE)
 }
 
 /// Sorts by real part descending; a conjugate pair is kept together with the
 /// positive imaginary part first, pairs with equal real parts by increasing
 /// frequency. Conjugate partners are made exact conjugates of each other.
-pub fn sort_spectrum(ev: &mut Vec<C64>) {
+pub(crate) fn sort_spectrum(ev: &mut Vec<C64>) {
     // keep one representative per pair (Im >= 0), then rebuild the partners
     let mut reps: Vec<C64> = Vec::with_capacity(ev.len());
     let mut negatives: Vec<C64> = Vec::new();

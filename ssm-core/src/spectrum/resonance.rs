@@ -64,7 +64,7 @@ pub struct ResonanceReport {
 
 /// Calls `f` with every multi-index of length `len` and total degree in `lo..=hi`,
 /// by increasing degree.
-pub fn for_each_multi_index(len: usize, lo: usize, hi: usize, mut f: impl FnMut(&[u32])) {
+pub(crate) fn for_each_multi_index(len: usize, lo: usize, hi: usize, mut f: impl FnMut(&[u32])) {
     fn rec(idx: &mut Vec<u32>, pos: usize, left: u32, f: &mut dyn FnMut(&[u32])) {
         if pos + 1 == idx.len() {
             idx[pos] = left;

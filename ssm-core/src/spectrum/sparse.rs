@@ -72,7 +72,7 @@ impl LinOp<f64> for ShiftInvert<'_> {
 }
 
 /// `A + s B` for real `s` (same sparsity as the union of both patterns).
-pub fn combine(
+pub(crate) fn combine(
     a: SparseColMatRef<'_, usize, f64>,
     b: SparseColMatRef<'_, usize, f64>,
     s: f64,
@@ -91,7 +91,7 @@ pub fn combine(
 
 /// The `modes` finite eigenvalues of `(A, B)` nearest `shift`, unsorted
 /// (conjugate partners included).
-pub fn eigenvalues_near_shift(
+pub(crate) fn eigenvalues_near_shift(
     a: SparseColMatRef<'_, usize, f64>,
     b: SparseColMatRef<'_, usize, f64>,
     shift: f64,

@@ -172,7 +172,12 @@ pub fn amplitude(ssm: &SsmExpansion, series: &[C64], rho: f64, order: usize) -> 
 }
 
 /// Sample points of eq. (39)-(40) generalized to `m` pairs, radius `radius`.
-pub fn sphere_points(m: usize, radius: f64, n_alpha: usize, n_theta: usize) -> Vec<Vec<C64>> {
+pub(crate) fn sphere_points(
+    m: usize,
+    radius: f64,
+    n_alpha: usize,
+    n_theta: usize,
+) -> Vec<Vec<C64>> {
     let n_alpha = n_alpha.max(2);
     let alpha: Vec<f64> = (0..n_alpha)
         .map(|i| i as f64 * PI / (2.0 * (n_alpha - 1) as f64))

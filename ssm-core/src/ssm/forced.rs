@@ -125,7 +125,7 @@ impl OutputCoefficients {
 
     /// Output `o` of `X0` where harmonic `h` has turned to `turns[h] = e^{i
     /// kappa_h phi}` (for many outputs or points at the same phases).
-    pub fn value_turned(&self, o: usize, turns: &[C64]) -> f64 {
+    pub(crate) fn value_turned(&self, o: usize, turns: &[C64]) -> f64 {
         turns
             .iter()
             .enumerate()
@@ -139,7 +139,7 @@ impl OutputCoefficients {
 /// the 1 % accuracy figures of a forced response, and above the rounding
 /// error of the bordered solves of large stiff models (measured 7e-8 for the
 /// 14,402-state divider, 2e-11 for its 146 states).
-pub const OUTPUT_TABLE_TOLERANCE: f64 = 1e-6;
+pub(crate) const OUTPUT_TABLE_TOLERANCE: f64 = 1e-6;
 
 /// Largest relative error estimate of [`ForcedSsm::tabulate_outputs`] at
 /// which the table is still used (with a warning above
@@ -147,11 +147,11 @@ pub const OUTPUT_TABLE_TOLERANCE: f64 = 1e-6;
 /// the solves themselves (ill-conditioned `Lambda B - A`, e.g. a very fine
 /// mesh), and solving every point would be no more accurate. Beyond it the
 /// table did not converge (a non-master eigenvalue near `i Omega`).
-pub const OUTPUT_TABLE_ACCEPT: f64 = 1e-2;
+pub(crate) const OUTPUT_TABLE_ACCEPT: f64 = 1e-2;
 
 /// The warning for a table of [`ForcedSsm::tabulate_outputs`] over `range`
 /// with error estimate `error`, if any.
-pub fn table_warning(error: f64, range: (f64, f64)) -> Option<String> {
+pub(crate) fn table_warning(error: f64, range: (f64, f64)) -> Option<String> {
     if error <= OUTPUT_TABLE_TOLERANCE {
         None
     } else if error <= OUTPUT_TABLE_ACCEPT {
@@ -333,7 +333,7 @@ impl<'a> ForcedSsm<'a> {
     ///
     /// # Errors
     /// A failed solve at a node.
-    pub fn tabulate_outputs(
+    pub(crate) fn tabulate_outputs(
         &mut self,
         a: f64,
         b: f64,
@@ -361,7 +361,7 @@ impl<'a> ForcedSsm<'a> {
     ///
     /// # Errors
     /// A failed solve.
-    pub fn outputs_at(&mut self, omega: f64) -> Result<OutputCoefficients, ForcedError> {
+    pub(crate) fn outputs_at(&mut self, omega: f64) -> Result<OutputCoefficients, ForcedError> {
         let inside = self.table.as_ref().filter(|t| t.contains(omega));
         let c = match inside {
             Some(t) => t.at(omega),

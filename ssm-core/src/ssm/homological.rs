@@ -179,7 +179,7 @@ impl<'a> Homological<'a> {
 
     /// Forgets cached numeric factorizations (called between orders, where
     /// values of `Lambda` no longer repeat).
-    pub fn clear_numeric(&mut self) {
+    pub(crate) fn clear_numeric(&mut self) {
         self.numeric.clear();
     }
 

@@ -199,7 +199,7 @@ fn lambda_of(dynamics: Dynamics, lambda: &[C64], e: &[u16]) -> C64 {
 }
 
 /// Inner resonance test of the normal-form style (see the module docs).
-pub fn inner_resonant(dynamics: Dynamics, big_lambda: C64, lambda_i: C64, tol: f64) -> bool {
+pub(crate) fn inner_resonant(dynamics: Dynamics, big_lambda: C64, lambda_i: C64, tol: f64) -> bool {
     match dynamics {
         Dynamics::Flow => (big_lambda.im - lambda_i.im).abs() <= tol * lambda_i.im.abs(),
         Dynamics::Map { .. } => {

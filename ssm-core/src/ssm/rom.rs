@@ -104,7 +104,7 @@ pub fn integrate(
 ///
 /// # Errors
 /// [`RomError`] when the trajectory diverges or the step size collapses.
-pub fn integrate_forced(
+pub(crate) fn integrate_forced(
     ssm: &SsmExpansion,
     order: usize,
     p0: &[C64],

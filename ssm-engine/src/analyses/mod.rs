@@ -158,7 +158,7 @@ pub trait Entry: Sync {
 
 /// The schema of `analyses` of `summary.json`: an object with one optional
 /// key per analysis of [`REGISTRY`], holding its results.
-pub fn outputs_schema(generator: &mut SchemaGenerator) -> Schema {
+pub(crate) fn outputs_schema(generator: &mut SchemaGenerator) -> Schema {
     let properties: serde_json::Map<String, serde_json::Value> = REGISTRY
         .iter()
         .map(|e| (e.name().to_owned(), e.output_schema(generator).to_value()))

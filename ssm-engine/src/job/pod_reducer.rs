@@ -18,7 +18,7 @@ use ssm_core::reduce::{lift_outputs, Reduction};
 use ssm_kernel::number::short;
 
 /// The reducers the engine offers itself.
-pub const ENGINE_REDUCERS: [&str; 1] = ["pod"];
+pub(crate) const ENGINE_REDUCERS: [&str; 1] = ["pod"];
 
 /// `[reduce.params]` of the engine's `pod`: the training run and the
 /// reducer's settings.
@@ -117,7 +117,7 @@ impl PodParams {
 
 /// The model the engine's reducer `red.reducer` makes from `full` (plugin
 /// name and model of `[model]`).
-pub fn engine_reduce(
+pub(crate) fn engine_reduce(
     scene: &SceneFile,
     red: &ReduceSection,
     full: Option<(String, ssm_api::Model)>,

@@ -12,7 +12,7 @@ use ssm_core::reduce::{lift_outputs, read_signals, Reduction};
 /// The model the reducer of `[reduce]` makes from the full model `full`
 /// (plugin name and model of `[model]`, if any) and/or the `[data]` signals,
 /// validated into a [`System`].
-pub fn reduce_scene(
+pub(crate) fn reduce_scene(
     scene: &SceneFile,
     red: &ReduceSection,
     full: Option<(String, ssm_api::Model)>,

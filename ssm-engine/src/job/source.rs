@@ -136,7 +136,7 @@ fn model_params_toml(
 }
 
 /// The TOML text of a scene's parameter table, as passed to a plugin.
-pub fn params_toml(
+pub(crate) fn params_toml(
     scene: &SceneFile,
     table: &Spanned<toml::Table>,
     key: &str,
@@ -152,7 +152,7 @@ pub fn params_toml(
 
 /// A plugin's [`ssm_api::ErrorKind::InvalidParameter`] becomes a scene error
 /// at the parameter's line in the `[table]` it came from.
-pub fn plugin_error(scene: &SceneFile, e: PluginLoadError, table: &str) -> SourceError {
+pub(crate) fn plugin_error(scene: &SceneFile, e: PluginLoadError, table: &str) -> SourceError {
     match e {
         PluginLoadError::Plugin { plugin, error }
             if error.kind == ssm_api::ErrorKind::InvalidParameter =>

@@ -35,7 +35,7 @@ use ssm_kernel::continuation::{crossed, Event, Ledger, Point, Step, Stop, Trace}
 const FORMAT: u32 = 1;
 
 /// The largest checkpoint read (it is read whole): 1 GiB.
-pub const LIMIT: Limit = Limit {
+pub(crate) const LIMIT: Limit = Limit {
     bytes: 1 << 30,
     what: "a reference checkpoint",
 };

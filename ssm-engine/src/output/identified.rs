@@ -11,7 +11,7 @@ use ssm_core::model::system::System;
 use ssm_core::reduce::Reduction;
 
 /// `identified.json` of the model `sys` made by `r`.
-pub fn identified_json(r: &Reduction, sys: &System) -> String {
+pub(crate) fn identified_json(r: &Reduction, sys: &System) -> String {
     let n = sys.n_states();
     let mut a = vec![vec![0.0; n]; n];
     for (col, row, v) in sys.a.triplet_iter().map(|t| (t.col, t.row, *t.val)) {

@@ -30,7 +30,7 @@ use ssm_core::model::system::System;
 
 /// `spectrum.csv`: one finite eigenvalue a row with its frequency, damping
 /// ratio and master-pair membership (`(pair, index)` of each master).
-pub fn spectrum_csv(modal: &[ModalFigures], master_indices: &[(usize, usize)]) -> String {
+pub(crate) fn spectrum_csv(modal: &[ModalFigures], master_indices: &[(usize, usize)]) -> String {
     let mut s = String::from("index,re,im,abs,frequency,damping_ratio,master_pair\n");
     for (k, m) in modal.iter().enumerate() {
         let master = master_indices
@@ -69,7 +69,7 @@ pub struct Products<'a> {
 
 /// Every file of a run: `summary.json`, `spectrum.csv`, and the files of each
 /// answer present.
-pub fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
+pub(crate) fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
     let s = &p.summary;
     let mut out = OutputSet::default();
     if let Some(b) = p.backbone {
@@ -161,7 +161,7 @@ fn pod_files(out: &mut OutputSet, model: &str, study: &PodStudy) -> Result<(), P
 }
 
 /// Every file of a `[pod]` scene that asks for no SSM answer.
-pub fn pod_only_files(
+pub(crate) fn pod_only_files(
     system: &System,
     plugins: &[PluginOrigin],
     study: Option<&PodStudy>,

@@ -109,7 +109,7 @@ pub fn line_plot(
 
 /// Draws `panels` one above the other into an SVG document 800 wide and
 /// `height` per panel high, each with its axis names and legend.
-pub fn stacked_plot(panels: &[Panel<'_>], height: u32) -> Result<String, PlotError> {
+pub(crate) fn stacked_plot(panels: &[Panel<'_>], height: u32) -> Result<String, PlotError> {
     let fail = |e: &dyn std::fmt::Display| PlotError {
         title: panels.first().map_or("", |p| p.title).to_owned(),
         message: e.to_string(),

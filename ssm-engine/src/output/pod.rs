@@ -64,7 +64,7 @@ fn sample(v: f64) -> String {
 }
 
 /// `pod_comparison.csv`: one row per reduced model and load case.
-pub fn comparison_csv(study: &PodStudy) -> String {
+pub(crate) fn comparison_csv(study: &PodStudy) -> String {
     let mut s = String::from(
         "id,model,kind,case,trained,epsilon,omega,t_end,dimension,states,offline_s,online_s,full_s,speedup,max_error,late_error,reaction_gap,reaction_gap_subspace,start_distance,failure\n",
     );
@@ -110,7 +110,7 @@ pub fn comparison_csv(study: &PodStudy) -> String {
 /// `pod_case_<k>.csv` (1-based, the training run is 1): `t`, each output
 /// of the full model (`<output>@full`) and of every reduced model
 /// (`<output>@<id>`), then every model's error `e(t)` (`error@<id>`).
-pub fn case_csv(study: &PodStudy, case: &CaseRun) -> String {
+pub(crate) fn case_csv(study: &PodStudy, case: &CaseRun) -> String {
     let infos = roms(study);
     let mut head = vec!["t".to_owned()];
     for o in &study.outputs {
@@ -147,7 +147,7 @@ pub fn case_csv(study: &PodStudy, case: &CaseRun) -> String {
 
 /// `pod_povs.csv`: every proper orthogonal value per coordinate kind, with
 /// its value relative to the kind's largest and the POD models keeping it.
-pub fn povs_csv(study: &PodStudy) -> String {
+pub(crate) fn povs_csv(study: &PodStudy) -> String {
     let mut s = String::from("kind,index,pov,relative,kept_by\n");
     let Some(first) = study.pod.first() else {
         return s;
@@ -177,7 +177,7 @@ pub fn povs_csv(study: &PodStudy) -> String {
 
 /// `pod_povs.svg`: the POV decay of each coordinate kind (relative to its
 /// largest), the basis of the truncation.
-pub fn povs_svg(study: &PodStudy) -> Result<String, PlotError> {
+pub(crate) fn povs_svg(study: &PodStudy) -> Result<String, PlotError> {
     let curves: Vec<Curve> = study
         .pod
         .first()
@@ -213,7 +213,7 @@ pub fn povs_svg(study: &PodStudy) -> Result<String, PlotError> {
 
 /// `pod_constraints.csv`: the singular values of the stacked projected
 /// constraint Jacobian of each POD model, and which combinations it keeps.
-pub fn constraints_csv(study: &PodStudy) -> String {
+pub(crate) fn constraints_csv(study: &PodStudy) -> String {
     let mut s = String::from("id,index,singular_value,relative,kept\n");
     for (k, r) in study.pod.iter().enumerate() {
         let c = &r.reduction.constraints;
@@ -246,7 +246,7 @@ fn rel(v: Option<f64>) -> String {
 }
 
 /// `pod_report.md`: the comparison a person reads.
-pub fn report_md(model: &str, study: &PodStudy) -> String {
+pub(crate) fn report_md(model: &str, study: &PodStudy) -> String {
     let infos = roms(study);
     let mut s = format!(
         "# POD and SSM reduced models against the full model: {model} ({} states)\n\n\

@@ -16,13 +16,13 @@ use ssm_kernel::continuation::Stop;
 /// `reference_frc.csv`: `omega,epsilon,stable,branch,period_multiple,
 /// <out>_linf...,max_multiplier,tail`, one row per orbit (`stable` and
 /// `max_multiplier` empty where the multipliers were not computed).
-pub fn reference_csv(r: &ReferenceFrc) -> String {
+pub(crate) fn reference_csv(r: &ReferenceFrc) -> String {
     orbits_csv(&r.outputs, &r.branches)
 }
 
 /// `reference_amplitude.csv`: the amplitude responses, with the columns of
 /// [`reference_csv`] (`branch` numbers the frequencies of `amplitude_at`).
-pub fn amplitude_csv(r: &ReferenceFrc) -> String {
+pub(crate) fn amplitude_csv(r: &ReferenceFrc) -> String {
     orbits_csv(&r.outputs, &r.amplitude)
 }
 
@@ -69,7 +69,7 @@ pub fn orbit_row(o: &ReferenceOrbit) -> String {
 /// The reference curves to draw: per branch one segment per run of equal
 /// stability (dashed when unstable), and its bifurcations as markers; the
 /// first output's amplitude (nothing when the scene names no output).
-pub fn reference_curves(r: &ReferenceFrc) -> Vec<Curve> {
+pub(crate) fn reference_curves(r: &ReferenceFrc) -> Vec<Curve> {
     let label = |o: &ReferenceOrbit| {
         format!(
             "full system (harmonic balance, H = {}), eps = {}",
@@ -129,7 +129,7 @@ fn curves(
 }
 
 /// `reference_frc.svg`: the reference alone (a scene without `[forcing]`).
-pub fn reference_svg(r: &ReferenceFrc) -> Result<String, PlotError> {
+pub(crate) fn reference_svg(r: &ReferenceFrc) -> Result<String, PlotError> {
     let y_label = r
         .outputs
         .first()
@@ -144,7 +144,7 @@ pub fn reference_svg(r: &ReferenceFrc) -> Result<String, PlotError> {
 }
 
 /// `reference_amplitude.svg`: the amplitude responses over `eps`.
-pub fn amplitude_svg(r: &ReferenceFrc) -> Result<String, PlotError> {
+pub(crate) fn amplitude_svg(r: &ReferenceFrc) -> Result<String, PlotError> {
     let y_label = r
         .outputs
         .first()
@@ -176,7 +176,7 @@ fn stop_text(s: &Stop) -> String {
 }
 
 /// What `"reference.method"` of `summary.json` says.
-pub const REFERENCE_METHOD: &str = "harmonic balance (AFT) continued in Omega (and in eps at the frequencies of amplitude_at) by local parametrization; Floquet multipliers by Hill's method up to 1500 Fourier coefficients, above by the monodromy map (Radau IIA on the variational DAE: the whole matrix up to 200 states, the multipliers above 1e-3 by subspace iteration above)";
+pub(crate) const REFERENCE_METHOD: &str = "harmonic balance (AFT) continued in Omega (and in eps at the frequencies of amplitude_at) by local parametrization; Floquet multipliers by Hill's method up to 1500 Fourier coefficients, above by the monodromy map (Radau IIA on the variational DAE: the whole matrix up to 200 states, the multipliers above 1e-3 by subspace iteration above)";
 
 /// `"reference"` of `summary.json`: the full-system forced responses of
 /// `[reference]`; per branch its parameter's fixed value, the orbit count,

@@ -61,7 +61,7 @@ fn fmt_e(v: Option<f64>) -> String {
 }
 
 /// `report.md`: a table a person reads.
-pub fn markdown(model: &str, n_states: usize, report: &Report) -> String {
+pub(crate) fn markdown(model: &str, n_states: usize, report: &Report) -> String {
     let mut s = format!(
         "# Speed against error: {} ({} states)\n\n\
          Times are wall-clock on this machine; errors are relative to the largest \

@@ -147,7 +147,7 @@ impl InvarianceSummary {
 
 /// `invariance.csv`: `order,radius,error`, one row per order and radius
 /// (eq. 41; Fig. 21 of Li, Jain & Haller 2023).
-pub fn invariance_csv(rows: &[InvarianceEntry]) -> String {
+pub(crate) fn invariance_csv(rows: &[InvarianceEntry]) -> String {
     let mut csv = String::from("order,radius,error\n");
     for r in rows {
         csv.push_str(&format!("{},{:.10e},{:.10e}\n", r.order, r.radius, r.error));
@@ -157,7 +157,7 @@ pub fn invariance_csv(rows: &[InvarianceEntry]) -> String {
 
 /// `invariance.svg`: the invariance error against the radius, one curve per
 /// order, logarithmic axes.
-pub fn invariance_svg(rows: &[InvarianceEntry]) -> Result<String, PlotError> {
+pub(crate) fn invariance_svg(rows: &[InvarianceEntry]) -> Result<String, PlotError> {
     let mut orders: Vec<usize> = rows.iter().map(|r| r.order).collect();
     orders.sort_unstable();
     orders.dedup();
@@ -184,7 +184,7 @@ pub fn invariance_svg(rows: &[InvarianceEntry]) -> Result<String, PlotError> {
 
 /// `backbone.csv`: `order,rho,omega,<output>...,error_estimate` (the last
 /// empty where there is no estimate).
-pub fn backbone_csv(curves: &[BackboneCurve], outputs: &[String]) -> String {
+pub(crate) fn backbone_csv(curves: &[BackboneCurve], outputs: &[String]) -> String {
     let mut csv = String::from("order,rho,omega");
     for o in outputs {
         csv.push(',');
@@ -203,7 +203,7 @@ pub fn backbone_csv(curves: &[BackboneCurve], outputs: &[String]) -> String {
 /// The end of a curve point's CSV row: its output amplitudes (`,%.10e`
 /// each), then `,` and its error estimate (`%.3e`; empty when there is none
 /// or it is not finite), then the newline.
-pub fn push_row_end(csv: &mut String, amplitudes: &[f64], estimate: Option<f64>) {
+pub(crate) fn push_row_end(csv: &mut String, amplitudes: &[f64], estimate: Option<f64>) {
     for a in amplitudes {
         csv.push_str(&format!(",{a:.10e}"));
     }
@@ -215,7 +215,7 @@ pub fn push_row_end(csv: &mut String, amplitudes: &[f64], estimate: Option<f64>)
 }
 
 /// A curve's legend: its order, estimate and, above the target, a warning.
-pub fn estimate_label(order: usize, estimate: Option<f64>, untrusted: bool) -> String {
+pub(crate) fn estimate_label(order: usize, estimate: Option<f64>, untrusted: bool) -> String {
     let mut label = format!("O({order})");
     if let Some(e) = estimate {
         label.push_str(&format!(", estimated error {}", percent(e)));
@@ -228,7 +228,7 @@ pub fn estimate_label(order: usize, estimate: Option<f64>, untrusted: bool) -> S
 
 /// `data_backbone.csv`: `method,source,amplitude,omega`, the backbones read
 /// off the `[data]` signals.
-pub fn data_backbone_csv(data: &[DataBackbone]) -> String {
+pub(crate) fn data_backbone_csv(data: &[DataBackbone]) -> String {
     let mut csv = String::from("method,source,amplitude,omega\n");
     for d in data {
         for (a, w) in &d.points {
@@ -245,7 +245,7 @@ pub fn data_backbone_csv(data: &[DataBackbone]) -> String {
 /// `backbone.svg`: omega against the amplitude of the first output (or
 /// against `rho` without outputs), one curve per order, and the backbones
 /// read off the `[data]` signals (zero crossings as markers, Hilbert dashed).
-pub fn backbone_svg(
+pub(crate) fn backbone_svg(
     curves: &[BackboneCurve],
     data: &[DataBackbone],
     outputs: &[String],
@@ -291,7 +291,7 @@ pub fn backbone_svg(
 }
 
 /// `rom_trajectory.csv`: `t,<output>...,rho_1,theta_1,...`.
-pub fn transient_csv(tr: &LiftedTransient, outputs: &[String]) -> String {
+pub(crate) fn transient_csv(tr: &LiftedTransient, outputs: &[String]) -> String {
     let m = tr.polar.first().map_or(0, Vec::len);
     let mut csv = String::from("t");
     for o in outputs {

@@ -501,13 +501,13 @@ impl RunSummary {
 }
 
 /// `summary.json`, pretty-printed.
-pub fn summary_json(s: &Summary<'_>) -> String {
+pub(crate) fn summary_json(s: &Summary<'_>) -> String {
     to_json(&SummaryFile::Run(Box::new(RunSummary::new(s))))
 }
 
 /// `summary.json` of a `[pod]` scene that asks for no SSM answer: the
 /// model, the plugins, the study, the warnings and the times.
-pub fn pod_only_summary_json(
+pub(crate) fn pod_only_summary_json(
     system: &System,
     plugins_ran: &[PluginOrigin],
     study: Option<&PodStudy>,

@@ -13,7 +13,7 @@ use ssm_core::compare::validation::{
 };
 
 /// `validation.csv`: `t,<out>_full,<out>_rom,...,rel_error,manifold_distance,algebraic_residual`.
-pub fn transient_csv(c: &TransientComparison) -> String {
+pub(crate) fn transient_csv(c: &TransientComparison) -> String {
     let tv = &c.result;
     let mut csv = String::from("t");
     for o in &c.outputs {
@@ -34,7 +34,7 @@ pub fn transient_csv(c: &TransientComparison) -> String {
 }
 
 /// `validation.svg`: the compared outputs, full (dashed) and reduced.
-pub fn transient_svg(c: &TransientComparison) -> Result<String, PlotError> {
+pub(crate) fn transient_svg(c: &TransientComparison) -> Result<String, PlotError> {
     let tv = &c.result;
     let mut curves = Vec::new();
     for (k, o) in c.outputs.iter().take(c.n_compared).enumerate() {
@@ -63,7 +63,7 @@ pub fn transient_svg(c: &TransientComparison) -> Result<String, PlotError> {
 }
 
 /// `steady_state.csv`: `epsilon,omega,<out>_linf...,periods,period_multiple,change,steps`.
-pub fn steady_csv(r: &SteadyReference) -> String {
+pub(crate) fn steady_csv(r: &SteadyReference) -> String {
     let mut csv = String::from("epsilon,omega");
     for o in &r.outputs {
         csv.push_str(&format!(",{o}_linf"));

@@ -92,7 +92,7 @@ fn ssm_roms(plan: &Plan, sys: &System, sec: &PodSpec) -> Result<Vec<SsmRom>, Job
 /// Runs the POD study `sec` of `plan` on the full plugin model
 /// `full_model` (validated into `sys`; the outputs and the runs' states
 /// checked by [`Plan::check`]).
-pub fn pod_stage(
+pub(crate) fn pod_stage(
     plan: &Plan,
     sec: &PodSpec,
     full_model: &ssm_api::Model,

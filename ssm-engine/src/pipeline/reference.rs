@@ -25,7 +25,7 @@ use ssm_kernel::continuation::{NoLedger, Stop};
 /// Runs the reference `sec` of `plan`, with seeds from the reduced model's
 /// forced response `reduced` where it starts from the SSM; returns the
 /// curves and the warnings.
-pub fn reference_stage(
+pub(crate) fn reference_stage(
     plan: &Plan,
     sec: &ReferenceSpec,
     system: &System,
@@ -259,7 +259,7 @@ fn branch_warnings(
 /// forcing amplitude: per output both have, the largest amplitude error over
 /// the reference's orbits (stable and unstable) relative to the reference's
 /// largest amplitude.
-pub fn reference_errors(f: &ForcedResponse, r: &ReferenceFrc) -> Vec<MeasuredError> {
+pub(crate) fn reference_errors(f: &ForcedResponse, r: &ReferenceFrc) -> Vec<MeasuredError> {
     let mut list = Vec::new();
     for c in &f.curves {
         let Some(points) = reference_points(r, c.epsilon) else {

@@ -35,7 +35,7 @@ pub(super) fn check(plan: &Plan, system: &System) -> Result<(), PlanError> {
 }
 
 /// The outputs `names` (the key `key`), each checked to exist.
-pub fn named_outputs<'a>(
+pub(crate) fn named_outputs<'a>(
     system: &'a System,
     names: &[String],
     key: &str,

@@ -48,7 +48,7 @@ impl PlanError {
 
     /// The same problem as a scene error at the line of `at` in `scene`
     /// (the value's line, or the line of the nearest table that holds it).
-    pub fn in_scene(&self, scene: &SceneFile) -> SceneError {
+    pub(crate) fn in_scene(&self, scene: &SceneFile) -> SceneError {
         let span: Range<usize> = scene.locate(&self.at);
         scene.invalid(span, &self.key, self.problem.clone())
     }

@@ -16,8 +16,7 @@ mod convert;
 mod error;
 
 pub use analyses::{needs, PlannedAnalysis};
-pub use checks::named_outputs;
-pub(crate) use checks::pod_outputs;
+pub(crate) use checks::{named_outputs, pod_outputs};
 pub use error::PlanError;
 
 use serde::{Deserialize, Serialize};
@@ -83,7 +82,7 @@ impl Plan {
     /// Whether the plan asks for an SSM answer: any plan without a POD
     /// study, and one with a POD study and any other request (the SSM
     /// models of the study's `ssm_pairs` are the study's own).
-    pub fn wants_ssm(&self) -> bool {
+    pub(crate) fn wants_ssm(&self) -> bool {
         self.pod.is_none()
             || self.invariance.is_some()
             || self.backbone.is_some()
@@ -99,7 +98,7 @@ impl Plan {
     /// The highest expansion order an answer names itself (`orders` lists,
     /// `order` keys, `nonautonomous_order + 1`); 1 when none does. A chosen
     /// SSM order is never below it.
-    pub fn highest_named_order(&self) -> usize {
+    pub(crate) fn highest_named_order(&self) -> usize {
         let lists = [
             self.frc.as_ref().and_then(|f| f.orders.as_ref()),
             self.invariance.as_ref().map(|i| &i.orders),

@@ -27,11 +27,9 @@ pub use pod::{
     load_sampling, PodRun, PodSection, MAX_POD_ROMS, MAX_POD_TESTS, MIN_STEPS_PER_PERIOD,
 };
 pub use reduce::{DataSection, ReduceSection};
-pub use reference::{
-    ReferenceSection, MAX_HARMONICS, MAX_REFERENCE_COEFFICIENTS, MAX_REFERENCE_CURVES,
-    MAX_REFERENCE_STEPS,
-};
-pub use simulate::{SimulateRun, SimulateSection, MAX_SAMPLES};
+pub(crate) use reference::MAX_REFERENCE_COEFFICIENTS;
+pub use reference::{ReferenceSection, MAX_HARMONICS, MAX_REFERENCE_CURVES, MAX_REFERENCE_STEPS};
+pub use simulate::{SimulateRun, SimulateSection};
 use ssm_core::spectrum::Normalization;
 pub use validate::{ReportSection, SteadyStateSection, ValidateSection};
 
@@ -241,7 +239,7 @@ pub struct SsmSection {
     #[serde(default = "default_master_pairs")]
     pub master_pairs: Spanned<Vec<usize>>,
     /// Expansion order; without it the engine chooses the lowest odd order
-    /// from 3 up to [`AUTO_MAX_ORDER`] (and the machine's limits) whose
+    /// from 3 up to `SsmSpec::AUTO_MAX_ORDER` (and the machine's limits) whose
     /// answers meet `tolerance`.
     #[serde(default)]
     pub order: Option<Spanned<usize>>,
@@ -277,18 +275,6 @@ impl Default for SsmSection {
             resonance_tol: default_resonance_tol(),
             tolerance: default_tolerance(),
         }
-    }
-}
-
-/// The highest expansion order the engine chooses by itself when `[ssm]`
-/// names none: beyond it, on a model whose answers still miss the accuracy
-/// target, the expansion is usually outside its convergence radius.
-pub const AUTO_MAX_ORDER: usize = ssm_core::spec::SsmSpec::AUTO_MAX_ORDER;
-
-impl SsmSection {
-    /// The highest order any answer may use: `order`, or [`AUTO_MAX_ORDER`].
-    pub fn max_order(&self) -> usize {
-        self.order.as_ref().map_or(AUTO_MAX_ORDER, |o| *o.get_ref())
     }
 }
 

@@ -11,7 +11,7 @@ use ssm_core::spec::ReferenceSpec;
 pub use ssm_core::spec::{MAX_HARMONICS, MAX_REFERENCE_CURVES, MAX_REFERENCE_STEPS};
 
 /// Most Fourier coefficients `N (2H + 1)` of one orbit.
-pub const MAX_REFERENCE_COEFFICIENTS: usize = 400_000;
+pub(crate) const MAX_REFERENCE_COEFFICIENTS: usize = 400_000;
 
 /// `[reference]`: forced responses of the full system.
 #[derive(Debug, Clone, Deserialize)]

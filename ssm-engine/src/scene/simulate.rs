@@ -7,9 +7,6 @@ use toml::Spanned;
 use super::{SceneError, SceneFile};
 use ssm_core::spec::SimulateSpec;
 
-/// Most samples per run (a CSV of this many rows is already ~100 MB per output).
-pub const MAX_SAMPLES: usize = ssm_core::spec::MAX_SIMULATE_SAMPLES;
-
 /// `[simulate]`: the full model integrated from given starts and sampled
 /// uniformly; each run becomes `simulation_<k>.csv` (header `t,<outputs>`).
 #[derive(Debug, Clone, Deserialize)]
@@ -77,7 +74,7 @@ fn default_atol() -> Spanned<f64> {
 
 impl SimulateRun {
     /// Given initial values `(state name, value)` of `x0` and `v0`.
-    pub fn given_start(&self) -> Vec<(String, f64)> {
+    pub(crate) fn given_start(&self) -> Vec<(String, f64)> {
         super::given_values([&self.x0, &self.v0].into_iter().flatten())
     }
 }

@@ -89,7 +89,7 @@ pub struct SteadyStateSection {
 
 impl ValidateSection {
     /// Given initial values `(state name, value)` of `x0` and `v0`.
-    pub fn given_start(&self) -> Vec<(String, f64)> {
+    pub(crate) fn given_start(&self) -> Vec<(String, f64)> {
         super::given_values(
             [&self.x0, &self.v0]
                 .into_iter()

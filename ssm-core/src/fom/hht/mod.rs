@@ -101,7 +101,7 @@ impl HhtOptions {
     }
 
     /// `(gamma, beta)` of `alpha`.
-    pub fn newmark(&self) -> (f64, f64) {
+    pub(crate) fn newmark(&self) -> (f64, f64) {
         (0.5 - self.alpha, 0.25 * (1.0 - self.alpha).powi(2))
     }
 
@@ -244,7 +244,7 @@ pub fn integrate(
 
 /// [`integrate`] without keeping the run: `on_step(t, z, a)` sees the
 /// consistent start and then every step end, in order; returns the counters.
-pub fn integrate_with(
+pub(crate) fn integrate_with(
     p: &DaeProblem,
     guess: &[f64],
     t0: f64,

@@ -107,7 +107,7 @@ impl<'p, 'a> Hht<'p, 'a> {
     }
 
     /// The counters so far.
-    pub fn hht_stats(&self) -> HhtStats {
+    pub(crate) fn hht_stats(&self) -> HhtStats {
         self.stats
     }
 

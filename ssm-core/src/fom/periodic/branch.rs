@@ -471,7 +471,7 @@ impl Reader {
 /// harmonics: the largest of `16 h` samples (at least 64), refined by Newton
 /// on `y'(psi) = 0` (a sampled maximum alone is low by up to `1 - cos(pi /
 /// samples)` relative).
-pub fn series_linf(y: &[f64], h: usize) -> f64 {
+pub(crate) fn series_linf(y: &[f64], h: usize) -> f64 {
     let eval = |psi: f64| -> (f64, f64, f64) {
         let (mut v, mut d1, mut d2) = (y[0], 0.0, 0.0);
         for k in 1..=h {

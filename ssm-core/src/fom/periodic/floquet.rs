@@ -30,10 +30,8 @@
 //! B. Deconinck, J. N. Kutz, Computing spectra of linear operators using the
 //! Floquet-Fourier-Hill method, J. Comput. Phys. 219 (2006) 296-321.
 
-pub use super::multipliers::{
-    Floquet, FloquetError, MultiplierCheck, CHECK_FLOOR, CHECK_WARNING, MAX_HILL_COEFFICIENTS,
-    UNIT_CIRCLE_TOL,
-};
+pub use super::multipliers::{Floquet, FloquetError, MultiplierCheck, MAX_HILL_COEFFICIENTS};
+pub(crate) use super::multipliers::{CHECK_WARNING, UNIT_CIRCLE_TOL};
 
 use super::HarmonicBalance;
 use crate::spectrum::dense::{finite_eigenvalues_with, FiniteStructure};
@@ -47,7 +45,7 @@ pub fn floquet(hb: &HarmonicBalance<'_>, c: &[f64], omega: f64) -> Result<Floque
 /// [`floquet`] reusing the structure of the Hill pencil's nilpotent part
 /// found at an earlier orbit of the same discretization (set on the first
 /// call).
-pub fn floquet_with(
+pub(crate) fn floquet_with(
     hb: &HarmonicBalance<'_>,
     c: &[f64],
     omega: f64,

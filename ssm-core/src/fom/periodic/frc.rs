@@ -22,7 +22,7 @@
 //! critical multipliers).
 
 pub use super::branch::{
-    series_linf, ReferenceBranch, ReferenceError, ReferenceEvent, ReferenceFrc, ReferenceOrbit,
+    ReferenceBranch, ReferenceError, ReferenceEvent, ReferenceFrc, ReferenceOrbit,
     ReferenceSettings,
 };
 

@@ -423,7 +423,7 @@ impl<'a> HarmonicBalance<'a> {
     }
 
     /// `R(c, Omega)` in physical units.
-    pub fn residual_physical(&self, c: &[f64], omega: f64) -> Vec<f64> {
+    pub(crate) fn residual_physical(&self, c: &[f64], omega: f64) -> Vec<f64> {
         let kk = self.kk();
         let (n, m) = (self.n, self.samples);
         let mut r = self.b_derivative(c);
@@ -490,7 +490,7 @@ impl<'a> HarmonicBalance<'a> {
     /// Sets the forcing amplitude (the parameter of an amplitude
     /// continuation). The forcing's terms are prepared only for a
     /// discretization made with `epsilon != 0`.
-    pub fn set_epsilon(&mut self, epsilon: f64) {
+    pub(crate) fn set_epsilon(&mut self, epsilon: f64) {
         self.prob.epsilon = epsilon;
     }
 
@@ -624,7 +624,7 @@ impl<'a> HarmonicBalance<'a> {
 
     /// `R_c` (unscaled, `N(2H+1)` square) as a sparse matrix: Hill's method
     /// needs it.
-    pub fn jacobian_physical(&self, c: &[f64], omega: f64) -> SparseColMat<usize, f64> {
+    pub(crate) fn jacobian_physical(&self, c: &[f64], omega: f64) -> SparseColMat<usize, f64> {
         let nu = self.n_coefficients();
         let saved = self.amplitude_scale;
         let vals = self.jacobian_values(c, omega);
@@ -644,7 +644,7 @@ impl<'a> HarmonicBalance<'a> {
 
     /// `I ⊗ B` in the coefficient ordering, without the gauge rows (which are
     /// algebraic).
-    pub fn mass_blocks(&self) -> SparseColMat<usize, f64> {
+    pub(crate) fn mass_blocks(&self) -> SparseColMat<usize, f64> {
         let kk = self.kk();
         let nu = self.n_coefficients();
         let b = self.prob.sys.b.as_ref();
@@ -683,19 +683,6 @@ impl<'a> HarmonicBalance<'a> {
             Parameter::Amplitude { .. } => parameter / self.epsilon_scale,
         });
         u
-    }
-
-    /// Amplitude `max_psi |y(psi)|` of the linear output `weights` on an
-    /// orbit, from `samples` angles (at least the AFT's).
-    pub fn output_linf(&self, c: &[f64], weights: &[(usize, f64)], samples: usize) -> f64 {
-        let samples = samples.max(self.samples);
-        (0..samples)
-            .map(|s| {
-                let psi = 2.0 * std::f64::consts::PI * s as f64 / samples as f64;
-                let z = self.state_at(c, psi);
-                weights.iter().map(|(i, w)| w * z[*i]).sum::<f64>().abs()
-            })
-            .fold(0.0, f64::max)
     }
 }
 
@@ -746,7 +733,7 @@ fn derivative_entry(q: usize) -> f64 {
 /// `G[sk][cl] = S(k+l) + S(k-l)`, `G[sk][sl] = C(k-l) - C(k+l)`,
 /// `G[0][cl] = C(l)`, `G[0][sl] = S(l)`, `G[ck][0] = 2 C(k)`,
 /// `G[sk][0] = 2 S(k)`, `G[0][0] = C(0)`; row-major in `out`.
-pub fn galerkin_block(cs: &[f64], h: usize, out: &mut [f64]) {
+pub(crate) fn galerkin_block(cs: &[f64], h: usize, out: &mut [f64]) {
     let kk = 2 * h + 1;
     let cc = |d: i64| -> f64 {
         let a = d.unsigned_abs() as usize;

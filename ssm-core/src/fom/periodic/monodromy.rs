@@ -57,7 +57,7 @@ const PAR: Par = Par::Seq;
 /// zeros (rounding leaves them near 1e-12, measured on the recast pendulum
 /// slider) and modes damped by more than `-ln(1e-9) = 20.7` e-folds per
 /// period.
-pub const NEGLIGIBLE_MULTIPLIER: f64 = 1e-9;
+pub(crate) const NEGLIGIBLE_MULTIPLIER: f64 = 1e-9;
 
 /// Default steps per period of the orbit: enough to resolve the highest
 /// harmonic of `J(t)` (`2 H m` for a quadratic `F`) with several steps per
@@ -242,7 +242,7 @@ impl<'h, 'a> PeriodSteps<'h, 'a> {
 
 /// The monodromy matrix `Phi` (`N x N`) of the orbit `c` at `omega` over
 /// its period `m T`, by `steps` Radau IIA steps.
-pub fn monodromy_matrix(
+pub(crate) fn monodromy_matrix(
     hb: &HarmonicBalance<'_>,
     c: &[f64],
     omega: f64,
@@ -340,7 +340,7 @@ const SUBSPACE_FLOOR: f64 = 0.25;
 /// [`dominant_multipliers`] gives the multipliers above this modulus: the
 /// Ritz values below it belong to the block's unconverged tail (its last
 /// columns carry the strongly damped modes, which no bifurcation involves).
-pub const DOMINANT_FLOOR: f64 = 1e-3;
+pub(crate) const DOMINANT_FLOOR: f64 = 1e-3;
 
 /// Relative residual `||Phi x - rho x|| / ||Phi||` below which a Ritz pair
 /// counts as converged.
@@ -367,7 +367,7 @@ const SUBSPACE_PASSES: usize = 12;
 /// A. Spence, A. R. Champneys, An adaptive Newton-Picard algorithm with
 /// subspace iteration for computing periodic solutions, SIAM J. Sci. Comput.
 /// 19 (1998) 1188-1209 (the dominant Floquet multipliers of large systems).
-pub fn dominant_multipliers(
+pub(crate) fn dominant_multipliers(
     steps: &PeriodSteps<'_, '_>,
     c: &[f64],
 ) -> Result<Vec<C64>, FloquetError> {

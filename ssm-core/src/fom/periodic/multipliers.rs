@@ -39,7 +39,7 @@ pub struct Floquet {
 }
 
 /// A multiplier counts as outside the unit circle when `|rho| > 1 + tol`.
-pub const UNIT_CIRCLE_TOL: f64 = 1e-7;
+pub(crate) const UNIT_CIRCLE_TOL: f64 = 1e-7;
 
 impl Floquet {
     /// No multiplier outside the unit circle.
@@ -63,7 +63,7 @@ impl Floquet {
     /// circle; two real multipliers merging into a complex pair change `k` by
     /// 0 or 2, not its sign, and multipliers deep inside the circle (which
     /// the monodromy path drops below a threshold) do not enter it.
-    pub fn real_crossing_test(&self) -> f64 {
+    pub(crate) fn real_crossing_test(&self) -> f64 {
         let mut sign = 1.0;
         let mut near = f64::INFINITY;
         for r in self.multipliers.iter().filter(|r| is_real(r)) {
@@ -82,7 +82,7 @@ impl Floquet {
 
     /// Number of complex (non-real) multipliers outside the unit circle:
     /// its changes are Neimark-Sacker bifurcations.
-    pub fn complex_unstable(&self) -> usize {
+    pub(crate) fn complex_unstable(&self) -> usize {
         self.multipliers
             .iter()
             .filter(|r| !is_real(r) && r.norm() > 1.0 + UNIT_CIRCLE_TOL)
@@ -92,7 +92,7 @@ impl Floquet {
     /// Why these data cannot be one analysis (as read back from a file):
     /// multipliers that are not finite, exponents not one per multiplier, or
     /// an unstable count other than the multipliers outside the circle.
-    pub fn inconsistency(&self) -> Option<String> {
+    pub(crate) fn inconsistency(&self) -> Option<String> {
         if self.exponents.len() != self.multipliers.len() {
             return Some(format!(
                 "{} exponents for {} multipliers",
@@ -136,7 +136,7 @@ impl Floquet {
 /// partners in another computation are above the monodromy's
 /// [`super::monodromy::DOMINANT_FLOOR`] unless the two differ by more than
 /// `1e-2`, which the distance then shows.
-pub const CHECK_FLOOR: f64 = 1e-2;
+pub(crate) const CHECK_FLOOR: f64 = 1e-2;
 
 impl Floquet {
     /// The largest distance from a multiplier above [`CHECK_FLOOR`] of either
@@ -183,7 +183,7 @@ pub struct MultiplierCheck {
 /// A [`MultiplierCheck::difference`] above this is a warning: the
 /// multipliers are uncertain to more than the tolerance on located
 /// bifurcations (1e-3), and stability near the unit circle with them.
-pub const CHECK_WARNING: f64 = 1e-3;
+pub(crate) const CHECK_WARNING: f64 = 1e-3;
 
 /// Real up to the accuracy of the exponents: Hill's method returns the
 /// exponent of a real negative multiplier on the strip's edge with an

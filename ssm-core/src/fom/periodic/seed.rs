@@ -35,7 +35,7 @@ use super::{HarmonicBalance, OrbitInfo};
 /// within `h / 80` of the arc, so `0.05` holds for the default steps, while
 /// distinct orbits at one frequency differ by much more outside the
 /// immediate neighbourhood of a fold or branch point (where they meet).
-pub const SAME_BRANCH: f64 = 0.05;
+pub(crate) const SAME_BRANCH: f64 = 0.05;
 
 /// A traced branch's polyline in scaled unknowns, with its period multiple.
 #[derive(Debug, Clone)]

@@ -27,7 +27,7 @@ impl RecastInfo {
     /// followed by the auxiliaries), as sparse rows `(j, value)` in
     /// auxiliary order: `du_k/dz = u_k'(x) (da/dz + sum_b da/du_b du_b/dz)`
     /// over the earlier auxiliaries `u_b` the argument `a` contains.
-    pub fn aux_jacobian(&self, z: &[f64]) -> Vec<Vec<(usize, f64)>> {
+    pub(crate) fn aux_jacobian(&self, z: &[f64]) -> Vec<Vec<(usize, f64)>> {
         let n = self.n_original;
         let mut rows: Vec<Vec<f64>> = Vec::with_capacity(self.auxiliaries.len());
         for a in &self.auxiliaries {

@@ -116,7 +116,7 @@ impl ExprGraph {
     }
 
     /// Value of every node at `z`.
-    pub fn eval_nodes(&self, z: &[f64]) -> Vec<f64> {
+    pub(crate) fn eval_nodes(&self, z: &[f64]) -> Vec<f64> {
         let mut val: Vec<f64> = Vec::with_capacity(self.nodes.len());
         for nd in &self.nodes {
             let a = || val[nd.a as usize];

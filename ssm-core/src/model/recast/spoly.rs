@@ -38,7 +38,7 @@ impl SPoly {
     }
 
     /// `c z^m` added to the polynomial (a term that cancels exactly is removed).
-    pub fn add_term(&mut self, m: Mono, c: f64) {
+    pub(crate) fn add_term(&mut self, m: Mono, c: f64) {
         if c == 0.0 {
             return;
         }
@@ -56,7 +56,7 @@ impl SPoly {
     }
 
     /// `self += s * other`.
-    pub fn add_scaled(&mut self, other: &SPoly, s: f64) {
+    pub(crate) fn add_scaled(&mut self, other: &SPoly, s: f64) {
         for (m, c) in &other.terms {
             self.add_term(m.clone(), s * c);
         }
@@ -88,7 +88,7 @@ impl SPoly {
     }
 
     /// `self^n`, by repeated squaring.
-    pub fn pow(&self, mut n: u32) -> SPoly {
+    pub(crate) fn pow(&self, mut n: u32) -> SPoly {
         let mut base = self.clone();
         let mut acc = SPoly::constant(1.0);
         while n > 0 {
@@ -122,19 +122,19 @@ impl SPoly {
     }
 
     /// The constant term (the value at the origin).
-    pub fn constant_term(&self) -> f64 {
+    pub(crate) fn constant_term(&self) -> f64 {
         self.terms.get(&Vec::new()).copied().unwrap_or(0.0)
     }
 
     /// The polynomial without its constant term.
-    pub fn without_constant(&self) -> SPoly {
+    pub(crate) fn without_constant(&self) -> SPoly {
         let mut p = self.clone();
         p.terms.remove(&Vec::new());
         p
     }
 
     /// True when the polynomial is identically zero.
-    pub fn is_zero(&self) -> bool {
+    pub(crate) fn is_zero(&self) -> bool {
         self.terms.is_empty()
     }
 

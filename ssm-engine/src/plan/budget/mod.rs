@@ -16,7 +16,7 @@
 
 mod runs;
 
-pub use runs::{check_pod, check_pod_reducer};
+pub(crate) use runs::{check_pod, check_pod_reducer};
 
 use super::{Plan, PlanError};
 use ssm_core::model::system::System;
@@ -28,7 +28,7 @@ use ssm_kernel::number::short;
 /// Elementary operations per second assumed by the estimates (complex
 /// multiply-adds and sparse-solve entries on one core of a 2-core machine,
 /// conservatively rounded down from the SSM and Radau timings of the zoo).
-pub const OPS_PER_SECOND: f64 = 2e8;
+pub(crate) const OPS_PER_SECOND: f64 = 2e8;
 
 /// Integration steps per period assumed for adaptive integrators at the
 /// tolerances scenes use (the Radau IIA runs of the zoo take 40-60, DOPRI5
@@ -36,7 +36,7 @@ pub const OPS_PER_SECOND: f64 = 2e8;
 const STEPS_PER_PERIOD: f64 = 60.0;
 
 /// Environment variable that raises (or lowers) the time limit, in minutes.
-pub const TIME_LIMIT_VAR: &str = "SSM_TIME_LIMIT_MINUTES";
+pub(crate) const TIME_LIMIT_VAR: &str = "SSM_TIME_LIMIT_MINUTES";
 
 /// What one run may use.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -73,7 +73,7 @@ impl Limits {
 /// The work of each analysis of `[analysis]` on an SSM of the masters'
 /// pairs to `order` within `limits`; a refusal names the key that sets the
 /// size.
-pub fn check_analyses(
+pub(crate) fn check_analyses(
     plan: &Plan,
     masters: &[MasterMode],
     order: usize,
@@ -207,7 +207,11 @@ fn within(cost: &Cost, limits: &Limits) -> bool {
 /// `N x N` pencil, about `70 N^3` operations on 6 dense complex matrices) and
 /// the SSM order (see [`order_ceiling`]); returns the highest order the run
 /// may compute.
-pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<usize, PlanError> {
+pub(crate) fn check_spectrum(
+    plan: &Plan,
+    system: &System,
+    limits: &Limits,
+) -> Result<usize, PlanError> {
     let n = system.n_states() as f64;
     let dense = match plan.spectrum.method {
         Some(Method::Dense) => true,
@@ -233,11 +237,11 @@ pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<u
 
 /// The highest SSM order of the run, with `pairs` master pairs: the scene's
 /// `[ssm] order`, checked against the limits; without one, the highest odd
-/// order up to [`AUTO_MAX_ORDER`] that the limits allow (not below 3 nor
+/// order up to [`SsmSpec::AUTO_MAX_ORDER`] that the limits allow (not below 3 nor
 /// the orders the answers name), which the pipeline may then lower. Run
 /// before the spectral stage, since the eq. (53) resonance check there
 /// enumerates the multi-indices up to this order.
-pub fn order_ceiling(
+pub(crate) fn order_ceiling(
     plan: &Plan,
     system: &System,
     pairs: usize,
@@ -617,7 +621,11 @@ const REFERENCE_CALIBRATION: f64 = 0.5;
 /// `(2H+1)^2` block per nonzero of the pencil, eliminated at `(2H+1)^3` each)
 /// and one Floquet analysis: up to the dense Hill limit one Hill
 /// eigenproblem (`(N (2H+1))^3`), above it the monodromy matrix.
-pub fn check_reference(plan: &Plan, system: &System, limits: &Limits) -> Result<(), PlanError> {
+pub(crate) fn check_reference(
+    plan: &Plan,
+    system: &System,
+    limits: &Limits,
+) -> Result<(), PlanError> {
     let Some(r) = &plan.reference else {
         return Ok(());
     };

@@ -135,7 +135,7 @@ fn reduction_parts(system: &System, t: &Training, snapshots: &str, samples: &str
 /// the full model's step, plus the lift to the full states, which are
 /// stored); the SSM models of `ssm_pairs` and their runs, lifted through
 /// `W` at every step end.
-pub fn check_pod(plan: &Plan, system: &System, limits: &Limits) -> Result<(), PlanError> {
+pub(crate) fn check_pod(plan: &Plan, system: &System, limits: &Limits) -> Result<(), PlanError> {
     let Some(p) = &plan.pod else {
         return Ok(());
     };
@@ -230,7 +230,7 @@ pub fn check_pod(plan: &Plan, system: &System, limits: &Limits) -> Result<(), Pl
 /// and its POD reduction (`reduction_parts`) would not finish within
 /// `limits`; a refusal names `reduce.params.step` or
 /// `reduce.params.jacobian_samples`.
-pub fn check_pod_reducer(
+pub(crate) fn check_pod_reducer(
     system: &System,
     (step, t_end, jacobian_samples): (f64, f64, usize),
     limits: &Limits,
