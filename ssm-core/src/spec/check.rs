@@ -61,6 +61,31 @@ pub(super) fn orders(orders: &[usize], max_order: usize, key: &str) -> Checked {
     Ok(())
 }
 
+/// An HHT `alpha` in `[-1/3, 0]`.
+fn hht_alpha(a: f64, key: &str) -> Checked {
+    if (-1.0 / 3.0..=0.0).contains(&a) {
+        return Ok(());
+    }
+    Err(SpecError::new(
+        key,
+        format!(
+            "must lie in [-1/3, 0] (0: no numerical damping), found {}",
+            short(a)
+        ),
+    ))
+}
+
+/// Outputs named, when a list is given: at least one.
+fn named(outputs: Option<&Vec<String>>, key: &str) -> Checked {
+    if outputs.is_some_and(Vec::is_empty) {
+        return Err(SpecError::new(
+            key,
+            "name at least one output, or leave the key out for [outputs] coordinates".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// Amplitudes, one per master pair, each finite and non-negative.
 fn amplitudes(rho0: &[f64], pairs: usize) -> bool {
     rho0.len() == pairs && rho0.iter().all(|x| x.is_finite() && *x >= 0.0)
@@ -264,15 +289,7 @@ impl ValidationSpec {
         if self.rtol >= 1e-2 {
             return Err(SpecError::new("validate.rtol", "must be below 1e-2".into()));
         }
-        if let Some(o) = &self.outputs {
-            if o.is_empty() {
-                return Err(SpecError::new(
-                    "validate.outputs",
-                    "name at least one output, or leave the key out for [outputs] coordinates"
-                        .into(),
-                ));
-            }
-        }
+        named(self.outputs.as_ref(), "validate.outputs")?;
         match &self.steady_state {
             Some(s) => s.check(forced),
             None => Ok(()),
@@ -397,15 +414,7 @@ impl ReferenceSpec {
                 format!("must lie in 1..={MAX_REFERENCE_STEPS}, found {steps}"),
             ));
         }
-        if let Some(o) = &self.outputs {
-            if o.is_empty() {
-                return Err(SpecError::new(
-                    "reference.outputs",
-                    "name at least one output, or leave the key out for [outputs] coordinates"
-                        .into(),
-                ));
-            }
-        }
+        named(self.outputs.as_ref(), "reference.outputs")?;
         Ok(())
     }
 
@@ -470,22 +479,9 @@ impl SimulateSpec {
         positive(self.rtol, "simulate.rtol")?;
         positive(self.atol, "simulate.atol")?;
         if let Some(a) = self.hht_alpha {
-            if !(-1.0 / 3.0..=0.0).contains(&a) {
-                return Err(SpecError::new(
-                    "simulate.hht_alpha",
-                    format!(
-                        "must lie in [-1/3, 0] (0: no numerical damping), found {}",
-                        short(a)
-                    ),
-                ));
-            }
+            hht_alpha(a, "simulate.hht_alpha")?;
         }
-        if self.outputs.as_ref().is_some_and(Vec::is_empty) {
-            return Err(SpecError::new(
-                "simulate.outputs",
-                "name at least one output, or leave the key out for [outputs] coordinates".into(),
-            ));
-        }
+        named(self.outputs.as_ref(), "simulate.outputs")?;
         if self.runs.is_empty() {
             return Err(SpecError::new(
                 "simulate.run",
@@ -562,22 +558,8 @@ impl PodSpec {
             ));
         }
         positive(self.step, "pod.step")?;
-        let a = self.hht_alpha;
-        if !(-1.0 / 3.0..=0.0).contains(&a) {
-            return Err(SpecError::new(
-                "pod.hht_alpha",
-                format!(
-                    "must lie in [-1/3, 0] (0: no numerical damping), found {}",
-                    short(a)
-                ),
-            ));
-        }
-        if self.outputs.as_ref().is_some_and(Vec::is_empty) {
-            return Err(SpecError::new(
-                "pod.outputs",
-                "name at least one output, or leave the key out for [outputs] coordinates".into(),
-            ));
-        }
+        hht_alpha(self.hht_alpha, "pod.hht_alpha")?;
+        named(self.outputs.as_ref(), "pod.outputs")?;
         for set in &self.ssm_pairs {
             let mut s = set.clone();
             s.sort_unstable();
