@@ -61,6 +61,18 @@ pub(super) fn orders(orders: &[usize], max_order: usize, key: &str) -> Checked {
     Ok(())
 }
 
+/// A fraction in `(0, 1)`; `meaning` (e.g. ` (a relative error, 0.01 = 1
+/// %)`) follows the range in the message.
+fn fraction(x: f64, key: &str, meaning: &str) -> Checked {
+    if x.is_finite() && x > 0.0 && x < 1.0 {
+        return Ok(());
+    }
+    Err(SpecError::new(
+        key,
+        format!("must lie in (0, 1){meaning}, found {}", short(x)),
+    ))
+}
+
 /// An HHT `alpha` in `[-1/3, 0]`.
 fn hht_alpha(a: f64, key: &str) -> Checked {
     if (-1.0 / 3.0..=0.0).contains(&a) {
@@ -127,23 +139,12 @@ impl SsmSpec {
         if self.order == Some(0) {
             return Err(SpecError::new("ssm.order", "must be at least 1".into()));
         }
-        let tol = self.resonance_tol;
-        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
-            return Err(SpecError::new(
-                "ssm.resonance_tol",
-                format!("must lie in (0, 1), found {}", short(tol)),
-            ));
-        }
-        let tol = self.tolerance;
-        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
-            return Err(SpecError::new(
-                "ssm.tolerance",
-                format!(
-                    "must lie in (0, 1) (a relative error, 0.01 = 1 %), found {}",
-                    short(tol)
-                ),
-            ));
-        }
+        fraction(self.resonance_tol, "ssm.resonance_tol", "")?;
+        fraction(
+            self.tolerance,
+            "ssm.tolerance",
+            " (a relative error, 0.01 = 1 %)",
+        )?;
         if let Normalization::Scale(s) = self.normalization {
             if !(s.is_finite() && s > 0.0) {
                 return Err(SpecError::new(
@@ -315,13 +316,7 @@ impl SteadyStateSpec {
                 "start = \"ssm\" starts from the FRC's prediction: add [forcing]".into(),
             ));
         }
-        let d = self.delta;
-        if !(d.is_finite() && d > 0.0 && d < 1.0) {
-            return Err(SpecError::new(
-                "validate.steady_state.delta",
-                format!("must lie in (0, 1), found {}", short(d)),
-            ));
-        }
+        fraction(self.delta, "validate.steady_state.delta", "")?;
         at_least(self.max_periods, 2, "validate.steady_state.max_periods")?;
         let key = "validate.steady_state.max_period_multiple";
         at_least(self.max_period_multiple, 1, key)?;
@@ -540,16 +535,11 @@ impl PodSpec {
                 v.len()
             }
         };
-        let tol = self.rank_tol;
-        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
-            return Err(SpecError::new(
-                "pod.rank_tol",
-                format!(
-                    "must lie in (0, 1) (relative to the largest singular value), found {}",
-                    short(tol)
-                ),
-            ));
-        }
+        fraction(
+            self.rank_tol,
+            "pod.rank_tol",
+            " (relative to the largest singular value)",
+        )?;
         let js = self.jacobian_samples;
         if !(1..=10_000).contains(&js) {
             return Err(SpecError::new(
