@@ -106,6 +106,7 @@ fn run(
         true
     });
     let b = reference_frc_resumable(sys, settings, &mut runs)?;
+    drop(runs);
     Ok((results(b), shown))
 }
 

@@ -71,15 +71,12 @@ where
 
 /// [`reference_amplitude`] with its continuation run kept in (and,
 /// resuming a stopped computation, restored from) the ledger of `runs`.
-pub fn reference_amplitude_resumable<O>(
+pub fn reference_amplitude_resumable(
     sys: &System,
     settings: &AmplitudeSettings,
     number: usize,
-    runs: &mut Runs<'_, O>,
-) -> Result<ReferenceBranch, ReferenceError>
-where
-    O: FnMut(&ReferenceOrbit) -> bool,
-{
+    runs: &mut Runs<'_>,
+) -> Result<ReferenceBranch, ReferenceError> {
     let (lo, hi) = settings.epsilon_range;
     let omega = settings.omega;
     if !(omega.is_finite() && omega > 0.0) {

@@ -25,7 +25,7 @@ use ssm_kernel::continuation::{correct, local_parameter, Point, Problem, Setting
 
 use super::branch::{
     classify, drop_rejoining_step, orbits_at, Reader, ReferenceBranch, ReferenceError,
-    ReferenceOrbit, ReferenceSettings,
+    ReferenceSettings,
 };
 use super::runs::Runs;
 use super::seed::Path;
@@ -33,18 +33,15 @@ use super::{HarmonicBalance, OrbitInfo};
 
 /// The branch of period `2T` from the period doubling `pd` of the
 /// period-`T` branch of `hb1`, numbered `number`.
-pub(super) fn doubled_branch<O>(
+pub(super) fn doubled_branch(
     sys: &System,
     settings: &ReferenceSettings,
     hb1: &HarmonicBalance<'_>,
     pd: &Point<OrbitInfo>,
     cs: &Settings,
     number: usize,
-    runs: &mut Runs<'_, O>,
-) -> Result<(ReferenceBranch, Path), ReferenceError>
-where
-    O: FnMut(&ReferenceOrbit) -> bool,
-{
+    runs: &mut Runs<'_>,
+) -> Result<(ReferenceBranch, Path), ReferenceError> {
     let h1 = hb1.harmonics();
     let mut hb = HarmonicBalance::new(sys, settings.epsilon, 2 * h1, 2)?;
     hb.amplitude_scale = hb1.amplitude_scale;

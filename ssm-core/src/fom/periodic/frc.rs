@@ -49,14 +49,11 @@ where
 
 /// [`reference_frc`] with its continuation runs kept in (and, resuming a
 /// stopped computation, restored from) the ledger of `runs`.
-pub fn reference_frc_resumable<O>(
+pub fn reference_frc_resumable(
     sys: &System,
     settings: &ReferenceSettings,
-    runs: &mut Runs<'_, O>,
-) -> Result<ReferenceBranch, ReferenceError>
-where
-    O: FnMut(&ReferenceOrbit) -> bool,
-{
+    runs: &mut Runs<'_>,
+) -> Result<ReferenceBranch, ReferenceError> {
     let (lo, hi) = settings.omega_range;
     if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
         return Err(ReferenceError::Settings(format!(
@@ -189,18 +186,15 @@ fn survivable<T>(outcome: Result<T, ReferenceError>) -> Result<Result<T, String>
 /// numbered from `next`; a doubling where a branch traced earlier ended
 /// (it rejoined the period-`T` branch there) starts none, and one whose
 /// switch or trace fails is named in `failed` (the others go on).
-fn switch_all<O>(
+fn switch_all(
     sys: &System,
     settings: &ReferenceSettings,
     hb: &HarmonicBalance<'_>,
     pds: &[Point<OrbitInfo>],
     cs: &Settings,
     (next, paths, failed): (&mut usize, &mut Vec<Path>, &mut Vec<String>),
-    runs: &mut Runs<'_, O>,
-) -> Result<Vec<ReferenceBranch>, ReferenceError>
-where
-    O: FnMut(&ReferenceOrbit) -> bool,
-{
+    runs: &mut Runs<'_>,
+) -> Result<Vec<ReferenceBranch>, ReferenceError> {
     let mut doubled: Vec<ReferenceBranch> = Vec::new();
     if !settings.period_doubling {
         return Ok(doubled);

@@ -25,23 +25,25 @@ const SAME_START: f64 = 1e-6;
 
 /// The observer of a reference computation's orbits and the ledger of its
 /// continuation runs.
-pub struct Runs<'a, O> {
+pub struct Runs<'a> {
     /// Sees each orbit as it is accepted (or restored); `false` stops.
-    pub observe: O,
+    /// (Boxed: the continuation behind it is compiled once, in this crate,
+    /// not again for every caller's closure.)
+    observe: Box<dyn FnMut(&ReferenceOrbit) -> bool + 'a>,
     /// Keeps the runs' steps, and holds those of a stopped computation.
     pub ledger: &'a dyn Ledger<OrbitInfo>,
     /// Runs opened so far.
     opened: usize,
 }
 
-impl<'a, O> Runs<'a, O>
-where
-    O: FnMut(&ReferenceOrbit) -> bool,
-{
+impl<'a> Runs<'a> {
     /// Runs shown to `observe` and kept in `ledger`.
-    pub fn new(ledger: &'a dyn Ledger<OrbitInfo>, observe: O) -> Self {
+    pub fn new(
+        ledger: &'a dyn Ledger<OrbitInfo>,
+        observe: impl FnMut(&ReferenceOrbit) -> bool + 'a,
+    ) -> Self {
         Runs {
-            observe,
+            observe: Box::new(observe),
             ledger,
             opened: 0,
         }

@@ -23,7 +23,7 @@ use ssm_kernel::continuation::{self, dot, solve_at_parameter, Point, Settings, S
 pub use super::branch::Seed;
 use super::branch::{
     classify, drop_rejoining_step, orbits_at, Reader, ReferenceBranch, ReferenceError,
-    ReferenceOrbit, ReferenceSettings,
+    ReferenceSettings,
 };
 use super::runs::Runs;
 use super::{HarmonicBalance, OrbitInfo};
@@ -81,7 +81,7 @@ pub(super) enum Seeded {
 /// rejoins the period-`T` branch (a seed of period `2T`); `template` gives
 /// the harmonics and scales.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn seeded_branch<O>(
+pub(super) fn seeded_branch(
     sys: &System,
     settings: &ReferenceSettings,
     template: &HarmonicBalance<'_>,
@@ -89,11 +89,8 @@ pub(super) fn seeded_branch<O>(
     cs: &Settings,
     number: usize,
     known: &[Path],
-    runs: &mut Runs<'_, O>,
-) -> Result<Seeded, ReferenceError>
-where
-    O: FnMut(&ReferenceOrbit) -> bool,
-{
+    runs: &mut Runs<'_>,
+) -> Result<Seeded, ReferenceError> {
     let m = seed.period_multiple.max(1);
     let mut hb = HarmonicBalance::new(sys, settings.epsilon, m * template.harmonics(), m)?;
     hb.amplitude_scale = template.amplitude_scale;
