@@ -46,8 +46,7 @@ directories), and from the directory of this binary."
     name = "ssm-engine",
     version,
     about = "Nonlinear model reduction on spectral submanifolds (SSMs) for mechanical systems and DAEs",
-    after_help = SCENE_HELP,
-    args_conflicts_with_subcommands = true
+    after_help = SCENE_HELP
 )]
 struct Cli {
     /// Load a plugin library (repeatable).
@@ -100,6 +99,18 @@ enum Command {
     },
     /// Print the JSON Schema of summary.json (docs/summary.schema.json).
     Schema,
+}
+
+impl Command {
+    /// The command's word on the command line.
+    fn name(&self) -> &'static str {
+        match self {
+            Command::Plugins => "plugins",
+            Command::Report { .. } => "report",
+            Command::Export { .. } => "export",
+            Command::Schema => "schema",
+        }
+    }
 }
 
 /// Progress of a run: a spinner on a terminal, else one line per stage on
@@ -344,6 +355,17 @@ fn print_text(text: &str) -> anyhow::Result<()> {
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
+    // the global options (--plugin, --resume) may come before a command; a
+    // scene or --out may not
+    if let (Some(command), Some(_), _) | (Some(command), _, Some(_)) =
+        (&cli.command, &cli.scene, &cli.out)
+    {
+        anyhow::bail!(
+            "'{}' takes no scene and no --out before it: ssm-engine SCENE.toml [--out DIR], or ssm-engine [--plugin PATH] {}",
+            command.name(),
+            command.name()
+        );
+    }
     if let Some(Command::Schema) = cli.command {
         return print_text(&ssm_engine::output::summary::schema_json());
     }

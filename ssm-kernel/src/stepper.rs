@@ -49,7 +49,8 @@ pub trait Stepper {
 }
 
 /// Steps `s` through the increasing `times` (all after its start), its
-/// steps ending at `t_end` at the latest (the last time if that is later),
+/// steps ending at `t_end` at the latest (the last time if that is later,
+/// or if `t_end` is NaN),
 /// and hands the state at each time to `at(t, state)`, in order, by the
 /// dense output of the step that covers it.
 ///
@@ -64,7 +65,8 @@ pub fn sample<S: Stepper>(
     let Some(&last) = times.last() else {
         return Ok(());
     };
-    let t_end = if t_end < last { last } else { t_end };
+    // NaN-safe: `max` takes the number
+    let t_end = t_end.max(last);
     let mut buf = s.state().to_vec();
     let mut next = 0;
     while next < times.len() {

@@ -270,6 +270,38 @@ fn plugins_command_lists_models_and_parameters() {
     }
 }
 
+/// The global `--plugin` may come before a command (`ssm-engine --plugin
+/// X.so plugins` lists X's models); a scene or `--out` before a command is
+/// refused, not run or dropped.
+#[test]
+fn global_options_may_precede_a_command_and_a_scene_may_not() {
+    let o = Command::new(engine_binary())
+        .arg("--plugin")
+        .arg(plugin_path("duffing"))
+        .arg("plugins")
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success() && out.contains("duffing"),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for args in [
+        &["scene.toml", "plugins"][..],
+        &["--out", "somewhere", "plugins"][..],
+        &["--out", "somewhere", "schema"][..],
+    ] {
+        let o = Command::new(engine_binary()).args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("takes no scene and no --out"),
+            "{args:?}: {err}"
+        );
+        assert!(o.stdout.is_empty(), "{args:?}");
+    }
+}
+
 #[test]
 fn output_orders_above_the_ssm_order_name_key_and_line() {
     let text = format!("{GOOD}[outputs.backbone]\nrho_max = 0.3\norders = [3, 15]\n");
