@@ -357,7 +357,7 @@ pub fn constraint_jacobian(sys: &System, z: &[f64]) -> Mat<f64> {
 /// The generalized reaction forces `C_q(q)^T mu` of a mechanical `sys` at
 /// recast states `z` (shifted: `mu = mu_eq + mu_hat`), the analytic
 /// Jacobian's pattern set up once for many states.
-pub struct Reactions<'a> {
+pub(crate) struct Reactions<'a> {
     sys: &'a System,
     problem: DaeProblem<'a>,
     vals: Vec<f64>,

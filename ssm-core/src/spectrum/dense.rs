@@ -103,7 +103,7 @@ fn numerical_rank(m: &Mat<f64>) -> Result<(usize, Mat<f64>), SpectrumError> {
 /// Pencils that differ by a smooth change of their entries (the Floquet
 /// problems along a branch of periodic orbits) keep it, so it can be reused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FiniteStructure {
+pub(crate) struct FiniteStructure {
     /// The index `nu`.
     pub power: usize,
     /// Dimension of the finite invariant subspace.

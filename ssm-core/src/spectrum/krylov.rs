@@ -34,7 +34,7 @@ use crate::C64;
 
 /// Why the iteration stopped without the wanted eigenvalues.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum KrylovError {
+pub(crate) enum KrylovError {
     /// Only `converged` of the `wanted` Ritz values met the tolerance.
     #[error("{converged} of {wanted} eigenvalues converged after {restarts} restarts")]
     NotConverged {

@@ -105,7 +105,7 @@ impl ForcedTerms {
 /// The harmonics' coefficients of a few scalar outputs of `X0` at one
 /// forcing frequency: `c_{h,o} = sum_s w_{o,s} x_{h,s}`.
 #[derive(Debug, Clone)]
-pub struct OutputCoefficients {
+pub(crate) struct OutputCoefficients {
     multiples: Vec<f64>,
     n_outputs: usize,
     /// Harmonic-major: `c[h * n_outputs + o]`.

@@ -85,7 +85,7 @@ pub struct SolveStats {
 }
 
 /// Solver for the homological equations of one SSM computation.
-pub struct Homological<'a> {
+pub(crate) struct Homological<'a> {
     n: usize,
     a: SparseColMatRef<'a, usize, f64>,
     b: SparseColMatRef<'a, usize, f64>,

@@ -104,7 +104,7 @@ impl From<ReduceError> for JobError {
 
 /// Why a reduced model could not be had.
 #[derive(Debug, thiserror::Error)]
-pub enum ReduceError {
+pub(crate) enum ReduceError {
     /// The scene or the reducer's plugin failed.
     #[error(transparent)]
     Source(#[from] SourceError),

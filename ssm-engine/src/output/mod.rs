@@ -52,7 +52,7 @@ pub(crate) fn spectrum_csv(modal: &[ModalFigures], master_indices: &[(usize, usi
 }
 
 /// The typed results of a run, as the output layer receives them.
-pub struct Products<'a> {
+pub(crate) struct Products<'a> {
     /// Names of `[outputs] coordinates`.
     pub coordinates: &'a [String],
     /// Backbone curves.

@@ -76,7 +76,7 @@ fn tick(v: f64) -> String {
 
 /// One panel of a [`stacked_plot`].
 #[derive(Debug, Clone, Copy)]
-pub struct Panel<'a> {
+pub(crate) struct Panel<'a> {
     /// Panel title.
     pub title: &'a str,
     /// Name of the x axis.

@@ -58,7 +58,7 @@ pub struct Timing {
 }
 
 /// The results a run hands to `summary.json`.
-pub struct Summary<'a> {
+pub(crate) struct Summary<'a> {
     /// The model analysed.
     pub system: &'a System,
     /// The plugin libraries that ran (model, reducer).
@@ -418,7 +418,7 @@ pub struct LinearAlgebraSummary {
 
 impl RunSummary {
     /// The summary of the results `s`.
-    pub fn new(s: &Summary<'_>) -> Self {
+    pub(crate) fn new(s: &Summary<'_>) -> Self {
         let sys = s.system;
         let t = &s.timing;
         let lin = &s.ssm.timing.linear;
