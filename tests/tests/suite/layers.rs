@@ -9,7 +9,9 @@
 //!   span-free specs of `ssm_core::spec` (a plan);
 //! - no two files and no two folders import each other, directly or around
 //!   a longer loop, in any crate of the engine, `ssm-api` and
-//!   `ssm-model-files`.
+//!   `ssm-model-files`;
+//! - no source file is longer than 800 lines, no function of the pipeline
+//!   longer than 150.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -457,4 +459,147 @@ fn the_cycle_check_sees_a_planted_loop() {
     let (_, folders, _) = import_cycles(&src);
     assert_eq!(folders, vec![vec!["a".to_owned(), "b".to_owned()]]);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Longest source file, in lines, anywhere in the workspace.
+const MAX_FILE_LINES: usize = 800;
+
+/// Longest function of the pipeline, in lines (signature to closing brace).
+const MAX_PIPELINE_FN_LINES: usize = 150;
+
+/// The functions of `text` longer than `limit` lines, as `(name, lines)`:
+/// each `fn` with a body, from its line to the line of the brace that
+/// closes the body (comments and string contents left out, so their braces
+/// do not count).
+fn long_functions(text: &str, limit: usize) -> Vec<(String, usize)> {
+    let code = code_of(text);
+    let lines: Vec<&str> = code.lines().collect();
+    let mut found = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let Some(at) = line.find("fn ").filter(|&at| {
+            at == 0
+                || !line.as_bytes()[at - 1].is_ascii_alphanumeric()
+                    && line.as_bytes()[at - 1] != b'_'
+        }) else {
+            continue;
+        };
+        let name: String = line[at + 3..]
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if name.is_empty() {
+            continue;
+        }
+        // the body opens at the first `{` before a `;` (a declaration
+        // without a body ends at the `;`)
+        let (mut depth, mut opened, mut end) = (0i64, false, None);
+        'scan: for (j, l) in lines.iter().enumerate().skip(i) {
+            let from = if j == i { at } else { 0 };
+            for c in l[from..].chars() {
+                match c {
+                    ';' if !opened => break 'scan,
+                    '{' => {
+                        depth += 1;
+                        opened = true;
+                    }
+                    '}' => {
+                        depth -= 1;
+                        if opened && depth == 0 {
+                            end = Some(j);
+                            break 'scan;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+        }
+        if let Some(end) = end {
+            let n = end - i + 1;
+            if n > limit {
+                found.push((name, n));
+            }
+        }
+    }
+    found
+}
+
+/// Reference: the files' line counts and a brace count of each function.
+/// No source file of the workspace is longer than 800 lines, and no
+/// function of the engine's pipeline longer than 150: a longer one is split
+/// along what it does.
+#[test]
+fn no_file_over_800_lines_and_no_pipeline_function_over_150() {
+    let root = repo_root();
+    let mut files = Vec::new();
+    for dir in [
+        "ssm-kernel",
+        "ssm-core",
+        "ssm-engine",
+        "ssm-api",
+        "ssm-plugin-kit",
+        "model-files",
+        "plugins",
+        "tests",
+        "benches",
+    ] {
+        rust_files(&root.join(dir), &mut files);
+    }
+    // the frozen copies of old ABI crates that the loading fixtures build
+    files.retain(|f| {
+        !f.components().any(|c| {
+            c.as_os_str() == "vendor" || c.as_os_str() == "api-1.0" || c.as_os_str() == "target"
+        })
+    });
+    assert!(files.len() > 200, "only {} files seen", files.len());
+    let long: Vec<String> = files
+        .iter()
+        .filter_map(|f| {
+            let n = std::fs::read_to_string(f)
+                .expect("a source file")
+                .lines()
+                .count();
+            (n > MAX_FILE_LINES).then(|| format!("{}: {n} lines", f.display()))
+        })
+        .collect();
+    assert!(
+        long.is_empty(),
+        "files over {MAX_FILE_LINES} lines:\n{}",
+        long.join("\n")
+    );
+    let mut pipeline = Vec::new();
+    rust_files(&root.join("ssm-engine/src/pipeline"), &mut pipeline);
+    assert!(pipeline.len() >= 5, "{pipeline:?}");
+    let long: Vec<String> = pipeline
+        .iter()
+        .flat_map(|f| {
+            let text = std::fs::read_to_string(f).expect("a source file");
+            long_functions(&text, MAX_PIPELINE_FN_LINES)
+                .into_iter()
+                .map(move |(name, n)| format!("{}: fn {name}, {n} lines", f.display()))
+        })
+        .collect();
+    assert!(
+        long.is_empty(),
+        "pipeline functions over {MAX_PIPELINE_FN_LINES} lines:\n{}",
+        long.join("\n")
+    );
+}
+
+/// The function measure on planted text: a body of 160 lines is seen with
+/// its exact length, braces in comments and strings do not count, and
+/// declarations without a body and short functions are not reported.
+#[test]
+fn the_function_measure_sees_a_planted_long_function() {
+    let body = "    let x = 1;\n".repeat(158);
+    let text = format!(
+        "trait T {{\n    fn declared(&self);\n}}\n\
+         fn short() {{ let s = \"{{{{ not a brace\"; }} // }}}}\n\
+         pub(crate) fn long_one(a: usize) -> usize {{\n{body}}}\n\
+         fn after() {{}}\n"
+    );
+    assert_eq!(
+        long_functions(&text, 150),
+        vec![("long_one".to_owned(), 160)]
+    );
+    assert!(long_functions(&text, 160).is_empty());
 }
