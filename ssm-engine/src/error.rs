@@ -1,8 +1,8 @@
 //! What stops a run: one error type for every stage, from the scene to the
 //! files written.
 
-use crate::output::plot::PlotError;
 use crate::output::OutputError;
+use crate::plot::PlotError;
 use crate::scene::SceneError;
 use ssm_core::compare::report::ReportError;
 use ssm_core::compare::ValidateError;

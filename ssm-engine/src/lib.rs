@@ -22,7 +22,10 @@
 //! - [`pipeline`]: a plan run on a model, stage after stage
 //!   ([`pipeline::execute`]; it reads no scene type);
 //! - [`output`]: writers of `summary.json`, CSV and SVG from typed results
-//!   (they compute nothing), written atomically.
+//!   (they compute nothing), written atomically;
+//! - [`plot`]: the SVG plots (and `csv`, the rows) that the writers of
+//!   `output` and of the analyses share, so that an analysis does not
+//!   reach into `output`.
 //!
 //! Dependencies point one way: `job` uses every stage, `pipeline` runs a
 //! plan, `output` reads the stages' result types, and no two files or
@@ -34,11 +37,13 @@
 #![warn(missing_docs)]
 
 pub mod analyses;
+mod csv;
 mod error;
 pub mod job;
 pub mod output;
 pub mod pipeline;
 pub mod plan;
+pub mod plot;
 pub mod scene;
 
 pub use ssm_core::C64;

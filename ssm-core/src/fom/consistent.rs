@@ -56,7 +56,7 @@ pub fn consistent_initial(p: &DaeProblem, t0: f64, guess: &[f64]) -> Result<Cons
 /// The initial state of a run of `p.sys` from the named `(state, value)`
 /// pairs: the origin (rest at the equilibrium) when there are none, else
 /// the values made consistent with the displacements among them kept
-/// ([`consistent_initial_keeping`]).
+/// (`consistent_initial_keeping`).
 pub fn given_start(p: &DaeProblem, values: &[(String, f64)]) -> Result<Vec<f64>, SimError> {
     if values.is_empty() {
         return Ok(vec![0.0; p.n()]);

@@ -33,7 +33,7 @@ struct PreparedHarmonic {
 /// The system to integrate, with forcing amplitude and frequency fixed.
 ///
 /// The Jacobian pattern is the union of the patterns of `A`, `B`, `DF` and
-/// `DFext`; [`DaeProblem::jacobian`] and [`DaeProblem::b_values`] fill values
+/// `DFext`; `DaeProblem::jacobian` and `DaeProblem::b_values` fill values
 /// in that pattern's order, so one symbolic LU serves the whole run.
 #[derive(Debug, Clone)]
 pub struct DaeProblem<'a> {

@@ -28,7 +28,7 @@ pub enum PluginLoadError {
         path: PathBuf,
     },
     /// The path is not a regular file (a FIFO, a device, a directory) or is
-    /// larger than [`LIBRARY`].
+    /// larger than `LIBRARY`.
     #[error("plugin library: {0}")]
     Input(#[from] InputError),
     /// The library was built against an incompatible `ssm-api`.

@@ -142,7 +142,7 @@ impl Samples {
     }
 }
 
-/// Size of the harmonic table of [`forced_response_multi`] at `order` for
+/// Size of the harmonic table of `forced_response_multi` at `order` for
 /// `ratios`, for the cost gate before any of it is allocated: the slots (at
 /// most the harmonics `-h..=h`, `h = periods * order * max r`) and the
 /// sampled phases (64 per response period).

@@ -44,7 +44,7 @@ pub(crate) fn auto_ratios(masters: &[MasterMode], omega: f64) -> Vec<f64> {
 }
 
 /// The external resonance ratios of `sec`: its `resonance`, else
-/// [`auto_ratios`] at the middle of its frequency range.
+/// `auto_ratios` at the middle of its frequency range.
 pub fn resonance_ratios(sec: &FrcSpec, masters: &[MasterMode]) -> Vec<f64> {
     let range = sec.omega_range;
     match &sec.resonance {

@@ -12,7 +12,7 @@
 //! the largest nilpotent block), found as the first power at which the
 //! numerical rank of `T^k` stops falling. With `Q` an orthonormal basis of that
 //! range (leading left singular vectors), the finite `theta` are the eigenvalues
-//! of `Q^T T Q`. The rank uses a relative threshold [`RANK_TOL`] on singular
+//! of `Q^T T Q`. The rank uses a relative threshold `RANK_TOL` on singular
 //! values of `T^k`; finite modes are kept as long as
 //! `(|lambda_slowest| / |lambda_fastest|)^nu > RANK_TOL`, i.e. four decades of
 //! frequency for an index-3 DAE and twelve for an ODE. Larger spreads belong to

@@ -283,7 +283,7 @@ pub(crate) fn sort_spectrum(ev: &mut Vec<C64>) {
     }
 }
 
-/// Sorts the multipliers of a map like [`sort_spectrum`] sorts eigenvalues
+/// Sorts the multipliers of a map like `sort_spectrum` sorts eigenvalues
 /// of a flow: by `ln |mu|` descending (slowest decay first), pairs adjacent.
 pub fn sort_multipliers(ev: &mut Vec<C64>) {
     let mut logs: Vec<C64> = ev.iter().map(|m| m.ln()).collect();

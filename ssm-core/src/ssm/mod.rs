@@ -13,7 +13,7 @@
 //! with `Lambda_k = k . lambda` and `c_k = [sum_{j} DW_j R_l]_k` over the
 //! nonlinear lower-order terms (flows), or `Lambda_k = mu^k` and
 //! `c_k = sum_{2 <= |j| < |k|} w_j [R(p)^j]_k` (maps). It is solved by
-//! [`homological::Homological`]. The normal-form style decides per multi-index
+//! `homological::Homological`. The normal-form style decides per multi-index
 //! and master coordinate `i` whether the term is an inner resonance (eq. 15):
 //! flows compare frequencies, `|Im(k . lambda) - Im(lambda_i)| <= tol |Im lambda_i|`,
 //! maps compare arguments, `|arg(mu^k / mu_i)| <= tol |arg mu_i|`. Damping is

@@ -18,7 +18,7 @@ use schemars::{json_schema, JsonSchema, Schema, SchemaGenerator};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use crate::output::plot::PlotError;
+use crate::plot::PlotError;
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::rom::accuracy::AnswerEstimate;
 use ssm_core::spec::SpecError;

@@ -66,7 +66,7 @@ pub enum CheckpointError {
         path: PathBuf,
     },
     /// The path is not a regular file of its own (a symbolic or hard link,
-    /// a FIFO, a directory), or it is too large ([`LIMIT`]).
+    /// a FIFO, a directory), or it is too large (`LIMIT`).
     #[error("cannot resume from the checkpoint: {0}")]
     Input(InputError),
     /// A line does not read, or records are out of order.

@@ -7,8 +7,8 @@ use serde::{Deserialize, Serialize};
 use ssm_kernel::number::short;
 
 use super::json::{Complex, PerPair};
-use super::plot::{line_plot, Curve, PlotError, Scale};
 use super::reference::reference_curves;
+use crate::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::compare::validation::SteadyReference;
 use ssm_core::fom::periodic::frc::ReferenceFrc;
 use ssm_core::rom::accuracy::percent;

@@ -8,7 +8,6 @@ mod files;
 pub mod frc;
 pub mod identified;
 pub mod json;
-pub mod plot;
 pub mod pod;
 pub mod reference;
 pub mod report;
@@ -17,8 +16,8 @@ pub mod ssm;
 pub mod summary;
 pub mod validation;
 
+use crate::plot::PlotError;
 pub use files::{check_not_input, InputInOutput, OutputError, OutputSet, MARKER};
-use plot::PlotError;
 use ssm_core::compare::instantaneous::DataBackbone;
 use ssm_core::rom::autonomous::{BackboneCurve, LiftedTransient};
 use ssm_core::spectrum::ModalFigures;

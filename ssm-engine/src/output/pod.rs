@@ -8,7 +8,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use ssm_kernel::number::short;
 
-use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::compare::pod::{CaseRun, PodStudy, RomRun};
 use ssm_core::reduce::pod::Truncation;
 

@@ -9,7 +9,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::json::Complex;
-use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::fom::periodic::frc::{ReferenceBranch, ReferenceFrc, ReferenceOrbit};
 use ssm_kernel::continuation::Stop;
 
@@ -34,7 +34,7 @@ fn orbits_csv(outputs: &[String], branches: &[ReferenceBranch]) -> String {
     csv
 }
 
-/// The header line of [`reference_csv`] for the output names `outputs`.
+/// The header line of `reference_csv` for the output names `outputs`.
 pub fn orbit_header(outputs: &[String]) -> String {
     let mut csv = String::from("omega,epsilon,stable,branch,period_multiple");
     for o in outputs {
@@ -44,7 +44,7 @@ pub fn orbit_header(outputs: &[String]) -> String {
     csv
 }
 
-/// One line of [`reference_csv`].
+/// One line of `reference_csv`.
 pub fn orbit_row(o: &ReferenceOrbit) -> String {
     let mut row = format!(
         "{:.12e},{:e},{},{},{}",
@@ -184,7 +184,7 @@ pub(crate) const REFERENCE_METHOD: &str = "harmonic balance (AFT) continued in O
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ReferenceSummary {
-    /// How the curves were computed ([`REFERENCE_METHOD`]).
+    /// How the curves were computed (`REFERENCE_METHOD`).
     pub method: String,
     /// Harmonics of the Fourier series.
     pub harmonics: usize,

@@ -5,7 +5,7 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::compare::report::{FullKind, Report, ReportRow};
 
 fn opt(v: Option<f64>) -> String {

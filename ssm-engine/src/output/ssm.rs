@@ -5,9 +5,9 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::csv::push_row_end;
+use crate::plot::{estimate_label, line_plot, Curve, PlotError, Scale};
 use ssm_core::compare::instantaneous::{DataBackbone, Method};
-use ssm_core::rom::accuracy::percent;
 use ssm_core::rom::autonomous::{BackboneCurve, InvarianceEntry, LiftedTransient};
 use ssm_core::ssm::analysis::Polar;
 use ssm_core::ssm::{Dynamics, RTerm, SsmExpansion};
@@ -198,32 +198,6 @@ pub(crate) fn backbone_csv(curves: &[BackboneCurve], outputs: &[String]) -> Stri
         }
     }
     csv
-}
-
-/// The end of a curve point's CSV row: its output amplitudes (`,%.10e`
-/// each), then `,` and its error estimate (`%.3e`; empty when there is none
-/// or it is not finite), then the newline.
-pub(crate) fn push_row_end(csv: &mut String, amplitudes: &[f64], estimate: Option<f64>) {
-    for a in amplitudes {
-        csv.push_str(&format!(",{a:.10e}"));
-    }
-    csv.push(',');
-    if let Some(e) = estimate.filter(|e| e.is_finite()) {
-        csv.push_str(&format!("{e:.3e}"));
-    }
-    csv.push('\n');
-}
-
-/// A curve's legend: its order, estimate and, above the target, a warning.
-pub(crate) fn estimate_label(order: usize, estimate: Option<f64>, untrusted: bool) -> String {
-    let mut label = format!("O({order})");
-    if let Some(e) = estimate {
-        label.push_str(&format!(", estimated error {}", percent(e)));
-    }
-    if untrusted {
-        label.push_str("  UNTRUSTED: error estimate above [ssm] tolerance");
-    }
-    label
 }
 
 /// `data_backbone.csv`: `method,source,amplitude,omega`, the backbones read

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::plot::{line_plot, Curve, PlotError, Scale};
+use crate::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::compare::validation::{
     SteadyReference, TransientComparison, TransientStart, Validation,
 };

@@ -179,17 +179,17 @@ fn concurrent_writers_leave_one_complete_set() {
     assert_eq!(leftovers(&root, &["out"]), Vec::<String>::new());
 }
 
-/// The SVG plotter (`output::plot::line_plot`): title, axis labels, legend
+/// The SVG plotter (`plot::line_plot`): title, axis labels, legend
 /// entries, curves and markers are drawn, on linear and log-log axes.
 #[test]
 fn svg_plots_have_axes_legend_and_curves() {
     let curves = vec![
-        ssm_engine::output::plot::Curve {
+        ssm_engine::plot::Curve {
             label: "O(3)".into(),
             points: (0..10).map(|i| (i as f64, (i * i) as f64)).collect(),
-            ..ssm_engine::output::plot::Curve::default()
+            ..ssm_engine::plot::Curve::default()
         },
-        ssm_engine::output::plot::Curve {
+        ssm_engine::plot::Curve {
             label: "O(5)".into(),
             points: vec![(1.0, 2.0), (f64::NAN, 1.0), (3.0, 4.0)],
             dashed: true,
@@ -197,12 +197,12 @@ fn svg_plots_have_axes_legend_and_curves() {
             color: Some(0),
         },
     ];
-    let svg = ssm_engine::output::plot::line_plot(
+    let svg = ssm_engine::plot::line_plot(
         "backbone",
         "amplitude x1",
         "omega",
         &curves,
-        ssm_engine::output::plot::Scale::Linear,
+        ssm_engine::plot::Scale::Linear,
     )
     .unwrap();
     assert!(svg.starts_with("<svg"));
@@ -216,12 +216,12 @@ fn svg_plots_have_axes_legend_and_curves() {
     ] {
         assert!(svg.contains(text), "missing {text}");
     }
-    let log = ssm_engine::output::plot::line_plot(
+    let log = ssm_engine::plot::line_plot(
         "error",
         "radius",
         "error",
         &curves,
-        ssm_engine::output::plot::Scale::LogLog,
+        ssm_engine::plot::Scale::LogLog,
     )
     .unwrap();
     assert!(log.contains("polyline"));

@@ -39,7 +39,7 @@
 //! algebraic one exactly; both rows are divided by `beta h^2` like the
 //! constraints.
 //!
-//! Consistent starts come from [`consistent_initial`]
+//! Consistent starts come from [`super::consistent_initial`]
 //! (positions, velocities and multipliers); the first accelerations from
 //! `M a_0 = f(z_0, t_0)`.
 //!
@@ -220,7 +220,7 @@ const MAX_STEPS: usize = 2_000_000;
 
 /// Integrates `p` from the start `guess` (made consistent first) over
 /// `[t0, t_end]` with HHT-alpha and keeps every step end (memory grows with
-/// the steps: [`integrate_with`] streams them instead).
+/// the steps: `integrate_with` streams them instead).
 pub fn integrate(
     p: &DaeProblem,
     guess: &[f64],

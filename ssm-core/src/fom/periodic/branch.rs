@@ -197,7 +197,7 @@ pub enum ReferenceError {
 
 impl ReferenceBranch {
     /// The warning a branch calls for when its multipliers' check differs
-    /// by more than [`CHECK_WARNING`] or failed, led by `at` (where it was
+    /// by more than `CHECK_WARNING` or failed, led by `at` (where it was
     /// traced, e.g. `[reference]`); every traced branch gets it.
     pub fn multiplier_warning(&self, at: &str) -> Option<String> {
         match self.multiplier_check.as_ref()? {

@@ -32,7 +32,7 @@
 //!   order reduction of collocation at index 3;
 //! - the Jacobian is exact and sparse: a slot `(i, j)` of `DF` or `DFext` is a
 //!   dense `(2H+1)^2` block of products of Fourier coefficients of
-//!   `J_ij(psi)` (eq. [`galerkin_block`]), a slot of `A` alone is diagonal,
+//!   `J_ij(psi)` (eq. `galerkin_block`), a slot of `A` alone is diagonal,
 //!   and `B` couples `cos k` with `sin k`. One symbolic sparse LU of the
 //!   bordered Jacobian serves the whole continuation;
 //! - the Floquet exponents follow from the same Jacobian (Hill's method,

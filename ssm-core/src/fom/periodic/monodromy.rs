@@ -16,7 +16,7 @@
 //! the multipliers. The method is stiffly accurate with `R(inf) = 0`: the
 //! algebraic directions (constraint multipliers, recast auxiliaries) leave
 //! `Phi` with zero eigenvalues, which are dropped with the multipliers below
-//! [`NEGLIGIBLE_MULTIPLIER`] (modes damped by more than 20 e-folds per
+//! `NEGLIGIBLE_MULTIPLIER` (modes damped by more than 20 e-folds per
 //! period, which no bifurcation involves). The error of a multiplier falls as
 //! `h^5` (order 5 of Radau IIA for the differential components).
 //!
@@ -264,7 +264,7 @@ pub(crate) fn monodromy_matrix(
 /// The Floquet multipliers of the orbit `c` at `omega` from its monodromy
 /// map with `steps` steps per period ([`default_steps`] when `None`): all of
 /// them from the matrix `Phi` up to [`MAX_MONODROMY_STATES`] states, the
-/// dominant ones by subspace iteration above ([`dominant_multipliers`]).
+/// dominant ones by subspace iteration above (`dominant_multipliers`).
 pub fn floquet_by_monodromy(
     hb: &HarmonicBalance<'_>,
     c: &[f64],

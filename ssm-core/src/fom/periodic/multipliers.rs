@@ -34,7 +34,7 @@ pub struct Floquet {
     /// `exp(mu m T)`.
     pub multipliers: Vec<C64>,
     /// Number of multipliers outside the unit circle (by more than
-    /// [`UNIT_CIRCLE_TOL`]).
+    /// `UNIT_CIRCLE_TOL`).
     pub unstable: usize,
 }
 
@@ -139,7 +139,7 @@ impl Floquet {
 pub(crate) const CHECK_FLOOR: f64 = 1e-2;
 
 impl Floquet {
-    /// The largest distance from a multiplier above [`CHECK_FLOOR`] of either
+    /// The largest distance from a multiplier above `CHECK_FLOOR` of either
     /// set to the nearest multiplier of the other: the disagreement of two
     /// computations of the same orbit's multipliers (0 when neither has one
     /// above the floor).

@@ -143,7 +143,7 @@ pub(crate) fn tests_of(fl: Option<&floquet::Floquet>) -> Vec<Test> {
 impl OrbitInfo {
     /// Why an orbit's data and test functions `tests`, as read back from a
     /// checkpoint, are not what [`Problem::monitor`] computes: its Floquet
-    /// data disagree with themselves ([`floquet::Floquet::inconsistency`]),
+    /// data disagree with themselves (`floquet::Floquet::inconsistency`),
     /// or the tests are not those of its multipliers.
     pub fn restored_inconsistency(&self, tests: &[Test]) -> Option<String> {
         if let Some(why) = self.floquet.as_ref().and_then(|f| f.inconsistency()) {

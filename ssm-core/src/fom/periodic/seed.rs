@@ -7,7 +7,7 @@
 //! that is not connected to it inside the range: isolas, and upper branches
 //! cut by the range's ends. A seed on each of the reduced model's branches
 //! reaches them. A seed whose corrected orbit lies on a branch already traced
-//! (within [`SAME_BRANCH`] of its polyline in scaled unknowns) adds nothing
+//! (within `SAME_BRANCH` of its polyline in scaled unknowns) adds nothing
 //! and is dropped.
 //!
 //! # References

@@ -33,7 +33,7 @@ mod write;
 pub use curve::{damping_curves, DampingCurve, DampingCurves, DampingError, DampingPoint};
 
 use super::{Analysis, Context, Needs, Sizes, Work};
-use crate::output::plot::PlotError;
+use crate::plot::PlotError;
 use ssm_core::rom::accuracy::{percent, AnswerEstimate};
 use ssm_core::spec::{BackboneSpec, SpecError};
 

@@ -1,8 +1,9 @@
 //! `damping.csv` and `damping.svg`.
 
 use super::DampingCurves;
-use crate::output::plot::{stacked_plot, Curve, Panel, PlotError, Scale};
-use crate::output::ssm::{estimate_label, push_row_end};
+use crate::csv::push_row_end;
+use crate::plot::estimate_label;
+use crate::plot::{stacked_plot, Curve, Panel, PlotError, Scale};
 
 /// `damping.csv`: `order,rho,omega,decay_rate,zeta,<output>...,error_estimate`
 /// (the last empty where there is no estimate).

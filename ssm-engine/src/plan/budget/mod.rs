@@ -10,7 +10,7 @@
 //!
 //! The estimates count elementary operations from the size of each algorithm
 //! (multi-indices, series products, sparse solves, integration steps) and
-//! convert them with a rate measured on a 2-core machine ([`OPS_PER_SECOND`]).
+//! convert them with a rate measured on a 2-core machine (`OPS_PER_SECOND`).
 //! They are meant to separate "seconds to minutes" from "days", not to
 //! predict run times: a factor of a few either way is expected.
 

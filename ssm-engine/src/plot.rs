@@ -2,6 +2,7 @@
 //! backend; text is emitted as SVG text, no font files are needed).
 
 use plotters::prelude::*;
+use ssm_core::rom::accuracy::percent;
 
 /// A plot that could not be drawn.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -218,4 +219,16 @@ fn draw_panel(
         }
     }
     Ok(())
+}
+
+/// A curve's legend: its order, estimate and, above the target, a warning.
+pub(crate) fn estimate_label(order: usize, estimate: Option<f64>, untrusted: bool) -> String {
+    let mut label = format!("O({order})");
+    if let Some(e) = estimate {
+        label.push_str(&format!(", estimated error {}", percent(e)));
+    }
+    if untrusted {
+        label.push_str("  UNTRUSTED: error estimate above [ssm] tolerance");
+    }
+    label
 }
