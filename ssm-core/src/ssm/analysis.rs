@@ -241,8 +241,10 @@ pub fn invariance_error(
 ) -> f64 {
     let points = sphere_points(ssm.dim() / 2, radius, n_alpha, n_theta);
     let n = ssm.n_states() as f64;
-    // sample points are independent: spread them over the cores
-    let total: f64 = points
+    // sample points are independent: spread them over the cores, then sum
+    // in the points' order (the same bits on any number of threads and in
+    // every run)
+    let norms: Vec<f64> = points
         .par_iter()
         .map(|p| {
             ssm.residual(sys, p, order)
@@ -251,8 +253,8 @@ pub fn invariance_error(
                 .sum::<f64>()
                 .sqrt()
         })
-        .sum();
-    total / (n * points.len() as f64)
+        .collect();
+    norms.iter().sum::<f64>() / (n * points.len() as f64)
 }
 
 #[cfg(test)]

@@ -5,12 +5,17 @@
 //! checked, costed by the run's one gate, and run on the SSM the run chose
 //! (computed once and shared with the other answers). Its results land in
 //! `summary.json` under `analyses.<name>` and in the files its writer names.
+//! The answers older than the registry move into it keeping their scene
+//! table and their key of `summary.json` ([`Analysis::OWN_TABLE`]): so far
+//! the invariance error ([`invariance`]).
 //!
 //! Adding an analysis: a folder with a type implementing [`Analysis`], and a
 //! line in [`REGISTRY`] (and its section in `docs/scene.md`).
 
 pub mod damping;
+pub mod invariance;
 
+use std::collections::BTreeMap;
 use std::fmt::Debug;
 use std::marker::PhantomData;
 
@@ -26,7 +31,10 @@ use ssm_core::spectrum::MasterMode;
 use ssm_core::ssm::SsmExpansion;
 
 /// The analyses the engine offers, one line each.
-pub static REGISTRY: &[&dyn Entry] = &[&Slice::<damping::Damping>(PhantomData)];
+pub static REGISTRY: &[&dyn Entry] = &[
+    &Slice::<invariance::Invariance>(PhantomData),
+    &Slice::<damping::Damping>(PhantomData),
+];
 
 /// The analysis of `name` in [`REGISTRY`].
 pub fn find(name: &str) -> Result<&'static dyn Entry, AnalysisError> {
@@ -91,12 +99,35 @@ pub struct Sizes {
     pub multi_indices: f64,
     /// Outputs of `[outputs] coordinates`.
     pub outputs: usize,
+    /// Master pairs of the SSM.
+    pub pairs: usize,
+    /// States of the model.
+    pub states: f64,
+    /// Factors of all monomials of the model's nonlinearity (a bound on
+    /// the nodes of one evaluation).
+    pub factors: f64,
+}
+
+/// The answers' part of `summary.json` that the analyses fill: each
+/// analysis's results under `analyses.<name>`, and the keys that answers
+/// older than the registry keep.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Answers {
+    /// `analyses`: the results of each analysis, by name.
+    pub analyses: BTreeMap<String, serde_json::Value>,
+    /// `invariance_error`: the rows of [`invariance`].
+    pub invariance_error: Option<Vec<invariance::InvarianceSummary>>,
 }
 
 /// One analysis: its spec, its run and its writer.
 pub trait Analysis {
     /// `[analysis.<NAME>]`, and the key of its results in `summary.json`.
     const NAME: &'static str;
+    /// The scene table of an answer older than the registry (e.g.
+    /// `outputs.invariance_error`), which also keeps its own key of
+    /// `summary.json` (set by its [`Analysis::summarize`]); `None` for
+    /// `[analysis.<NAME>]` and `analyses.<NAME>`.
+    const OWN_TABLE: Option<&'static str> = None;
     /// What is asked (serde: from the scene's table or from JSON; unknown
     /// keys are refused, defaults documented on the fields).
     type Spec: Serialize + DeserializeOwned;
@@ -122,6 +153,14 @@ pub trait Analysis {
     fn warnings(_output: &Self::Output) -> Vec<String> {
         Vec::new()
     }
+    /// Puts its results into the summary: `analyses.<NAME>` unless it has
+    /// an [`Analysis::OWN_TABLE`].
+    fn summarize(output: &Self::Output, answers: &mut Answers) {
+        // plain data of numbers and strings: serializing cannot fail (a
+        // non-finite float becomes null)
+        let value = serde_json::to_value(output).unwrap_or(serde_json::Value::Null);
+        answers.analyses.insert(Self::NAME.to_owned(), value);
+    }
     /// Its files `(name, contents)`; `outputs` are the names of
     /// `[outputs] coordinates`.
     fn files(
@@ -135,6 +174,9 @@ pub trait Analysis {
 pub trait Entry: Sync {
     /// Its name.
     fn name(&self) -> &'static str;
+    /// The scene table it is asked for with: `analysis.<name>`, or the
+    /// table of an answer older than the registry.
+    fn table(&self) -> String;
     /// Reads `json` into its spec and checks it; the spec with every default
     /// filled in.
     fn spec(
@@ -161,6 +203,7 @@ pub trait Entry: Sync {
 pub(crate) fn outputs_schema(generator: &mut SchemaGenerator) -> Schema {
     let properties: serde_json::Map<String, serde_json::Value> = REGISTRY
         .iter()
+        .filter(|e| e.table() == format!("analysis.{}", e.name()))
         .map(|e| (e.name().to_owned(), e.output_schema(generator).to_value()))
         .collect();
     json_schema!({
@@ -174,8 +217,8 @@ pub(crate) fn outputs_schema(generator: &mut SchemaGenerator) -> Schema {
 pub trait Finished: Debug + Send {
     /// The analysis's name.
     fn name(&self) -> &'static str;
-    /// Its results as JSON (`summary.json`, `analyses.<name>`).
-    fn summary(&self) -> serde_json::Value;
+    /// Puts its results into the summary.
+    fn summarize(&self, answers: &mut Answers);
     /// Its error estimates.
     fn estimates(&self) -> Vec<AnswerEstimate>;
     /// Its warnings.
@@ -247,6 +290,10 @@ impl<A: Analysis + 'static> Entry for Slice<A> {
         A::NAME
     }
 
+    fn table(&self) -> String {
+        A::OWN_TABLE.map_or_else(|| format!("analysis.{}", A::NAME), str::to_owned)
+    }
+
     fn spec(
         &self,
         json: serde_json::Value,
@@ -294,10 +341,8 @@ impl<A: Analysis + 'static> Finished for Done<A> {
         A::NAME
     }
 
-    fn summary(&self) -> serde_json::Value {
-        // plain data of numbers and strings: serializing cannot fail (a
-        // non-finite float becomes null)
-        serde_json::to_value(&self.0).unwrap_or(serde_json::Value::Null)
+    fn summarize(&self, answers: &mut Answers) {
+        A::summarize(&self.0, answers);
     }
 
     fn estimates(&self) -> Vec<AnswerEstimate> {

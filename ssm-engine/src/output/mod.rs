@@ -87,10 +87,6 @@ pub(crate) fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
     if let Some(t) = p.transient {
         out.add("rom_trajectory.csv", ssm::transient_csv(t, p.coordinates));
     }
-    if let Some(rows) = s.invariance.filter(|r| !r.is_empty()) {
-        out.add("invariance.csv", ssm::invariance_csv(rows));
-        out.add("invariance.svg", ssm::invariance_svg(rows)?);
-    }
     let steady = s.validation.and_then(|v| v.steady.as_ref());
     if let Some(v) = s.validation {
         if let Some(t) = &v.transient {

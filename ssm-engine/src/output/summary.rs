@@ -15,8 +15,10 @@ use super::pod::PodSummary;
 use super::reference::ReferenceSummary;
 use super::report::ReportSummary;
 use super::simulation::SimulationSummary;
-use super::ssm::{InvarianceSummary, PolarSummary, SsmSummary};
+use super::ssm::{PolarSummary, SsmSummary};
 use super::validation::ValidationSummary;
+use crate::analyses::invariance::InvarianceSummary;
+use crate::analyses::Answers;
 use ssm_core::compare::pod::PodStudy;
 use ssm_core::compare::report::Report;
 use ssm_core::compare::validation::Validation;
@@ -26,7 +28,6 @@ use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::System;
 use ssm_core::reduce::Reduction;
 use ssm_core::rom::accuracy::Accuracy;
-use ssm_core::rom::autonomous::InvarianceEntry;
 use ssm_core::rom::forced_response::ForcedResponse;
 use ssm_core::spectrum::{MasterMode, SpectralQuotients, Spectrum};
 use ssm_core::ssm::analysis::Polar;
@@ -80,7 +81,6 @@ pub(crate) struct Summary<'a> {
     /// Polar form of a two-dimensional SSM of a flow.
     pub polar: Option<&'a Polar>,
     /// Invariance-error table.
-    pub invariance: Option<&'a [InvarianceEntry]>,
     /// Steps of the reduced transient.
     pub rom_steps: Option<usize>,
     /// Forced response curves.
@@ -95,8 +95,8 @@ pub(crate) struct Summary<'a> {
     pub pod: Option<&'a PodStudy>,
     /// The `[reference]` forced responses of the full system.
     pub reference: Option<&'a ReferenceFrc>,
-    /// The results of the analyses of `[analysis]`, by name.
-    pub analyses: &'a [(&'a str, Value)],
+    /// What the analyses of the registry put into the summary.
+    pub answers: &'a Answers,
     /// The accuracy target, the order and every answer's estimate.
     pub accuracy: &'a Accuracy,
     /// Warnings of the run.
@@ -470,7 +470,7 @@ impl RunSummary {
             },
             ssm: SsmSummary::new(s.ssm),
             polar: s.polar.map(PolarSummary::new),
-            invariance_error: s.invariance.map(InvarianceSummary::new),
+            invariance_error: s.answers.invariance_error.clone(),
             rom_steps: s.rom_steps,
             frc: s.frc.map(FrcSummary::new),
             validation: s.validation.map(ValidationSummary::new),
@@ -491,11 +491,7 @@ impl RunSummary {
                 numeric_factorizations: lin.factorizations,
                 solves: lin.solves,
             },
-            analyses: s
-                .analyses
-                .iter()
-                .map(|(name, v)| ((*name).to_owned(), v.clone()))
-                .collect(),
+            analyses: s.answers.analyses.clone(),
         }
     }
 }

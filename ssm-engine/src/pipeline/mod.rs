@@ -22,7 +22,7 @@ use std::time::Instant;
 pub use crate::error::JobError;
 pub use spectral::Spectral;
 
-use crate::analyses::{self, Context, Finished};
+use crate::analyses::{self, Answers, Context, Finished};
 use crate::output::summary::{Summary, Timing};
 use crate::output::{pod_only_files, result_files, OutputSet, Products};
 use crate::plan::budget::{self, Limits};
@@ -38,7 +38,7 @@ use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::reduce::Reduction;
 use ssm_core::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
-use ssm_core::rom::autonomous::{self, BackboneCurve, InvarianceEntry, LiftedTransient};
+use ssm_core::rom::autonomous::{self, BackboneCurve, LiftedTransient};
 use ssm_core::rom::forced_response::{forced_response, ForcedResponse};
 use ssm_core::spectrum::{MasterMode, Spectrum};
 use ssm_core::ssm::analysis::polar;
@@ -129,7 +129,6 @@ impl JobResult {
 
 /// The answers read off the autonomous reduced model.
 struct Autonomous {
-    invariance: Option<Vec<InvarianceEntry>>,
     backbone: Option<Vec<BackboneCurve>>,
     transient: Option<LiftedTransient>,
 }
@@ -191,11 +190,6 @@ impl Stage<'_> {
         let t = Instant::now();
         let specs = self.plan;
         let answers = Autonomous {
-            invariance: specs
-                .invariance
-                .as_ref()
-                .map(|sec| autonomous::invariance_table(&expansion, sys, sec))
-                .transpose()?,
             backbone: specs
                 .backbone
                 .as_ref()
@@ -221,7 +215,7 @@ impl Stage<'_> {
             tolerance,
         };
         let analyses = specs
-            .analyses
+            .requested()
             .iter()
             .map(|a| analyses::find(&a.name)?.run(&a.spec, &cx))
             .collect::<Result<Vec<_>, _>>()?;
@@ -464,7 +458,7 @@ pub fn execute(
     timing.spectrum = sp.spectrum_s;
     timing.resonance_check = sp.resonance_s;
     budget::check(plan, &system, &sp.masters, ceiling, limits)?;
-    budget::check_analyses(plan, &sp.masters, ceiling, limits)?;
+    budget::check_analyses(plan, &system, &sp.masters, ceiling, limits)?;
 
     let others: Vec<C64> = ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
     let stage = Stage {
@@ -515,8 +509,10 @@ pub fn execute(
     let pairs = &plan.ssm.master_pairs;
     timing.total = t0.elapsed().as_secs_f64();
     let modal = sp.spectrum.modal_figures();
-    let analysis_summaries: Vec<(&str, serde_json::Value)> =
-        analyses.iter().map(|a| (a.name(), a.summary())).collect();
+    let mut answers_of_analyses = Answers::default();
+    for a in &analyses {
+        a.summarize(&mut answers_of_analyses);
+    }
     let mut outputs = result_files(&Products {
         coordinates: &names,
         modal: &modal,
@@ -534,7 +530,6 @@ pub fn execute(
             quotients: &sp.resonances.quotients,
             ssm: &expansion,
             polar: polar_form.as_ref(),
-            invariance: answers.invariance.as_deref(),
             rom_steps: answers.transient.as_ref().map(|t| t.steps),
             frc: frc.as_ref(),
             validation: full.validation.as_ref(),
@@ -542,7 +537,7 @@ pub fn execute(
             simulation: full.simulation.as_ref(),
             pod: pod.as_ref(),
             reference: full.reference.as_ref(),
-            analyses: &analysis_summaries,
+            answers: &answers_of_analyses,
             accuracy: &accuracy,
             warnings: &warnings,
             timing,
@@ -569,7 +564,7 @@ pub fn execute(
 /// without any).
 fn highest_analysis_order(plan: &Plan) -> Result<usize, JobError> {
     let mut highest = 1;
-    for a in &plan.analyses {
+    for a in plan.requested() {
         let orders = analyses::find(&a.name)?.orders(&a.spec)?;
         highest = orders.into_iter().fold(highest, usize::max);
     }

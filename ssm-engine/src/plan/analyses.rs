@@ -43,6 +43,9 @@ pub(super) fn analyses(
                 scene.invalid(span, key, e.to_string())
             };
             let entry = analyses::find(name).map_err(|e| fail(at.clone(), &key, e))?;
+            if entry.table() != key {
+                return Err(scene.invalid(at.clone(), &key, own_table(&entry.table())));
+            }
             let json = serde_json::to_value(table.get_ref())
                 .map_err(|e| scene.invalid(at.clone(), &key, format!("cannot be read: {e}")))?;
             let spec = entry.spec(json, &needs).map_err(|e| match &e {
@@ -67,10 +70,19 @@ pub(super) fn check(planned: &[PlannedAnalysis], ssm: &SsmSpec) -> Result<(), Sp
     for a in planned {
         let key = format!("analysis.{}", a.name);
         let entry = analyses::find(&a.name).map_err(|e| SpecError::new(&key, e.to_string()))?;
+        if entry.table() != key {
+            return Err(SpecError::new(&key, own_table(&entry.table())));
+        }
         entry.spec(a.spec.clone(), &needs).map_err(|e| match e {
             AnalysisError::Spec { source, .. } => source,
             other => SpecError::new(&key, other.to_string()),
         })?;
     }
     Ok(())
+}
+
+/// Why an answer older than the registry is not asked for with
+/// `[analysis.<name>]`.
+fn own_table(table: &str) -> String {
+    format!("is asked for with [{table}], not here")
 }

@@ -95,6 +95,21 @@ impl Plan {
             || !self.analyses.is_empty()
     }
 
+    /// Every analysis of [`crate::analyses::REGISTRY`] the plan asks for,
+    /// its spec as JSON: the answers older than the registry that a field
+    /// of their own asks for (`invariance`), then `analyses`.
+    pub fn requested(&self) -> Vec<PlannedAnalysis> {
+        use crate::analyses::{invariance::Invariance, Analysis};
+        let own = self.invariance.as_ref().map(|s| PlannedAnalysis {
+            name: Invariance::NAME.to_owned(),
+            // plain data: serializing cannot fail
+            spec: serde_json::to_value(s).unwrap_or(serde_json::Value::Null),
+        });
+        own.into_iter()
+            .chain(self.analyses.iter().cloned())
+            .collect()
+    }
+
     /// The highest expansion order an answer names itself (`orders` lists,
     /// `order` keys, `nonautonomous_order + 1`); 1 when none does. A chosen
     /// SSM order is never below it.

@@ -363,3 +363,69 @@ fn hand_built_plans_are_checked_like_scenes() {
     }
     base().validate().expect("the sound plan passes");
 }
+
+/// The invariance error runs as an analysis of the registry
+/// (`ssm_engine::analyses::invariance`) and writes what it wrote before its
+/// move: its rows under `invariance_error` of `summary.json` (not under
+/// `analyses`) and `invariance.csv`/`.svg`. Checks: a determinism check
+/// against `invariance_table` called on the run's own SSM (the same code:
+/// the same bits, its sum over the torus taken in the points' order on any
+/// number of threads); eq. (41) falls with the order at a radius inside the
+/// convergence (the residual is `O(rho^(order + 1))`). Asking for it in
+/// `[analysis.invariance]` or in a plan's `analyses` is refused: its table
+/// is `[outputs.invariance_error]`.
+#[test]
+fn the_invariance_error_runs_as_an_analysis_and_keeps_its_key() {
+    use ssm_core::rom::autonomous::invariance_table;
+    use ssm_core::spec::InvarianceSpec;
+    let table = "[outputs.invariance_error]\nradii = [0.05, 0.1]\norders = [3, 5]\n";
+    let job = ssm_tests::run_scene_text(&format!("{DUFFING}{table}")).expect("scene runs");
+    ssm_tests::assert_job_summary_valid(&job, "invariance");
+    let summary: serde_json::Value =
+        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    assert!(summary.get("analyses").is_none(), "{}", summary["analyses"]);
+    let rows = summary["invariance_error"]
+        .as_array()
+        .expect("invariance_error");
+    let spec = InvarianceSpec {
+        radii: vec![0.05, 0.1],
+        orders: vec![3, 5],
+        n_alpha: InvarianceSpec::DEFAULT_N_ALPHA,
+        n_theta: InvarianceSpec::DEFAULT_N_THETA,
+    };
+    let direct =
+        invariance_table(job.ssm.as_ref().expect("an SSM"), &job.system, &spec).expect("the table");
+    assert_eq!(rows.len(), direct.len());
+    for (row, d) in rows.iter().zip(&direct) {
+        assert_eq!(row["order"], d.order);
+        assert_eq!(row["radius"].as_f64(), Some(d.radius));
+        assert_eq!(row["error"].as_f64(), Some(d.error));
+    }
+    let at = |order: usize, radius: f64| {
+        direct
+            .iter()
+            .find(|d| d.order == order && d.radius == radius)
+            .expect("a row")
+            .error
+    };
+    assert!(at(5, 0.05) < at(3, 0.05), "{direct:?}");
+    let csv = std::str::from_utf8(job.outputs.get("invariance.csv").expect("csv")).unwrap();
+    assert!(csv.starts_with("order,radius,error\n") && csv.lines().count() == 5);
+    assert!(job.outputs.get("invariance.svg").is_some());
+    // not an [analysis.*] table
+    let text = format!("{DUFFING}[analysis.invariance]\nradii = [0.1]\norders = [3]\n");
+    let (line, msg) = ssm_tests::scene_error(&text);
+    assert_eq!(line, 1 + DUFFING.lines().count(), "{msg}");
+    assert!(
+        msg.contains("analysis.invariance") && msg.contains("[outputs.invariance_error]"),
+        "{msg}"
+    );
+    let mut plan = duffing_plan();
+    plan.analyses = vec![plan::PlannedAnalysis {
+        name: "invariance".into(),
+        spec: serde_json::to_value(&spec).expect("json"),
+    }];
+    let e = plan.validate().expect_err("refused");
+    assert_eq!(e.key, "analysis.invariance", "{e}");
+    assert!(e.problem.contains("[outputs.invariance_error]"), "{e}");
+}

@@ -75,21 +75,25 @@ impl Limits {
 /// size.
 pub(crate) fn check_analyses(
     plan: &Plan,
+    system: &System,
     masters: &[MasterMode],
     order: usize,
     limits: &Limits,
 ) -> Result<(), PlanError> {
+    let model = Sizes::of(system);
     let sizes = crate::analyses::Sizes {
         multi_indices: multi_indices(2 * masters.len().max(1), order),
         outputs: plan.coordinates.len(),
+        pairs: masters.len().max(1),
+        states: model.states,
+        factors: model.factors,
     };
-    for a in &plan.analyses {
-        let key = format!("analysis.{}", a.name);
-        let fail = |e: crate::analyses::AnalysisError| PlanError::new(&key, e.to_string());
-        let work = crate::analyses::find(&a.name)
-            .map_err(fail)?
+    for a in plan.requested() {
+        let entry = crate::analyses::find(&a.name)
+            .map_err(|e| PlanError::new(&format!("analysis.{}", a.name), e.to_string()))?;
+        let work = entry
             .work(&a.spec, &sizes)
-            .map_err(fail)?;
+            .map_err(|e| PlanError::new(&entry.table(), e.to_string()))?;
         let cost = Cost {
             ops: work.ops,
             bytes: work.bytes,
@@ -358,22 +362,6 @@ pub fn check(
         Dynamics::Flow => periods(t_end) * STEPS_PER_PERIOD,
     };
     let coords = plan.coordinates.len() as f64;
-    if let Some(ie) = &plan.invariance {
-        let points =
-            (ie.n_alpha as f64).powi(pairs as i32 - 1) * (ie.n_theta as f64).powi(pairs as i32);
-        let evaluations = points * (ie.radii.len() * ie.orders.len()) as f64;
-        let cost = Cost {
-            ops: evaluations * (4.0 * n_idx * sizes.states + 4.0 * sizes.factors),
-            bytes: points * (16.0 * nvar as f64 + 64.0),
-        };
-        ensure(
-                "outputs.invariance_error.n_theta",
-                format!("the invariance error on {points:.1e} points per radius and order (n_alpha^(pairs-1) n_theta^pairs with {pairs} pairs)"),
-                &cost,
-                limits,
-                "lower n_alpha and n_theta",
-        )?;
-    }
     if let Some(bb) = &plan.backbone {
         let points = bb.points as f64;
         let orders = bb.orders.as_ref().map_or(1, Vec::len) as f64;
