@@ -160,7 +160,7 @@ pub fn parametric_pump_reference(
 /// and `x1` obeys a damped Mathieu equation whose tongue near `Omega = 2`
 /// is bounded by two period doublings.
 pub fn parametric_pump(zeta1: f64, zeta2: f64, alpha: f64, beta: f64, f: f64) -> System {
-    use ssm_api::{Harmonic, PolyVector, SparseMatrix};
+    use ssm_api::{PolyVector, SparseMatrix};
     use ssm_plugin_kit::MechanicalSystem;
     let mut m = MechanicalSystem::new("parametric-pump", &["x1", "x2"]);
     m.mass = SparseMatrix::diagonal(&[1.0, 1.0]);
@@ -170,12 +170,18 @@ pub fn parametric_pump(zeta1: f64, zeta2: f64, alpha: f64, beta: f64, f: f64) ->
     nl.push(0, alpha, &[(0, 1), (1, 1)]);
     nl.push(1, beta, &[(0, 2)]);
     m.internal_force = nl;
-    let mut cos = PolyVector::zeros(2, 4);
-    cos.push(1, f, &[]);
-    m.forcing = vec![Harmonic {
+    m.forcing = cosine_load(2, 1, f);
+    System::from_model("catalogue", m.into_model().expect("valid model")).expect("valid system")
+}
+
+/// The load `f cos(Omega t)` on the coordinate `dof` of `n` (degree-4
+/// polynomial vectors, as the catalogue's models use).
+pub(crate) fn cosine_load(n: usize, dof: usize, f: f64) -> Vec<ssm_api::Harmonic> {
+    let mut cos = ssm_api::PolyVector::zeros(n, 4);
+    cos.push(dof, f, &[]);
+    vec![ssm_api::Harmonic {
         multiple: 1.0,
         cos,
-        sin: PolyVector::zeros(2, 4),
-    }];
-    System::from_model("catalogue", m.into_model().expect("valid model")).expect("valid system")
+        sin: ssm_api::PolyVector::zeros(n, 4),
+    }]
 }

@@ -441,17 +441,11 @@ pub fn one_to_two_resonant(zeta: f64) -> System {
 /// `x1` parametrically (a Mathieu tongue for `0.5 |x2| > 4 zeta`), so the
 /// response can be of period `2T` (a frequency divider).
 pub fn one_to_two_forced(zeta: f64, f: f64) -> System {
-    use ssm_api::{Harmonic, PolyVector, SparseMatrix};
+    use ssm_api::{PolyVector, SparseMatrix};
     use ssm_plugin_kit::MechanicalSystem;
     let mut m = MechanicalSystem::new("one-to-two", &["x1", "x2"]);
     if f != 0.0 {
-        let mut cos = PolyVector::zeros(2, 4);
-        cos.push(1, f, &[]);
-        m.forcing = vec![Harmonic {
-            multiple: 1.0,
-            cos,
-            sin: PolyVector::zeros(2, 4),
-        }];
+        m.forcing = forced::cosine_load(2, 1, f);
     }
     let (w1, w2) = (1.0f64, 2.0f64);
     m.mass = SparseMatrix::diagonal(&[1.0, 1.0]);
