@@ -366,6 +366,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             command.name()
         );
     }
+    // a resumed reference belongs to a run; these commands run none
+    if let Some(command @ (Command::Plugins | Command::Schema | Command::Export { .. })) =
+        &cli.command
+    {
+        if cli.resume || cli.resume_from.is_some() {
+            anyhow::bail!(
+                "'{}' runs no scene: --resume and --resume-from go with ssm-engine SCENE.toml or ssm-engine report SCENE.toml",
+                command.name()
+            );
+        }
+    }
     if let Some(Command::Schema) = cli.command {
         return print_text(&ssm_engine::output::summary::schema_json());
     }

@@ -463,6 +463,22 @@ impl SceneFile {
         }
     }
 
+    /// A periodic orbit's `start` (of `key`) names `"rest"` or `"ssm"`.
+    pub(crate) fn check_start(
+        &self,
+        start: Option<&Spanned<String>>,
+        key: &str,
+    ) -> Result<(), SceneError> {
+        match start.map(|st| (st, st.get_ref().as_str())) {
+            Some((st, other)) if other != "rest" && other != "ssm" => Err(self.invalid(
+                st.span(),
+                key,
+                format!("unknown start \"{other}\"; expected \"rest\" or \"ssm\""),
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// The checks of the scene's shape that its specs cannot make (which
     /// keys go together, lists of two numbers, names of starts); the
     /// values are checked by the specs' own checks when the scene is

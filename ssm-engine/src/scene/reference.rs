@@ -120,13 +120,6 @@ impl SceneFile {
                 ),
             ));
         }
-        match r.start.as_ref().map(|st| (st, st.get_ref().as_str())) {
-            Some((st, other)) if other != "rest" && other != "ssm" => Err(self.invalid(
-                st.span(),
-                "reference.start",
-                format!("unknown start \"{other}\"; expected \"rest\" or \"ssm\""),
-            )),
-            _ => Ok(()),
-        }
+        self.check_start(r.start.as_ref(), "reference.start")
     }
 }

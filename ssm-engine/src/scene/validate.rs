@@ -227,13 +227,6 @@ impl SceneFile {
                 ))
             }
         }
-        match s.start.as_ref().map(|st| (st, st.get_ref().as_str())) {
-            Some((st, other)) if other != "rest" && other != "ssm" => Err(self.invalid(
-                st.span(),
-                "validate.steady_state.start",
-                format!("unknown start \"{other}\"; expected \"rest\" or \"ssm\""),
-            )),
-            _ => Ok(()),
-        }
+        self.check_start(s.start.as_ref(), "validate.steady_state.start")
     }
 }

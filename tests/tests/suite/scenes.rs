@@ -272,7 +272,8 @@ fn plugins_command_lists_models_and_parameters() {
 
 /// The global `--plugin` may come before a command (`ssm-engine --plugin
 /// X.so plugins` lists X's models); a scene or `--out` before a command is
-/// refused, not run or dropped.
+/// refused, not run or dropped, and so is `--resume` with a command that
+/// runs no scene.
 #[test]
 fn global_options_may_precede_a_command_and_a_scene_may_not() {
     let o = Command::new(engine_binary())
@@ -296,6 +297,19 @@ fn global_options_may_precede_a_command_and_a_scene_may_not() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
             !o.status.success() && err.contains("takes no scene and no --out"),
+            "{args:?}: {err}"
+        );
+        assert!(o.stdout.is_empty(), "{args:?}");
+    }
+    // a resumed reference belongs to a run
+    for args in [
+        &["--resume", "plugins"][..],
+        &["schema", "--resume-from", "x.jsonl"][..],
+    ] {
+        let o = Command::new(engine_binary()).args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("runs no scene"),
             "{args:?}: {err}"
         );
         assert!(o.stdout.is_empty(), "{args:?}");
@@ -618,4 +632,36 @@ fn zoo_fig11_scene_continues_the_internally_resonant_frc() {
     let svg = std::fs::read_to_string(out.join("frc.svg")).unwrap();
     assert!(svg.contains("<circle"), "fold markers missing from frc.svg");
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// A periodic orbit's start names "rest" or "ssm", in `[reference]` and in
+/// `[validate.steady_state]` alike: another name is a scene error at its
+/// line and key.
+#[test]
+fn unknown_orbit_starts_are_refused_at_their_line() {
+    let scene = "[model]\nplugin = \"duffing\"\n[ssm]\norder = 3\n[outputs]\n\
+        coordinates = [\"x\"]\n[forcing]\nepsilon = [0.01]\nomega_range = [0.9, 1.1]\n\
+        [validate.steady_state]\nepsilon = 0.01\nomega = [1.0]\nstart = \"ssm\"\n\
+        [reference]\nepsilon = 0.01\nomega_range = [0.9, 1.1]\nstart = \"rest\"\n";
+    for (from, to, line, key) in [
+        (
+            "start = \"ssm\"",
+            "start = \"sky\"",
+            13,
+            "validate.steady_state.start",
+        ),
+        (
+            "start = \"rest\"",
+            "start = \"moon\"",
+            17,
+            "reference.start",
+        ),
+    ] {
+        let (at, msg) = ssm_tests::scene_error(&scene.replace(from, to));
+        assert_eq!(at, line, "{msg}");
+        assert!(
+            msg.starts_with(key) && msg.contains("expected \"rest\" or \"ssm\""),
+            "{msg}"
+        );
+    }
 }
