@@ -7,6 +7,7 @@
 //! - [`chebyshev`]: adaptive Chebyshev tables in one variable;
 //! - [`continuation`]: the continuation core (local parametrization, step
 //!   control, test functions and the events they locate);
+//! - [`sparse_lu`]: a sparse LU analyzed once and refactored in place;
 //! - [`stepper`]: the one interface of the time integrators, and sampling
 //!   any of them at given times;
 //! - [`dopri`]: the Dormand-Prince 5(4) pair on complex states;
@@ -19,6 +20,7 @@ pub mod continuation;
 pub mod dopri;
 pub mod number;
 pub mod poly;
+pub mod sparse_lu;
 pub mod stepper;
 
 pub use num_complex::Complex64 as C64;

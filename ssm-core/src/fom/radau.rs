@@ -16,13 +16,12 @@
 //! Springer (1996), Sects. IV.8 and VII.8; the RADAU5 code of the same authors
 //! (constants `T`, `T^{-1}`, step-size and Newton controls).
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::SparseColMat;
-use faer::Mat;
+use faer::{Mat, Par};
 
 use super::{DaeProblem, SimError};
 use crate::C64;
+use ssm_kernel::sparse_lu::SparseLu;
 use ssm_kernel::stepper::{StepStats, Stepper};
 
 const SQ6: f64 = 2.449_489_742_783_178;
@@ -181,9 +180,12 @@ pub struct Radau<'p, 'a> {
     jac_current: bool,
     need_jac: bool,
     need_lu: bool,
-    symbolic: SymbolicLu<usize>,
-    lu_real: Option<Lu<usize, f64>>,
-    lu_cplx: Option<Lu<usize, C64>>,
+    /// The LUs of the real and the complex iteration matrix, on one thread
+    /// each (the matrices are `3N` at most a few thousand: threads inside
+    /// one factorization cost more than they give; callers run independent
+    /// integrations in parallel instead).
+    lu_real: SparseLu<f64>,
+    lu_cplx: SparseLu<C64>,
     /// Why the last step was rejected (reported when steps collapse).
     last_cause: &'static str,
     /// Newton iterations of the last converged stage solve.
@@ -220,12 +222,13 @@ impl<'p, 'a> Radau<'p, 'a> {
                 state: p.state_name(i).to_owned(),
             });
         }
-        let symbolic =
-            SymbolicLu::try_new(p.pattern().as_ref()).map_err(|e| SimError::SingularIteration {
-                t: t0,
-                h: 0.0,
-                detail: format!("symbolic LU of the iteration matrix failed: {e:?}"),
-            })?;
+        let analyze_fail = |e: faer::sparse::FaerError| SimError::SingularIteration {
+            t: t0,
+            h: 0.0,
+            detail: format!("symbolic LU of the iteration matrix failed: {e:?}"),
+        };
+        let lu_real = SparseLu::analyze(p.pattern().as_ref(), Par::Seq).map_err(analyze_fail)?;
+        let lu_cplx = SparseLu::analyze(p.pattern().as_ref(), Par::Seq).map_err(analyze_fail)?;
         // RADAU5's tolerance transformation: the order-3 error estimate is
         // compared with 0.1 rtol^(2/3)
         let quot = opts.atol / opts.rtol;
@@ -273,9 +276,8 @@ impl<'p, 'a> Radau<'p, 'a> {
             jac_current: false,
             need_jac: true,
             need_lu: true,
-            symbolic,
-            lu_real: None,
-            lu_cplx: None,
+            lu_real,
+            lu_cplx,
             last_cause: "",
             last_newton: 0,
             stats: RadauStats::default(),
@@ -335,31 +337,29 @@ impl<'p, 'a> Radau<'p, 'a> {
             detail: e,
         };
         let m = SparseColMat::new(self.p.pattern().clone(), real);
-        let lu = Lu::try_new_with_symbolic(self.symbolic.clone(), m.as_ref())
+        self.lu_real
+            .factor(m.as_ref())
             .map_err(|e| fail(format!("LU of (gamma/h) B - J failed: {e:?}")))?;
         let mc = SparseColMat::new(self.p.pattern().clone(), cplx);
-        let luc = Lu::try_new_with_symbolic(self.symbolic.clone(), mc.as_ref())
+        self.lu_cplx
+            .factor(mc.as_ref())
             .map_err(|e| fail(format!("LU of ((alpha + i beta)/h) B - J failed: {e:?}")))?;
-        self.lu_real = Some(lu);
-        self.lu_cplx = Some(luc);
         self.stats.factorizations += 1;
         Ok(())
     }
 
-    fn solve_real(&self, rhs: &mut [f64]) -> Result<(), SimError> {
-        let lu = self.lu_real.as_ref().expect("factorized before solving");
+    fn solve_real(&mut self, rhs: &mut [f64]) -> Result<(), SimError> {
         let mut x = Mat::<f64>::from_fn(rhs.len(), 1, |i, _| rhs[i]);
-        lu.solve_in_place(x.as_mut());
+        self.lu_real.solve_in_place(x.as_mut());
         for (i, r) in rhs.iter_mut().enumerate() {
             *r = x[(i, 0)];
         }
         self.check_solution(rhs.iter().copied())
     }
 
-    fn solve_cplx(&self, re: &mut [f64], im: &mut [f64]) -> Result<(), SimError> {
-        let lu = self.lu_cplx.as_ref().expect("factorized before solving");
+    fn solve_cplx(&mut self, re: &mut [f64], im: &mut [f64]) -> Result<(), SimError> {
         let mut x = Mat::<C64>::from_fn(re.len(), 1, |i, _| C64::new(re[i], im[i]));
-        lu.solve_in_place(x.as_mut());
+        self.lu_cplx.solve_in_place(x.as_mut());
         for i in 0..re.len() {
             re[i] = x[(i, 0)].re;
             im[i] = x[(i, 0)].im;

@@ -8,24 +8,24 @@
 //! rests, dense). The symbolic analysis (COLAMD ordering and elimination
 //! structure) is made once per local parameter `k` and reused; along a branch
 //! `k` is the frequency but near folds, where an amplitude takes over, so a
-//! handful of analyses serve a whole branch.
+//! handful of analyses serve a whole branch. Each analysis keeps its
+//! factors' storage ([`SparseLu`], on one thread).
 
 use std::collections::HashMap;
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
-use faer::MatMut;
+use faer::{MatMut, Par};
 
 use super::ProblemFailure;
+use crate::sparse_lu::SparseLu;
 
 /// A sparse `n x (n + 1)` Jacobian's bordered solves.
 pub struct SparseBordered {
     pattern: SymbolicSparseColMat<usize>,
-    /// `k -> (pattern without column k, its symbolic LU)`.
-    analyses: HashMap<usize, (SymbolicSparseColMat<usize>, SymbolicLu<usize>)>,
-    lu: Option<Lu<usize, f64>>,
-    k: usize,
+    /// `k -> (pattern without column k, its LU)`.
+    analyses: HashMap<usize, (SymbolicSparseColMat<usize>, SparseLu<f64>)>,
+    /// The local parameter of the last factorization, if it succeeded.
+    factored: Option<usize>,
     /// Column `k` of the last factorization: `(row, value)`.
     column_k: Vec<(usize, f64)>,
     /// Numeric factorizations made.
@@ -40,8 +40,7 @@ impl SparseBordered {
         Self {
             pattern,
             analyses: HashMap::new(),
-            lu: None,
-            k: 0,
+            factored: None,
             column_k: Vec::new(),
             factorizations: 0,
             analyses_made: 0,
@@ -68,33 +67,33 @@ impl SparseBordered {
                 col_ptr.push(rows.len());
             }
             let sq = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);
-            let symbolic = SymbolicLu::try_new(sq.as_ref()).map_err(|e| {
+            let lu = SparseLu::analyze(sq.as_ref(), Par::Seq).map_err(|e| {
                 ProblemFailure(format!("symbolic LU of the Jacobian failed: {e:?}"))
             })?;
-            slot.insert((sq, symbolic));
+            slot.insert((sq, lu));
             self.analyses_made += 1;
         }
-        let (sq, symbolic) = &self.analyses[&k];
+        self.factored = None;
+        let (sq, lu) = self.analyses.get_mut(&k).expect("analyzed above");
         let mut v = Vec::with_capacity(vals.len());
         for j in (0..=n).filter(|&j| j != k) {
             v.extend_from_slice(&vals[cp[j]..cp[j + 1]]);
         }
         let m = SparseColMat::new(sq.clone(), v);
-        let lu = Lu::try_new_with_symbolic(symbolic.clone(), m.as_ref())
+        lu.factor(m.as_ref())
             .map_err(|e| ProblemFailure(format!("sparse LU of the Jacobian failed: {e:?}")))?;
         self.column_k = (cp[k]..cp[k + 1]).map(|p| (ri[p], vals[p])).collect();
-        self.k = k;
-        self.lu = Some(lu);
+        self.factored = Some(k);
         self.factorizations += 1;
         Ok(())
     }
 
     /// Solves `[J; e_k^T] x = rhs` in place (`n + 1` values).
-    pub fn solve(&self, rhs: &mut [f64]) -> Result<(), ProblemFailure> {
-        let lu = self
-            .lu
-            .as_ref()
+    pub fn solve(&mut self, rhs: &mut [f64]) -> Result<(), ProblemFailure> {
+        let k = self
+            .factored
             .ok_or_else(|| ProblemFailure("solve before factor".into()))?;
+        let lu = &mut self.analyses.get_mut(&k).expect("factored").1;
         let n = rhs.len() - 1;
         let xk = rhs[n];
         let mut b = rhs[..n].to_vec();
@@ -106,9 +105,9 @@ impl SparseBordered {
             return Err(ProblemFailure("the bordered Jacobian is singular".into()));
         }
         // reinsert x_k at its place
-        rhs[..self.k].copy_from_slice(&b[..self.k]);
-        rhs[self.k] = xk;
-        rhs[self.k + 1..].copy_from_slice(&b[self.k..]);
+        rhs[..k].copy_from_slice(&b[..k]);
+        rhs[k] = xk;
+        rhs[k + 1..].copy_from_slice(&b[k..]);
         Ok(())
     }
 }

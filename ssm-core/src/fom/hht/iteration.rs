@@ -3,9 +3,9 @@
 //! reusable symbolic LU, and the momentum force.
 
 use faer::prelude::Solve;
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
-use faer::Mat;
+use faer::{Mat, Par};
+use ssm_kernel::sparse_lu::SparseLu;
 
 use super::HhtOptions;
 use crate::fom::problem::square_pattern;
@@ -132,8 +132,9 @@ struct Scatter {
 pub(super) struct Iteration {
     pattern: SymbolicSparseColMat<usize>,
     scatter: Vec<Scatter>,
-    symbolic: SymbolicLu<usize>,
-    lu: Option<Lu<usize, f64>>,
+    /// On one thread (see [`SparseLu`]): the steps are sequential, and
+    /// independent integrations share the cores.
+    lu: SparseLu<f64>,
 }
 
 impl Iteration {
@@ -184,17 +185,17 @@ impl Iteration {
                 row,
             })
             .collect();
-        let symbolic =
-            SymbolicLu::try_new(pattern.as_ref()).map_err(|e| SimError::SingularIteration {
+        let lu = SparseLu::analyze(pattern.as_ref(), Par::Seq).map_err(|e| {
+            SimError::SingularIteration {
                 t: 0.0,
                 h: 0.0,
                 detail: format!("symbolic LU of the HHT iteration matrix failed: {e:?}"),
-            })?;
+            }
+        })?;
         Ok(Self {
             pattern,
             scatter,
-            symbolic,
-            lu: None,
+            lu,
         })
     }
 
@@ -231,21 +232,18 @@ impl Iteration {
             };
         }
         let m = SparseColMat::new(self.pattern.clone(), vals);
-        let lu = Lu::try_new_with_symbolic(self.symbolic.clone(), m.as_ref()).map_err(|e| {
-            SimError::SingularIteration {
+        self.lu
+            .factor(m.as_ref())
+            .map_err(|e| SimError::SingularIteration {
                 t,
                 h,
                 detail: format!("LU of the HHT iteration matrix failed: {e:?}"),
-            }
-        })?;
-        self.lu = Some(lu);
-        Ok(())
+            })
     }
 
-    pub(super) fn solve(&self, rhs: &mut [f64]) {
-        let lu = self.lu.as_ref().expect("factorized before solving");
+    pub(super) fn solve(&mut self, rhs: &mut [f64]) {
         let mut x = Mat::<f64>::from_fn(rhs.len(), 1, |i, _| rhs[i]);
-        lu.solve_in_place(x.as_mut());
+        self.lu.solve_in_place(x.as_mut());
         for (i, r) in rhs.iter_mut().enumerate() {
             *r = x[(i, 0)];
         }
