@@ -267,8 +267,10 @@ fn lift(
 }
 
 /// A reduced transient lifted to physical outputs.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct LiftedTransient {
+    /// Expansion order of the reduced model.
+    pub order: usize,
     /// Sample times.
     pub times: Vec<f64>,
     /// Per sample: each output's value `Re (W(p(t)))` in the output's weights.
@@ -323,6 +325,7 @@ pub fn transient(
         other => other,
     };
     Ok(LiftedTransient {
+        order,
         times: tr.times,
         outputs: values,
         polar,

@@ -7,13 +7,16 @@
 //! `summary.json` under `analyses.<name>` and in the files its writer names.
 //! The answers older than the registry move into it keeping their scene
 //! table and their key of `summary.json` ([`Analysis::OWN_TABLE`]): so far
-//! the invariance error ([`invariance`]).
+//! the invariance error ([`invariance`]) and the reduced transient
+//! ([`transient`]). Their estimates join the run's accuracy table in the
+//! order of [`crate::plan::Plan::requested`].
 //!
 //! Adding an analysis: a folder with a type implementing [`Analysis`], and a
 //! line in [`REGISTRY`] (and its section in `docs/scene.md`).
 
 pub mod damping;
 pub mod invariance;
+pub mod transient;
 
 use std::collections::BTreeMap;
 use std::fmt::Debug;
@@ -28,11 +31,12 @@ use ssm_core::model::system::{OutputMap, System};
 use ssm_core::rom::accuracy::AnswerEstimate;
 use ssm_core::spec::SpecError;
 use ssm_core::spectrum::MasterMode;
-use ssm_core::ssm::SsmExpansion;
+use ssm_core::ssm::{Dynamics, SsmExpansion};
 
 /// The analyses the engine offers, one line each.
 pub static REGISTRY: &[&dyn Entry] = &[
     &Slice::<invariance::Invariance>(PhantomData),
+    &Slice::<transient::Transient>(PhantomData),
     &Slice::<damping::Damping>(PhantomData),
 ];
 
@@ -106,6 +110,13 @@ pub struct Sizes {
     /// Factors of all monomials of the model's nonlinearity (a bound on
     /// the nodes of one evaluation).
     pub factors: f64,
+    /// Flow or map.
+    pub dynamics: Dynamics,
+    /// Periods of the fastest master mode per unit time (a map: steps per
+    /// unit time).
+    pub periods_per_time: f64,
+    /// Integration steps per period assumed for an adaptive integrator.
+    pub steps_per_period: f64,
 }
 
 /// The answers' part of `summary.json` that the analyses fill: each
@@ -117,6 +128,8 @@ pub struct Answers {
     pub analyses: BTreeMap<String, serde_json::Value>,
     /// `invariance_error`: the rows of [`invariance`].
     pub invariance_error: Option<Vec<invariance::InvarianceSummary>>,
+    /// `rom_steps`: the steps of [`transient`].
+    pub rom_steps: Option<usize>,
 }
 
 /// One analysis: its spec, its run and its writer.
@@ -217,6 +230,9 @@ pub(crate) fn outputs_schema(generator: &mut SchemaGenerator) -> Schema {
 pub trait Finished: Debug + Send {
     /// The analysis's name.
     fn name(&self) -> &'static str;
+    /// Whether it is an answer older than the registry
+    /// ([`Analysis::OWN_TABLE`]).
+    fn own_table(&self) -> bool;
     /// Puts its results into the summary.
     fn summarize(&self, answers: &mut Answers);
     /// Its error estimates.
@@ -339,6 +355,10 @@ impl<A: Analysis + 'static> Entry for Slice<A> {
 impl<A: Analysis + 'static> Finished for Done<A> {
     fn name(&self) -> &'static str {
         A::NAME
+    }
+
+    fn own_table(&self) -> bool {
+        A::OWN_TABLE.is_some()
     }
 
     fn summarize(&self, answers: &mut Answers) {

@@ -19,7 +19,7 @@ pub mod validation;
 use crate::plot::PlotError;
 pub use files::{check_not_input, InputInOutput, OutputError, OutputSet, MARKER};
 use ssm_core::compare::instantaneous::DataBackbone;
-use ssm_core::rom::autonomous::{BackboneCurve, LiftedTransient};
+use ssm_core::rom::autonomous::BackboneCurve;
 use ssm_core::spectrum::ModalFigures;
 use summary::{pod_only_summary_json, summary_json, Summary, Timing};
 
@@ -58,8 +58,6 @@ pub(crate) struct Products<'a> {
     pub backbone: Option<&'a [BackboneCurve]>,
     /// Backbones read off the `[data]` signals (zero crossings, Hilbert).
     pub data_backbones: &'a [DataBackbone],
-    /// Reduced transient.
-    pub transient: Option<&'a LiftedTransient>,
     /// The finite spectrum's frequencies and damping ratios.
     pub modal: &'a [ModalFigures],
     /// Everything `summary.json` reports (also the FRC, validation and report).
@@ -83,9 +81,6 @@ pub(crate) fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
                 ssm::data_backbone_csv(p.data_backbones),
             );
         }
-    }
-    if let Some(t) = p.transient {
-        out.add("rom_trajectory.csv", ssm::transient_csv(t, p.coordinates));
     }
     let steady = s.validation.and_then(|v| v.steady.as_ref());
     if let Some(v) = s.validation {

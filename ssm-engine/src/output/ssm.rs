@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::csv::push_row_end;
 use crate::plot::{estimate_label, line_plot, Curve, PlotError, Scale};
 use ssm_core::compare::instantaneous::{DataBackbone, Method};
-use ssm_core::rom::autonomous::{BackboneCurve, LiftedTransient};
+use ssm_core::rom::autonomous::BackboneCurve;
 use ssm_core::ssm::analysis::Polar;
 use ssm_core::ssm::{Dynamics, RTerm, SsmExpansion};
 
@@ -201,29 +201,4 @@ pub(crate) fn backbone_svg(
         .first()
         .map_or_else(|| "rho".to_owned(), |o| format!("amplitude of {o}"));
     line_plot("backbone", &x_label, "omega", &drawn, Scale::Linear)
-}
-
-/// `rom_trajectory.csv`: `t,<output>...,rho_1,theta_1,...`.
-pub(crate) fn transient_csv(tr: &LiftedTransient, outputs: &[String]) -> String {
-    let m = tr.polar.first().map_or(0, Vec::len);
-    let mut csv = String::from("t");
-    for o in outputs {
-        csv.push(',');
-        csv.push_str(o);
-    }
-    for i in 1..=m {
-        csv.push_str(&format!(",rho_{i},theta_{i}"));
-    }
-    csv.push('\n');
-    for ((t, values), polar) in tr.times.iter().zip(&tr.outputs).zip(&tr.polar) {
-        csv.push_str(&format!("{t:.10e}"));
-        for y in values {
-            csv.push_str(&format!(",{y:.10e}"));
-        }
-        for (rho, theta) in polar {
-            csv.push_str(&format!(",{rho:.10e},{theta:.10e}"));
-        }
-        csv.push('\n');
-    }
-    csv
 }

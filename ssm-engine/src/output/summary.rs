@@ -80,9 +80,6 @@ pub(crate) struct Summary<'a> {
     pub ssm: &'a SsmExpansion,
     /// Polar form of a two-dimensional SSM of a flow.
     pub polar: Option<&'a Polar>,
-    /// Invariance-error table.
-    /// Steps of the reduced transient.
-    pub rom_steps: Option<usize>,
     /// Forced response curves.
     pub frc: Option<&'a ForcedResponse>,
     /// Full-system comparisons.
@@ -471,7 +468,7 @@ impl RunSummary {
             ssm: SsmSummary::new(s.ssm),
             polar: s.polar.map(PolarSummary::new),
             invariance_error: s.answers.invariance_error.clone(),
-            rom_steps: s.rom_steps,
+            rom_steps: s.answers.rom_steps,
             frc: s.frc.map(FrcSummary::new),
             validation: s.validation.map(ValidationSummary::new),
             report: s.report.map(ReportSummary::new),

@@ -38,7 +38,7 @@ use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::reduce::Reduction;
 use ssm_core::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
-use ssm_core::rom::autonomous::{self, BackboneCurve, LiftedTransient};
+use ssm_core::rom::autonomous::{self, BackboneCurve};
 use ssm_core::rom::forced_response::{forced_response, ForcedResponse};
 use ssm_core::spectrum::{MasterMode, Spectrum};
 use ssm_core::ssm::analysis::polar;
@@ -127,16 +127,10 @@ impl JobResult {
     }
 }
 
-/// The answers read off the autonomous reduced model.
-struct Autonomous {
-    backbone: Option<Vec<BackboneCurve>>,
-    transient: Option<LiftedTransient>,
-}
-
 /// The SSM at one order and every answer read off it, with the seconds spent.
 struct Reduced {
     expansion: SsmExpansion,
-    answers: Autonomous,
+    backbone: Option<Vec<BackboneCurve>>,
     analyses: Vec<Box<dyn Finished>>,
     frc: Option<ForcedResponse>,
     estimates: Vec<AnswerEstimate>,
@@ -171,8 +165,9 @@ struct Stage<'a> {
 }
 
 impl Stage<'_> {
-    /// The SSM to `order`, the backbone, invariance error and transient of
-    /// `[outputs]`, the forced response of `[forcing]`, and their estimates.
+    /// The SSM to `order`, the backbone of `[outputs]`, the analyses of
+    /// the plan (among them the invariance error and the transient), the
+    /// forced response of `[forcing]`, and their estimates.
     fn at(&self, order: usize) -> Result<Reduced, JobError> {
         let tolerance = self.plan.ssm.tolerance;
         let (sys, masters) = (self.system, &self.sp.masters);
@@ -189,24 +184,14 @@ impl Stage<'_> {
             .stage("backbone, invariance error, transients");
         let t = Instant::now();
         let specs = self.plan;
-        let answers = Autonomous {
-            backbone: specs
-                .backbone
-                .as_ref()
-                .map(|sec| {
-                    let coords = self.coordinates;
-                    autonomous::backbone(&expansion, sys, &masters[0], sec, coords, tolerance)
-                })
-                .transpose()?,
-            transient: specs
-                .transient
-                .as_ref()
-                .map(|sec| {
-                    let coords = self.coordinates;
-                    autonomous::transient(&expansion, sys, masters, sec, coords, tolerance)
-                })
-                .transpose()?,
-        };
+        let backbone = specs
+            .backbone
+            .as_ref()
+            .map(|sec| {
+                let coords = self.coordinates;
+                autonomous::backbone(&expansion, sys, &masters[0], sec, coords, tolerance)
+            })
+            .transpose()?;
         let cx = Context {
             system: sys,
             masters,
@@ -231,16 +216,10 @@ impl Stage<'_> {
             })
             .transpose()?;
         let frc_s = t.elapsed().as_secs_f64();
-        let transient_order = specs
-            .transient
-            .as_ref()
-            .and_then(|t| t.order)
-            .unwrap_or(order);
-        let mut estimates = estimates(&answers, transient_order, frc.as_ref());
-        estimates.extend(analyses.iter().flat_map(|a| a.estimates()));
+        let estimates = estimates(backbone.as_deref(), &analyses, frc.as_ref());
         Ok(Reduced {
             expansion,
-            answers,
+            backbone,
             analyses,
             frc,
             estimates,
@@ -348,14 +327,16 @@ impl Stage<'_> {
     }
 }
 
-/// The error estimate of every estimated answer.
+/// The error estimate of every estimated answer: the backbone's, those of
+/// the answers older than the registry in the plan's order (the
+/// transient), the forced response's, then those of `[analysis]`.
 fn estimates(
-    answers: &Autonomous,
-    transient_order: usize,
+    backbone: Option<&[BackboneCurve]>,
+    analyses: &[Box<dyn Finished>],
     frc: Option<&ForcedResponse>,
 ) -> Vec<AnswerEstimate> {
     let mut list = Vec::new();
-    for c in answers.backbone.iter().flatten() {
+    for c in backbone.iter().copied().flatten() {
         list.push(AnswerEstimate {
             answer: "backbone",
             order: c.order,
@@ -365,16 +346,8 @@ fn estimates(
             trusted_up_to: c.trusted_up_to,
         });
     }
-    if let Some(t) = &answers.transient {
-        list.push(AnswerEstimate {
-            answer: "transient",
-            order: transient_order,
-            epsilon: None,
-            estimate: t.error_estimate,
-            untrusted: t.untrusted,
-            trusted_up_to: None,
-        });
-    }
+    let (own, registry): (Vec<_>, Vec<_>) = analyses.iter().partition(|a| a.own_table());
+    list.extend(own.iter().flat_map(|a| a.estimates()));
     for c in frc.iter().flat_map(|f| &f.curves) {
         list.push(AnswerEstimate {
             answer: "frc",
@@ -385,29 +358,25 @@ fn estimates(
             trusted_up_to: None,
         });
     }
+    list.extend(registry.iter().flat_map(|a| a.estimates()));
     list
 }
 
-/// Loud warnings for the autonomous answers whose estimate exceeds the
-/// tolerance (forced responses warn where they are computed).
+/// Loud warnings for the backbones whose estimate exceeds the tolerance
+/// (forced responses warn where they are computed, the analyses in their
+/// [`Finished::warnings`]).
 fn untrusted_warnings(estimates: &[AnswerEstimate], tolerance: f64) -> Vec<String> {
     estimates
         .iter()
-        .filter(|a| a.untrusted && matches!(a.answer, "backbone" | "transient"))
+        .filter(|a| a.untrusted && a.answer == "backbone")
         .map(|a| {
             format!(
-                "{} O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance){}; do not trust it: {}",
-                a.answer,
+                "backbone O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance){}; do not trust it: lower [outputs.backbone] rho_max or raise the expansion order",
                 a.order,
                 percent(a.estimate.unwrap_or(f64::NAN)),
                 percent(tolerance),
                 a.trusted_up_to
                     .map_or(String::new(), |r| format!(" beyond rho = {r:.4}")),
-                if a.answer == "backbone" {
-                    "lower [outputs.backbone] rho_max or raise the expansion order"
-                } else {
-                    "start nearer the equilibrium (rho0), shorten t_end or raise the expansion order"
-                }
             )
         })
         .collect()
@@ -476,7 +445,7 @@ pub fn execute(
     let (reduced, mut accuracy) = stage.reduce(ceiling, &mut warnings, &mut timing)?;
     let Reduced {
         expansion,
-        answers,
+        backbone,
         analyses,
         frc,
         ..
@@ -496,11 +465,7 @@ pub fn execute(
     }
     warnings.extend(untrusted_warnings(&accuracy.answers, tolerance));
     warnings.extend(analyses.iter().flat_map(|a| a.warnings()));
-    let data_backbones = data_backbones_near(
-        reduction.as_ref(),
-        answers.backbone.as_deref(),
-        &coordinates,
-    );
+    let data_backbones = data_backbones_near(reduction.as_ref(), backbone.as_deref(), &coordinates);
     progress.stage("writing outputs");
     let polar_form = (expansion.dynamics == Dynamics::Flow)
         .then(|| polar(&expansion).ok())
@@ -516,9 +481,8 @@ pub fn execute(
     let mut outputs = result_files(&Products {
         coordinates: &names,
         modal: &modal,
-        backbone: answers.backbone.as_deref(),
+        backbone: backbone.as_deref(),
         data_backbones: &data_backbones,
-        transient: answers.transient.as_ref(),
         summary: Summary {
             system: &system,
             plugins: &plugins,
@@ -530,7 +494,6 @@ pub fn execute(
             quotients: &sp.resonances.quotients,
             ssm: &expansion,
             polar: polar_form.as_ref(),
-            rom_steps: answers.transient.as_ref().map(|t| t.steps),
             frc: frc.as_ref(),
             validation: full.validation.as_ref(),
             report: full.report.as_ref(),

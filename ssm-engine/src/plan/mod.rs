@@ -97,17 +97,25 @@ impl Plan {
 
     /// Every analysis of [`crate::analyses::REGISTRY`] the plan asks for,
     /// its spec as JSON: the answers older than the registry that a field
-    /// of their own asks for (`invariance`), then `analyses`.
+    /// of their own asks for (`invariance`, `transient`), then `analyses`.
+    /// The run's estimates and warnings follow this order.
     pub fn requested(&self) -> Vec<PlannedAnalysis> {
-        use crate::analyses::{invariance::Invariance, Analysis};
-        let own = self.invariance.as_ref().map(|s| PlannedAnalysis {
-            name: Invariance::NAME.to_owned(),
-            // plain data: serializing cannot fail
-            spec: serde_json::to_value(s).unwrap_or(serde_json::Value::Null),
-        });
-        own.into_iter()
-            .chain(self.analyses.iter().cloned())
-            .collect()
+        use crate::analyses::{invariance::Invariance, transient::Transient, Analysis};
+        fn own<S: serde::Serialize>(name: &str, spec: Option<&S>) -> Option<PlannedAnalysis> {
+            spec.map(|s| PlannedAnalysis {
+                name: name.to_owned(),
+                // plain data: serializing cannot fail
+                spec: serde_json::to_value(s).unwrap_or(serde_json::Value::Null),
+            })
+        }
+        [
+            own(Invariance::NAME, self.invariance.as_ref()),
+            own(Transient::NAME, self.transient.as_ref()),
+        ]
+        .into_iter()
+        .flatten()
+        .chain(self.analyses.iter().cloned())
+        .collect()
     }
 
     /// The highest expansion order an answer names itself (`orders` lists,

@@ -429,3 +429,105 @@ fn the_invariance_error_runs_as_an_analysis_and_keeps_its_key() {
     assert_eq!(e.key, "analysis.invariance", "{e}");
     assert!(e.problem.contains("[outputs.invariance_error]"), "{e}");
 }
+
+/// The reduced transient runs as an analysis of the registry
+/// (`ssm_engine::analyses::transient`) and writes what it wrote before its
+/// move: its steps under `rom_steps` of `summary.json` (not under
+/// `analyses`), `rom_trajectory.csv`, and its estimate in
+/// `accuracy.answers` between the backbone's and the forced responses'.
+/// Checks: a determinism check against `autonomous::transient` called on
+/// the run's own SSM (the same code: the same bits in the file's 10
+/// significant digits); the free decay of the damped Duffing oscillator
+/// loses amplitude (`rho` falls from `rho0`, each of the 11 samples below
+/// the one before). Started far out (`rho0 = 2`, beyond the backbone's
+/// convergence) its estimate exceeds the tolerance: the entry is untrusted
+/// and the run warns about it in the transient's words. `[analysis.transient]`
+/// is refused at its line: its table is `[outputs.transient]`.
+#[test]
+fn the_transient_runs_as_an_analysis_and_keeps_its_key() {
+    use ssm_core::rom::autonomous::transient;
+    use ssm_core::spec::TransientSpec;
+    let table = "[outputs.transient]\nrho0 = [0.2]\nt_end = 20.0\nsamples = 11\n";
+    let job = ssm_tests::run_scene_text(&format!("{DUFFING}{table}")).expect("scene runs");
+    ssm_tests::assert_job_summary_valid(&job, "transient");
+    let summary: serde_json::Value =
+        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    assert!(summary.get("analyses").is_none(), "{}", summary["analyses"]);
+    let answers: Vec<&str> = summary["accuracy"]["answers"]
+        .as_array()
+        .expect("answers")
+        .iter()
+        .map(|a| a["answer"].as_str().expect("a name"))
+        .collect();
+    assert_eq!(answers, ["backbone", "transient", "frc", "frc"]);
+    let spec = TransientSpec {
+        rho0: vec![0.2],
+        theta0: None,
+        t_end: 20.0,
+        samples: 11,
+        order: None,
+        rtol: TransientSpec::DEFAULT_RTOL,
+    };
+    let x = job.system.output("x").expect("output x");
+    let direct = transient(
+        job.ssm.as_ref().expect("an SSM"),
+        &job.system,
+        &job.masters,
+        &spec,
+        &[x],
+        SsmSpec::default().tolerance,
+    )
+    .expect("the transient");
+    assert_eq!(summary["rom_steps"], direct.steps);
+    assert_eq!(direct.order, 5);
+    let entry = &summary["accuracy"]["answers"][1];
+    assert_eq!(entry["order"], 5);
+    assert_eq!(entry["error_estimate"].as_f64(), direct.error_estimate);
+    assert_eq!(entry["untrusted"], false);
+    let csv = std::str::from_utf8(job.outputs.get("rom_trajectory.csv").expect("csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("t,x,rho_1,theta_1"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().expect("a number")).collect())
+        .collect();
+    assert_eq!(rows.len(), 11);
+    for (k, row) in rows.iter().enumerate() {
+        let want = [
+            direct.times[k],
+            direct.outputs[k][0],
+            direct.polar[k][0].0,
+            direct.polar[k][0].1,
+        ];
+        for (a, b) in row.iter().zip(want) {
+            assert!((a - b).abs() <= 1e-9 * b.abs().max(1e-300), "{a} {b}");
+        }
+        if k > 0 {
+            assert!(row[2] < rows[k - 1][2], "rho grows at sample {k}");
+        }
+    }
+    // far out: untrusted, with the transient's warning
+    let far = "[outputs.transient]\nrho0 = [2.0]\nt_end = 1.0\nsamples = 3\n";
+    let job = ssm_tests::run_scene_text(&format!("{DUFFING}{far}")).expect("scene runs");
+    let summary: serde_json::Value =
+        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    let entry = &summary["accuracy"]["answers"][1];
+    assert_eq!(entry["answer"], "transient");
+    assert_eq!(entry["untrusted"], true, "{entry}");
+    assert!(
+        job.warnings.iter().any(|w| w.starts_with(
+            "transient O(5): the estimated error, "
+        ) && w.ends_with(
+            "do not trust it: start nearer the equilibrium (rho0), shorten t_end or raise the expansion order"
+        )),
+        "{:?}",
+        job.warnings
+    );
+    // not an [analysis.*] table
+    let text = format!("{DUFFING}[analysis.transient]\nrho0 = [0.1]\nt_end = 1.0\n");
+    let (line, msg) = ssm_tests::scene_error(&text);
+    assert_eq!(line, 1 + DUFFING.lines().count(), "{msg}");
+    assert!(
+        msg.contains("analysis.transient") && msg.contains("[outputs.transient]"),
+        "{msg}"
+    );
+}

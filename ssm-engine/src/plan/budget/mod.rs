@@ -70,6 +70,22 @@ impl Limits {
     }
 }
 
+/// Periods of the fastest master mode per unit time for a flow, steps per
+/// unit time for a map of period `T`.
+fn periods_per_time(dynamics: Dynamics, masters: &[MasterMode]) -> f64 {
+    match dynamics {
+        Dynamics::Map { period } => 1.0 / period.max(f64::MIN_POSITIVE),
+        Dynamics::Flow => {
+            let omega = masters
+                .iter()
+                .map(|m| m.lambda.norm())
+                .fold(0.0, f64::max)
+                .max(f64::MIN_POSITIVE);
+            omega / (2.0 * std::f64::consts::PI)
+        }
+    }
+}
+
 /// The work of each analysis of `[analysis]` on an SSM of the masters'
 /// pairs to `order` within `limits`; a refusal names the key that sets the
 /// size.
@@ -81,12 +97,16 @@ pub(crate) fn check_analyses(
     limits: &Limits,
 ) -> Result<(), PlanError> {
     let model = Sizes::of(system);
+    let dynamics = Dynamics::from(system.time);
     let sizes = crate::analyses::Sizes {
         multi_indices: multi_indices(2 * masters.len().max(1), order),
         outputs: plan.coordinates.len(),
         pairs: masters.len().max(1),
         states: model.states,
         factors: model.factors,
+        dynamics,
+        periods_per_time: periods_per_time(dynamics, masters),
+        steps_per_period: STEPS_PER_PERIOD,
     };
     for a in plan.requested() {
         let entry = crate::analyses::find(&a.name)
@@ -348,15 +368,8 @@ pub fn check(
     let nvar = 2 * pairs;
     check_order(plan, system, pairs, order, limits)?;
     let n_idx = multi_indices(nvar, order);
-    let omega = masters
-        .iter()
-        .map(|m| m.lambda.norm())
-        .fold(0.0, f64::max)
-        .max(f64::MIN_POSITIVE);
-    let periods = |t_end: f64| match system.time {
-        ssm_api::TimeKind::Map { period } => t_end / period.max(f64::MIN_POSITIVE),
-        ssm_api::TimeKind::Flow => t_end * omega / (2.0 * std::f64::consts::PI),
-    };
+    let per_time = periods_per_time(Dynamics::from(system.time), masters);
+    let periods = |t_end: f64| t_end * per_time;
     let steps = |t_end: f64| match Dynamics::from(system.time) {
         Dynamics::Map { .. } => periods(t_end),
         Dynamics::Flow => periods(t_end) * STEPS_PER_PERIOD,
@@ -375,37 +388,6 @@ pub fn check(
             &cost,
             limits,
             "lower the number of points",
-        )?;
-    }
-    if let Some(tr) = &plan.transient {
-        let t_end = tr.t_end;
-        let n = steps(t_end);
-        let samples = tr.samples as f64;
-        let stored = match system.time {
-            ssm_api::TimeKind::Map { .. } => n.max(samples),
-            ssm_api::TimeKind::Flow => samples,
-        };
-        let cost = Cost {
-            ops: n * 7.0 * 4.0 * n_idx.min(1e3) * nvar as f64 + stored * 4.0 * n_idx * coords,
-            bytes: stored * (16.0 * nvar as f64 + 8.0 * coords + 96.0),
-        };
-        let (key, what) = if n * 1e3 > stored {
-            (
-                "outputs.transient.t_end",
-                format!("a reduced transient over {:.1e} periods", periods(t_end)),
-            )
-        } else {
-            (
-                "outputs.transient.samples",
-                format!("a reduced transient of {samples:.1e} samples"),
-            )
-        };
-        ensure(
-            key,
-            what,
-            &cost,
-            limits,
-            "shorten the transient or take fewer samples",
         )?;
     }
     if let Some(s) = &plan.simulate {
