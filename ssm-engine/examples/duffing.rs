@@ -90,6 +90,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ssm: &expansion,
         outputs: &[x],
         tolerance,
+        signals: None,
     };
     let damping = damping_curves(
         &DampingSpec {

@@ -32,7 +32,8 @@ use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
 
 /// How a data-based backbone was read off a signal.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
 pub enum Method {
     /// Periods between upward zero crossings.
     ZeroCrossings,
@@ -51,7 +52,7 @@ impl Method {
 }
 
 /// Instantaneous `(amplitude, omega)` points of one signal, one per cycle.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct DataBackbone {
     /// Method used.
     pub method: Method,

@@ -40,7 +40,7 @@ pub enum ResultError {
 }
 
 /// One point of a backbone curve.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct BackbonePoint {
     /// Polar amplitude `rho` of the master pair.
     pub rho: f64,
@@ -54,7 +54,7 @@ pub struct BackbonePoint {
 }
 
 /// A backbone curve of one expansion order.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct BackboneCurve {
     /// Expansion order.
     pub order: usize,

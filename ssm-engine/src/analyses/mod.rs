@@ -7,13 +7,14 @@
 //! `summary.json` under `analyses.<name>` and in the files its writer names.
 //! The answers older than the registry move into it keeping their scene
 //! table and their key of `summary.json` ([`Analysis::OWN_TABLE`]): so far
-//! the invariance error ([`invariance`]) and the reduced transient
-//! ([`transient`]). Their estimates join the run's accuracy table in the
+//! the backbone ([`backbone`]), the invariance error ([`invariance`]) and
+//! the reduced transient ([`transient`]). Their estimates join the run's accuracy table in the
 //! order of [`crate::plan::Plan::requested`].
 //!
 //! Adding an analysis: a folder with a type implementing [`Analysis`], and a
 //! line in [`REGISTRY`] (and its section in `docs/scene.md`).
 
+pub mod backbone;
 pub mod damping;
 pub mod invariance;
 pub mod transient;
@@ -35,6 +36,7 @@ use ssm_core::ssm::{Dynamics, SsmExpansion};
 
 /// The analyses the engine offers, one line each.
 pub static REGISTRY: &[&dyn Entry] = &[
+    &Slice::<backbone::Backbone>(PhantomData),
     &Slice::<invariance::Invariance>(PhantomData),
     &Slice::<transient::Transient>(PhantomData),
     &Slice::<damping::Damping>(PhantomData),
@@ -57,7 +59,8 @@ pub fn find(name: &str) -> Result<&'static dyn Entry, AnalysisError> {
 }
 
 /// What an analysis reads: the model, its master modes and the SSM at the
-/// order the run chose.
+/// order the run chose (and the signals a model identified from data came
+/// from).
 #[derive(Debug, Clone, Copy)]
 pub struct Context<'a> {
     /// The model.
@@ -70,6 +73,8 @@ pub struct Context<'a> {
     pub outputs: &'a [&'a OutputMap],
     /// The accuracy target (`[ssm] tolerance`, relative).
     pub tolerance: f64,
+    /// The `[data]` signals of a model a reducer identified from them.
+    pub signals: Option<&'a ssm_api::Signals>,
 }
 
 /// What an analysis's spec is checked against before anything runs.

@@ -18,8 +18,6 @@ pub mod validation;
 
 use crate::plot::PlotError;
 pub use files::{check_not_input, InputInOutput, OutputError, OutputSet, MARKER};
-use ssm_core::compare::instantaneous::DataBackbone;
-use ssm_core::rom::autonomous::BackboneCurve;
 use ssm_core::spectrum::ModalFigures;
 use summary::{pod_only_summary_json, summary_json, Summary, Timing};
 
@@ -52,12 +50,6 @@ pub(crate) fn spectrum_csv(modal: &[ModalFigures], master_indices: &[(usize, usi
 
 /// The typed results of a run, as the output layer receives them.
 pub(crate) struct Products<'a> {
-    /// Names of `[outputs] coordinates`.
-    pub coordinates: &'a [String],
-    /// Backbone curves.
-    pub backbone: Option<&'a [BackboneCurve]>,
-    /// Backbones read off the `[data]` signals (zero crossings, Hilbert).
-    pub data_backbones: &'a [DataBackbone],
     /// The finite spectrum's frequencies and damping ratios.
     pub modal: &'a [ModalFigures],
     /// Everything `summary.json` reports (also the FRC, validation and report).
@@ -69,19 +61,6 @@ pub(crate) struct Products<'a> {
 pub(crate) fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
     let s = &p.summary;
     let mut out = OutputSet::default();
-    if let Some(b) = p.backbone {
-        out.add("backbone.csv", ssm::backbone_csv(b, p.coordinates));
-        out.add(
-            "backbone.svg",
-            ssm::backbone_svg(b, p.data_backbones, p.coordinates)?,
-        );
-        if !p.data_backbones.is_empty() {
-            out.add(
-                "data_backbone.csv",
-                ssm::data_backbone_csv(p.data_backbones),
-            );
-        }
-    }
     let steady = s.validation.and_then(|v| v.steady.as_ref());
     if let Some(v) = s.validation {
         if let Some(t) = &v.transient {

@@ -1,15 +1,11 @@
 //! Writers of what is read off an SSM: the `ssm` and `polar` entries of
-//! `summary.json`, `backbone.csv`/`.svg` and `rom_trajectory.csv` (the
-//! invariance error is an analysis: `crate::analyses::invariance`). They
-//! format typed results and compute nothing.
+//! `summary.json` (the backbone, the invariance error and the transient are
+//! analyses, with their writers: `crate::analyses`). They format typed
+//! results and compute nothing.
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::csv::push_row_end;
-use crate::plot::{estimate_label, line_plot, Curve, PlotError, Scale};
-use ssm_core::compare::instantaneous::{DataBackbone, Method};
-use ssm_core::rom::autonomous::BackboneCurve;
 use ssm_core::ssm::analysis::Polar;
 use ssm_core::ssm::{Dynamics, RTerm, SsmExpansion};
 
@@ -119,86 +115,4 @@ impl PolarSummary {
             omega: p.omega(),
         }]
     }
-}
-
-/// `backbone.csv`: `order,rho,omega,<output>...,error_estimate` (the last
-/// empty where there is no estimate).
-pub(crate) fn backbone_csv(curves: &[BackboneCurve], outputs: &[String]) -> String {
-    let mut csv = String::from("order,rho,omega");
-    for o in outputs {
-        csv.push(',');
-        csv.push_str(o);
-    }
-    csv.push_str(",error_estimate\n");
-    for c in curves {
-        for p in &c.points {
-            csv.push_str(&format!("{},{:.10e},{:.10e}", c.order, p.rho, p.omega));
-            push_row_end(&mut csv, &p.amplitudes, p.error_estimate);
-        }
-    }
-    csv
-}
-
-/// `data_backbone.csv`: `method,source,amplitude,omega`, the backbones read
-/// off the `[data]` signals.
-pub(crate) fn data_backbone_csv(data: &[DataBackbone]) -> String {
-    let mut csv = String::from("method,source,amplitude,omega\n");
-    for d in data {
-        for (a, w) in &d.points {
-            csv.push_str(&format!(
-                "{},{},{a:.10e},{w:.10e}\n",
-                d.method.as_str(),
-                d.source.replace(',', ";")
-            ));
-        }
-    }
-    csv
-}
-
-/// `backbone.svg`: omega against the amplitude of the first output (or
-/// against `rho` without outputs), one curve per order, and the backbones
-/// read off the `[data]` signals (zero crossings as markers, Hilbert dashed).
-pub(crate) fn backbone_svg(
-    curves: &[BackboneCurve],
-    data: &[DataBackbone],
-    outputs: &[String],
-) -> Result<String, PlotError> {
-    let n = curves.len();
-    let mut drawn: Vec<Curve> = curves
-        .iter()
-        .map(|c| Curve {
-            label: estimate_label(c.order, c.error_estimate, c.untrusted),
-            points: c
-                .points
-                .iter()
-                .map(|p| (p.amplitudes.first().copied().unwrap_or(p.rho), p.omega))
-                .collect(),
-            ..Curve::default()
-        })
-        .collect();
-    for (k, d) in data.iter().enumerate() {
-        let file = std::path::Path::new(&d.source)
-            .file_name()
-            .map_or(d.source.clone(), |f| f.to_string_lossy().into_owned());
-        let label = format!("{} of {file}", d.method.as_str().replace('_', " "));
-        drawn.push(match d.method {
-            Method::ZeroCrossings => Curve {
-                label,
-                markers: d.points.clone(),
-                color: Some(n + k),
-                ..Curve::default()
-            },
-            Method::Hilbert => Curve {
-                label,
-                points: d.points.clone(),
-                dashed: true,
-                color: Some(n + k),
-                ..Curve::default()
-            },
-        });
-    }
-    let x_label = outputs
-        .first()
-        .map_or_else(|| "rho".to_owned(), |o| format!("amplitude of {o}"));
-    line_plot("backbone", &x_label, "omega", &drawn, Scale::Linear)
 }

@@ -28,7 +28,6 @@ use crate::output::{pod_only_files, result_files, OutputSet, Products};
 use crate::plan::budget::{self, Limits};
 use crate::plan::{named_outputs, Plan};
 use crate::C64;
-use ssm_core::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
 use ssm_core::compare::pod::PodStudy;
 use ssm_core::compare::report::Report;
 use ssm_core::compare::validation::Validation;
@@ -38,7 +37,6 @@ use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::reduce::Reduction;
 use ssm_core::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
-use ssm_core::rom::autonomous::{self, BackboneCurve};
 use ssm_core::rom::forced_response::{forced_response, ForcedResponse};
 use ssm_core::spectrum::{MasterMode, Spectrum};
 use ssm_core::ssm::analysis::polar;
@@ -130,7 +128,6 @@ impl JobResult {
 /// The SSM at one order and every answer read off it, with the seconds spent.
 struct Reduced {
     expansion: SsmExpansion,
-    backbone: Option<Vec<BackboneCurve>>,
     analyses: Vec<Box<dyn Finished>>,
     frc: Option<ForcedResponse>,
     estimates: Vec<AnswerEstimate>,
@@ -160,13 +157,15 @@ struct Stage<'a> {
     others: &'a [C64],
     coordinates: &'a [&'a OutputMap],
     progress: &'a dyn Progress,
+    /// The `[data]` signals of a model identified from them.
+    signals: Option<&'a ssm_api::Signals>,
     /// The highest order the analyses of `[analysis]` name.
     analysis_orders: usize,
 }
 
 impl Stage<'_> {
-    /// The SSM to `order`, the backbone of `[outputs]`, the analyses of
-    /// the plan (among them the invariance error and the transient), the
+    /// The SSM to `order`, the analyses of the plan (among them the
+    /// backbone, the invariance error and the transient of `[outputs]`), the
     /// forced response of `[forcing]`, and their estimates.
     fn at(&self, order: usize) -> Result<Reduced, JobError> {
         let tolerance = self.plan.ssm.tolerance;
@@ -184,20 +183,13 @@ impl Stage<'_> {
             .stage("backbone, invariance error, transients");
         let t = Instant::now();
         let specs = self.plan;
-        let backbone = specs
-            .backbone
-            .as_ref()
-            .map(|sec| {
-                let coords = self.coordinates;
-                autonomous::backbone(&expansion, sys, &masters[0], sec, coords, tolerance)
-            })
-            .transpose()?;
         let cx = Context {
             system: sys,
             masters,
             ssm: &expansion,
             outputs: self.coordinates,
             tolerance,
+            signals: self.signals,
         };
         let analyses = specs
             .requested()
@@ -216,10 +208,9 @@ impl Stage<'_> {
             })
             .transpose()?;
         let frc_s = t.elapsed().as_secs_f64();
-        let estimates = estimates(backbone.as_deref(), &analyses, frc.as_ref());
+        let estimates = estimates(&analyses, frc.as_ref());
         Ok(Reduced {
             expansion,
-            backbone,
             analyses,
             frc,
             estimates,
@@ -327,25 +318,11 @@ impl Stage<'_> {
     }
 }
 
-/// The error estimate of every estimated answer: the backbone's, those of
-/// the answers older than the registry in the plan's order (the
-/// transient), the forced response's, then those of `[analysis]`.
-fn estimates(
-    backbone: Option<&[BackboneCurve]>,
-    analyses: &[Box<dyn Finished>],
-    frc: Option<&ForcedResponse>,
-) -> Vec<AnswerEstimate> {
+/// The error estimate of every estimated answer: those of the answers
+/// older than the registry in the plan's order (backbone, transient), the
+/// forced response's, then those of `[analysis]`.
+fn estimates(analyses: &[Box<dyn Finished>], frc: Option<&ForcedResponse>) -> Vec<AnswerEstimate> {
     let mut list = Vec::new();
-    for c in backbone.iter().copied().flatten() {
-        list.push(AnswerEstimate {
-            answer: "backbone",
-            order: c.order,
-            epsilon: None,
-            estimate: c.error_estimate,
-            untrusted: c.untrusted,
-            trusted_up_to: c.trusted_up_to,
-        });
-    }
     let (own, registry): (Vec<_>, Vec<_>) = analyses.iter().partition(|a| a.own_table());
     list.extend(own.iter().flat_map(|a| a.estimates()));
     for c in frc.iter().flat_map(|f| &f.curves) {
@@ -360,26 +337,6 @@ fn estimates(
     }
     list.extend(registry.iter().flat_map(|a| a.estimates()));
     list
-}
-
-/// Loud warnings for the backbones whose estimate exceeds the tolerance
-/// (forced responses warn where they are computed, the analyses in their
-/// [`Finished::warnings`]).
-fn untrusted_warnings(estimates: &[AnswerEstimate], tolerance: f64) -> Vec<String> {
-    estimates
-        .iter()
-        .filter(|a| a.untrusted && a.answer == "backbone")
-        .map(|a| {
-            format!(
-                "backbone O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance){}; do not trust it: lower [outputs.backbone] rho_max or raise the expansion order",
-                a.order,
-                percent(a.estimate.unwrap_or(f64::NAN)),
-                percent(tolerance),
-                a.trusted_up_to
-                    .map_or(String::new(), |r| format!(" beyond rho = {r:.4}")),
-            )
-        })
-        .collect()
 }
 
 /// Runs `plan` on `model` within `limits` and assembles its outputs
@@ -437,15 +394,14 @@ pub fn execute(
         others: &others,
         coordinates: &coordinates,
         progress,
+        signals: reduction.as_ref().and_then(|r| r.signals.as_ref()),
         analysis_orders,
     };
     warnings.extend(sp.warnings.iter().cloned());
     warnings.extend(reduction.iter().flat_map(reducer_warnings));
-    let tolerance = plan.ssm.tolerance;
     let (reduced, mut accuracy) = stage.reduce(ceiling, &mut warnings, &mut timing)?;
     let Reduced {
         expansion,
-        backbone,
         analyses,
         frc,
         ..
@@ -463,9 +419,7 @@ pub fn execute(
     if let Some(f) = &frc {
         warnings.extend(f.warnings.iter().cloned());
     }
-    warnings.extend(untrusted_warnings(&accuracy.answers, tolerance));
     warnings.extend(analyses.iter().flat_map(|a| a.warnings()));
-    let data_backbones = data_backbones_near(reduction.as_ref(), backbone.as_deref(), &coordinates);
     progress.stage("writing outputs");
     let polar_form = (expansion.dynamics == Dynamics::Flow)
         .then(|| polar(&expansion).ok())
@@ -479,10 +433,7 @@ pub fn execute(
         a.summarize(&mut answers_of_analyses);
     }
     let mut outputs = result_files(&Products {
-        coordinates: &names,
         modal: &modal,
-        backbone: backbone.as_deref(),
-        data_backbones: &data_backbones,
         summary: Summary {
             system: &system,
             plugins: &plugins,
@@ -572,35 +523,4 @@ fn reducer_warnings(r: &Reduction) -> Vec<String> {
         .filter(|d| d.name.starts_with("warning"))
         .map(|d| format!("reducer '{}': {}", r.reducer, d.text))
         .collect()
-}
-
-/// The `[data]` signals' own backbones (of the first output), those
-/// decaying near the frequency of the SSM's `backbone`.
-fn data_backbones_near(
-    reduction: Option<&Reduction>,
-    backbone: Option<&[BackboneCurve]>,
-    coordinates: &[&OutputMap],
-) -> Vec<DataBackbone> {
-    let (Some(sig), Some([first, ..])) = (reduction.and_then(|r| r.signals.as_ref()), backbone)
-    else {
-        return Vec::new();
-    };
-    let all = signal_backbones(sig, coordinates.first().map(|o| o.name.as_str()));
-    let omega0 = first.points.first().map_or(0.0, |p| p.omega);
-    near_frequency(all, omega0, 0.25)
-}
-
-/// The zero-crossing and Hilbert backbones of each `[data]` signal of the
-/// observable `name` (the backbone's first output), when the data have it.
-fn signal_backbones(sig: &ssm_api::Signals, name: Option<&str>) -> Vec<DataBackbone> {
-    let Some(j) = name.and_then(|n| sig.names.iter().position(|c| c.as_str() == n)) else {
-        return Vec::new();
-    };
-    let series: Vec<(String, Vec<f64>)> = (0..sig.trajectories.len())
-        .map(|k| {
-            let y = (0..sig.n_samples(k)).map(|i| sig.sample(k, i)[j]).collect();
-            (sig.trajectories[k].source.to_string(), y)
-        })
-        .collect();
-    data_backbones(&series, sig.period)
 }

@@ -62,6 +62,7 @@ fn curves(
         ssm,
         outputs: &[x],
         tolerance: 0.01,
+        signals: None,
     };
     damping_curves(spec, &cx).expect("damping curves")
 }

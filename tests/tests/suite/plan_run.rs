@@ -531,3 +531,99 @@ fn the_transient_runs_as_an_analysis_and_keeps_its_key() {
         "{msg}"
     );
 }
+
+/// The backbone runs as an analysis of the registry
+/// (`ssm_engine::analyses::backbone`) and writes what it wrote before its
+/// move: `backbone.csv`/`.svg`, no key of its own in `summary.json`, and
+/// its estimates first in `accuracy.answers`. Checks: a determinism check
+/// against `autonomous::backbone` called on the run's own SSM (the same
+/// code: the same numbers in the file's 10 significant digits, 4 for the
+/// estimates); at `rho =
+/// 0` the curve starts at the master eigenvalue's frequency `Im lambda`
+/// (the spectrum's, computed apart from the polar form). Taken far out
+/// (`rho_max = 3`, beyond the expansion's convergence) the curve is
+/// untrusted beyond the amplitude its estimate names, and the run warns
+/// about it in the backbone's words. `[analysis.backbone]` is refused at its
+/// line: its table is `[outputs.backbone]`.
+#[test]
+fn the_backbone_runs_as_an_analysis_and_keeps_its_files() {
+    use ssm_core::rom::autonomous::backbone;
+    let job = ssm_tests::run_scene_text(DUFFING).expect("scene runs");
+    let summary: serde_json::Value =
+        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    assert!(summary.get("analyses").is_none(), "{}", summary["analyses"]);
+    assert!(summary.get("backbone").is_none());
+    let x = job.system.output("x").expect("output x");
+    let spec = BackboneSpec::up_to(0.3);
+    let direct = backbone(
+        job.ssm.as_ref().expect("an SSM"),
+        &job.system,
+        &job.masters[0],
+        &spec,
+        &[x],
+        SsmSpec::default().tolerance,
+    )
+    .expect("the backbone");
+    assert_eq!(direct.len(), 1);
+    let entry = &summary["accuracy"]["answers"][0];
+    assert_eq!(entry["answer"], "backbone");
+    assert_eq!(entry["order"], 5);
+    assert_eq!(entry["error_estimate"].as_f64(), direct[0].error_estimate);
+    let csv = std::str::from_utf8(job.outputs.get("backbone.csv").expect("csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("order,rho,omega,x,error_estimate"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().expect("a number")).collect())
+        .collect();
+    assert_eq!(rows.len(), direct[0].points.len());
+    for (row, p) in rows.iter().zip(&direct[0].points) {
+        let want = [
+            5.0,
+            p.rho,
+            p.omega,
+            p.amplitudes[0],
+            p.error_estimate.expect("an estimate"),
+        ];
+        // the estimate is written to 4 significant digits
+        for (k, (a, b)) in row.iter().zip(want).enumerate() {
+            let digits = if k == 4 { 1e-3 } else { 1e-9 };
+            assert!((a - b).abs() <= digits * b.abs().max(1e-300), "{a} {b}");
+        }
+    }
+    let omega0 = job.masters[0].lambda.im;
+    assert_eq!(rows[0][1], 0.0);
+    assert!(
+        (rows[0][2] - omega0).abs() <= 1e-9 * omega0,
+        "{} {omega0}",
+        rows[0][2]
+    );
+    assert!(job.outputs.get("backbone.svg").is_some());
+    assert!(job.outputs.get("data_backbone.csv").is_none());
+    // far out: untrusted beyond an amplitude, with the backbone's warning
+    let far = DUFFING.replace("rho_max = 0.3", "rho_max = 3.0");
+    let job = ssm_tests::run_scene_text(&far).expect("scene runs");
+    let summary: serde_json::Value =
+        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    let entry = &summary["accuracy"]["answers"][0];
+    assert_eq!(entry["untrusted"], true, "{entry}");
+    let trusted = entry["trusted_up_to_rho"].as_f64().expect("an amplitude");
+    assert!(trusted > 0.0 && trusted < 3.0, "{entry}");
+    assert!(
+        job.warnings
+            .iter()
+            .any(|w| w.starts_with("backbone O(5): the estimated error, ")
+                && w.contains(&format!(
+                    " beyond rho = {trusted:.4}; do not trust it: lower [outputs.backbone] rho_max"
+                ))),
+        "{:?}",
+        job.warnings
+    );
+    // not an [analysis.*] table
+    let text = format!("{DUFFING}[analysis.backbone]\nrho_max = 0.1\n");
+    let (line, msg) = ssm_tests::scene_error(&text);
+    assert_eq!(line, 1 + DUFFING.lines().count(), "{msg}");
+    assert!(
+        msg.contains("analysis.backbone") && msg.contains("[outputs.backbone]"),
+        "{msg}"
+    );
+}

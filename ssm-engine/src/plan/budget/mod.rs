@@ -375,21 +375,6 @@ pub fn check(
         Dynamics::Flow => periods(t_end) * STEPS_PER_PERIOD,
     };
     let coords = plan.coordinates.len() as f64;
-    if let Some(bb) = &plan.backbone {
-        let points = bb.points as f64;
-        let orders = bb.orders.as_ref().map_or(1, Vec::len) as f64;
-        let cost = Cost {
-            ops: points * orders * 4.0 * n_idx * (coords + 1.0),
-            bytes: points * orders * 8.0 * (coords + 6.0),
-        };
-        ensure(
-            "outputs.backbone.points",
-            format!("a backbone of {points:.1e} points"),
-            &cost,
-            limits,
-            "lower the number of points",
-        )?;
-    }
     if let Some(s) = &plan.simulate {
         let length = s.period * (s.samples as f64 - 1.0);
         let outputs = s.outputs.as_ref().map_or(coords, |o| o.len() as f64);
