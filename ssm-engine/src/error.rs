@@ -75,3 +75,24 @@ pub enum JobError {
     #[error(transparent)]
     Plan(#[from] crate::plan::PlanError),
 }
+
+impl JobError {
+    /// The failure of an analysis: the typed error of its family where the
+    /// engine has one (the answers older than the registry keep theirs, a
+    /// [`ResultError`] or an [`FrcError`], with the same message), else
+    /// [`JobError::Analysis`].
+    pub(crate) fn of_analysis(e: crate::analyses::AnalysisError) -> Self {
+        use crate::analyses::AnalysisError;
+        let AnalysisError::Failed { analysis, source } = e else {
+            return JobError::Analysis(e);
+        };
+        let source = match source.downcast::<FrcError>() {
+            Ok(f) => return JobError::Frc(*f),
+            Err(other) => other,
+        };
+        match source.downcast::<ResultError>() {
+            Ok(r) => JobError::Result(*r),
+            Err(source) => JobError::Analysis(AnalysisError::Failed { analysis, source }),
+        }
+    }
+}

@@ -40,6 +40,7 @@ pub mod analyses;
 mod csv;
 mod error;
 pub mod job;
+pub mod json;
 pub mod output;
 pub mod pipeline;
 pub mod plan;

@@ -11,9 +11,9 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use ssm_core::fom::periodic::{OrbitInfo, ReferenceOrbit};
 use ssm_core::model::plugin::Registry;
+use ssm_engine::analyses;
 use ssm_engine::job::source::scene_inputs;
 use ssm_engine::job::{self, export};
-use ssm_engine::output;
 use ssm_engine::output::check_not_input;
 use ssm_engine::output::checkpoint::{create_first, Checkpoint};
 use ssm_engine::pipeline::Progress;
@@ -181,14 +181,14 @@ impl Journal {
         }
         let mut slot = self.file.borrow_mut();
         if slot.is_none() {
-            *slot = self.open(&output::reference::orbit_header(outputs));
+            *slot = self.open(&analyses::reference::write::orbit_header(outputs));
             if slot.is_none() {
                 self.failed.set(true);
                 return;
             }
         }
         if let Some((_, f)) = slot.as_mut() {
-            if f.write_all(output::reference::orbit_row(orbit).as_bytes())
+            if f.write_all(analyses::reference::write::orbit_row(orbit).as_bytes())
                 .is_err()
             {
                 self.failed.set(true);

@@ -7,8 +7,10 @@
 //! `summary.json` under `analyses.<name>` and in the files its writer names.
 //! The answers older than the registry move into it keeping their scene
 //! table and their key of `summary.json` ([`Analysis::OWN_TABLE`]): so far
-//! the backbone ([`backbone`]), the invariance error ([`invariance`]) and
-//! the reduced transient ([`transient`]). Their estimates join the run's accuracy table in the
+//! the backbone ([`backbone`]), the invariance error ([`invariance`]), the
+//! reduced transient ([`transient`]) and the forced response ([`frc`]). The
+//! full-system answers (`[reference]`, `[validate]`, ...) run after them in
+//! the pipeline; the analyses' writers may draw them ([`Beside`]). Their estimates join the run's accuracy table in the
 //! order of [`crate::plan::Plan::requested`].
 //!
 //! Adding an analysis: a folder with a type implementing [`Analysis`], and a
@@ -16,9 +18,12 @@
 
 pub mod backbone;
 pub mod damping;
+pub mod frc;
 pub mod invariance;
+pub mod reference;
 pub mod transient;
 
+use std::any::Any;
 use std::collections::BTreeMap;
 use std::fmt::Debug;
 use std::marker::PhantomData;
@@ -28,6 +33,8 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use crate::plot::PlotError;
+use ssm_core::compare::validation::SteadyReference;
+use ssm_core::fom::periodic::frc::ReferenceFrc;
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::rom::accuracy::AnswerEstimate;
 use ssm_core::spec::SpecError;
@@ -39,6 +46,7 @@ pub static REGISTRY: &[&dyn Entry] = &[
     &Slice::<backbone::Backbone>(PhantomData),
     &Slice::<invariance::Invariance>(PhantomData),
     &Slice::<transient::Transient>(PhantomData),
+    &Slice::<frc::Frc>(PhantomData),
     &Slice::<damping::Damping>(PhantomData),
 ];
 
@@ -102,8 +110,8 @@ pub struct Work {
 }
 
 /// What sizes the cost of an analysis run on an SSM.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sizes {
+#[derive(Debug, Clone, Copy)]
+pub struct Sizes<'a> {
     /// Multi-indices of the expansion up to its order.
     pub multi_indices: f64,
     /// Outputs of `[outputs] coordinates`.
@@ -122,6 +130,20 @@ pub struct Sizes {
     pub periods_per_time: f64,
     /// Integration steps per period assumed for an adaptive integrator.
     pub steps_per_period: f64,
+    /// The master modes.
+    pub masters: &'a [MasterMode],
+    /// The expansion order when `[ssm] order` fixes it.
+    pub fixed_order: Option<usize>,
+}
+
+/// The full-system answers a writer may draw beside an analysis's own
+/// results (they are computed after the reduced answers).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Beside<'a> {
+    /// The steady states of `[validate.steady_state]`.
+    pub steady: Option<&'a SteadyReference>,
+    /// The forced responses of `[reference]`.
+    pub reference: Option<&'a ReferenceFrc>,
 }
 
 /// The answers' part of `summary.json` that the analyses fill: each
@@ -135,6 +157,8 @@ pub struct Answers {
     pub invariance_error: Option<Vec<invariance::InvarianceSummary>>,
     /// `rom_steps`: the steps of [`transient`].
     pub rom_steps: Option<usize>,
+    /// `frc`: the summary of [`frc`].
+    pub frc: Option<frc::FrcSummary>,
 }
 
 /// One analysis: its spec, its run and its writer.
@@ -151,7 +175,7 @@ pub trait Analysis {
     type Spec: Serialize + DeserializeOwned;
     /// What it computed (serialized into `summary.json`; its schema is part
     /// of `summary.json`'s).
-    type Output: Serialize + JsonSchema + Debug + Send;
+    type Output: Serialize + JsonSchema + Debug + Send + 'static;
     /// Why it failed.
     type Error: std::error::Error + Send + Sync + 'static;
 
@@ -161,7 +185,7 @@ pub trait Analysis {
     /// highest).
     fn orders(spec: &Self::Spec) -> Vec<usize>;
     /// Its work and memory.
-    fn work(spec: &Self::Spec, sizes: &Sizes) -> Work;
+    fn work(spec: &Self::Spec, sizes: &Sizes<'_>) -> Work;
     /// Runs it.
     fn run(spec: &Self::Spec, cx: &Context<'_>) -> Result<Self::Output, Self::Error>;
     /// The error estimates of its answers (they take part in choosing the
@@ -180,10 +204,12 @@ pub trait Analysis {
         answers.analyses.insert(Self::NAME.to_owned(), value);
     }
     /// Its files `(name, contents)`; `outputs` are the names of
-    /// `[outputs] coordinates`.
+    /// `[outputs] coordinates`, `beside` the full-system answers it may
+    /// draw in.
     fn files(
         output: &Self::Output,
         outputs: &[String],
+        beside: &Beside<'_>,
     ) -> Result<Vec<(String, Vec<u8>)>, PlotError>;
 }
 
@@ -205,7 +231,7 @@ pub trait Entry: Sync {
     /// The expansion orders a spec names.
     fn orders(&self, spec: &serde_json::Value) -> Result<Vec<usize>, AnalysisError>;
     /// The work and memory of a spec.
-    fn work(&self, spec: &serde_json::Value, sizes: &Sizes) -> Result<Work, AnalysisError>;
+    fn work(&self, spec: &serde_json::Value, sizes: &Sizes<'_>) -> Result<Work, AnalysisError>;
     /// Runs a (read) spec.
     fn run(
         &self,
@@ -245,7 +271,20 @@ pub trait Finished: Debug + Send {
     /// Its warnings.
     fn warnings(&self) -> Vec<String>;
     /// Its files.
-    fn files(&self, outputs: &[String]) -> Result<Vec<(String, Vec<u8>)>, PlotError>;
+    fn files(
+        &self,
+        outputs: &[String],
+        beside: &Beside<'_>,
+    ) -> Result<Vec<(String, Vec<u8>)>, PlotError>;
+    /// Itself, for [`output_of`].
+    fn as_any(&self) -> &dyn Any;
+}
+
+/// The results of the analysis `A` among `done`, if it ran.
+pub fn output_of<A: Analysis + 'static>(done: &[Box<dyn Finished>]) -> Option<&A::Output> {
+    done.iter()
+        .find_map(|d| d.as_any().downcast_ref::<Done<A>>())
+        .map(|d| &d.0)
 }
 
 /// Why an analysis could not be planned or run.
@@ -335,7 +374,7 @@ impl<A: Analysis + 'static> Entry for Slice<A> {
         Ok(A::orders(&Self::read(spec.clone())?))
     }
 
-    fn work(&self, spec: &serde_json::Value, sizes: &Sizes) -> Result<Work, AnalysisError> {
+    fn work(&self, spec: &serde_json::Value, sizes: &Sizes<'_>) -> Result<Work, AnalysisError> {
         Ok(A::work(&Self::read(spec.clone())?, sizes))
     }
 
@@ -378,7 +417,15 @@ impl<A: Analysis + 'static> Finished for Done<A> {
         A::warnings(&self.0)
     }
 
-    fn files(&self, outputs: &[String]) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
-        A::files(&self.0, outputs)
+    fn files(
+        &self,
+        outputs: &[String],
+        beside: &Beside<'_>,
+    ) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
+        A::files(&self.0, outputs, beside)
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
     }
 }

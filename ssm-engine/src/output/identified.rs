@@ -6,7 +6,7 @@
 use serde_json::{json, Value};
 use ssm_api::TimeKind;
 
-use super::json::diagnostics;
+use crate::json::diagnostics;
 use ssm_core::model::system::System;
 use ssm_core::reduce::Reduction;
 

@@ -5,17 +5,15 @@
 
 pub mod checkpoint;
 mod files;
-pub mod frc;
 pub mod identified;
-pub mod json;
 pub mod pod;
-pub mod reference;
 pub mod report;
 pub mod simulation;
 pub mod ssm;
 pub mod summary;
 pub mod validation;
 
+use crate::analyses::reference::write as reference;
 use crate::plot::PlotError;
 pub use files::{check_not_input, InputInOutput, OutputError, OutputSet, MARKER};
 use ssm_core::spectrum::ModalFigures;
@@ -79,13 +77,10 @@ pub(crate) fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
             );
         }
     }
-    if let Some(f) = s.frc {
-        out.add("frc.csv", frc::frc_csv(f));
-        out.add("frc.svg", frc::frc_svg(f, steady, s.reference)?);
-    }
     if let Some(r) = s.reference {
         out.add("reference_frc.csv", reference::reference_csv(r));
-        if s.frc.is_none() {
+        // with [forcing], frc.svg draws it
+        if s.answers.frc.is_none() {
             out.add("reference_frc.svg", reference::reference_svg(r)?);
         }
         if !r.amplitude.is_empty() {

@@ -9,16 +9,16 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::frc::FrcSummary;
-use super::json::{diagnostics, Complex, Diagnostics};
 use super::pod::PodSummary;
-use super::reference::ReferenceSummary;
 use super::report::ReportSummary;
 use super::simulation::SimulationSummary;
 use super::ssm::{PolarSummary, SsmSummary};
 use super::validation::ValidationSummary;
+use crate::analyses::frc::FrcSummary;
 use crate::analyses::invariance::InvarianceSummary;
+use crate::analyses::reference::write::ReferenceSummary;
 use crate::analyses::Answers;
+use crate::json::{diagnostics, Complex, Diagnostics};
 use ssm_core::compare::pod::PodStudy;
 use ssm_core::compare::report::Report;
 use ssm_core::compare::validation::Validation;
@@ -28,7 +28,6 @@ use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::System;
 use ssm_core::reduce::Reduction;
 use ssm_core::rom::accuracy::Accuracy;
-use ssm_core::rom::forced_response::ForcedResponse;
 use ssm_core::spectrum::{MasterMode, SpectralQuotients, Spectrum};
 use ssm_core::ssm::analysis::Polar;
 use ssm_core::ssm::SsmExpansion;
@@ -80,8 +79,6 @@ pub(crate) struct Summary<'a> {
     pub ssm: &'a SsmExpansion,
     /// Polar form of a two-dimensional SSM of a flow.
     pub polar: Option<&'a Polar>,
-    /// Forced response curves.
-    pub frc: Option<&'a ForcedResponse>,
     /// Full-system comparisons.
     pub validation: Option<&'a Validation>,
     /// Speed-against-error report.
@@ -469,7 +466,7 @@ impl RunSummary {
             polar: s.polar.map(PolarSummary::new),
             invariance_error: s.answers.invariance_error.clone(),
             rom_steps: s.answers.rom_steps,
-            frc: s.frc.map(FrcSummary::new),
+            frc: s.answers.frc.clone(),
             validation: s.validation.map(ValidationSummary::new),
             report: s.report.map(ReportSummary::new),
             simulation: s.simulation.map(SimulationSummary::new),

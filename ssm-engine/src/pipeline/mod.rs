@@ -22,7 +22,8 @@ use std::time::Instant;
 pub use crate::error::JobError;
 pub use spectral::Spectral;
 
-use crate::analyses::{self, Answers, Context, Finished};
+use crate::analyses::frc::Frc;
+use crate::analyses::{self, Analysis, Answers, Beside, Context, Finished};
 use crate::output::summary::{Summary, Timing};
 use crate::output::{pod_only_files, result_files, OutputSet, Products};
 use crate::plan::budget::{self, Limits};
@@ -37,7 +38,7 @@ use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::reduce::Reduction;
 use ssm_core::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
-use ssm_core::rom::forced_response::{forced_response, ForcedResponse};
+use ssm_core::rom::forced_response::ForcedResponse;
 use ssm_core::spectrum::{MasterMode, Spectrum};
 use ssm_core::ssm::analysis::polar;
 use ssm_core::ssm::{self, Dynamics, SsmExpansion, SsmOptions};
@@ -129,7 +130,6 @@ impl JobResult {
 struct Reduced {
     expansion: SsmExpansion,
     analyses: Vec<Box<dyn Finished>>,
-    frc: Option<ForcedResponse>,
     estimates: Vec<AnswerEstimate>,
     ssm_s: f64,
     results_s: f64,
@@ -181,8 +181,6 @@ impl Stage<'_> {
 
         self.progress
             .stage("backbone, invariance error, transients");
-        let t = Instant::now();
-        let specs = self.plan;
         let cx = Context {
             system: sys,
             masters,
@@ -191,28 +189,23 @@ impl Stage<'_> {
             tolerance,
             signals: self.signals,
         };
-        let analyses = specs
-            .requested()
-            .iter()
-            .map(|a| analyses::find(&a.name)?.run(&a.spec, &cx))
-            .collect::<Result<Vec<_>, _>>()?;
-        let results_s = t.elapsed().as_secs_f64();
-
-        let t = Instant::now();
-        let frc = specs
-            .frc
-            .as_ref()
-            .map(|sec| {
+        // the forced response has its own stage and timing
+        let (mut results_s, mut frc_s) = (0.0, 0.0);
+        let mut analyses = Vec::new();
+        for a in self.plan.requested() {
+            let forced = a.name == Frc::NAME;
+            if forced {
                 self.progress.stage("forced response curves");
-                forced_response(&expansion, sys, masters, sec, self.coordinates, tolerance)
-            })
-            .transpose()?;
-        let frc_s = t.elapsed().as_secs_f64();
-        let estimates = estimates(&analyses, frc.as_ref());
+            }
+            let t = Instant::now();
+            let done = analyses::find(&a.name)?.run(&a.spec, &cx);
+            analyses.push(done.map_err(JobError::of_analysis)?);
+            *if forced { &mut frc_s } else { &mut results_s } += t.elapsed().as_secs_f64();
+        }
+        let estimates = estimates(&analyses);
         Ok(Reduced {
             expansion,
             analyses,
-            frc,
             estimates,
             ssm_s,
             results_s,
@@ -318,25 +311,11 @@ impl Stage<'_> {
     }
 }
 
-/// The error estimate of every estimated answer: those of the answers
-/// older than the registry in the plan's order (backbone, transient), the
-/// forced response's, then those of `[analysis]`.
-fn estimates(analyses: &[Box<dyn Finished>], frc: Option<&ForcedResponse>) -> Vec<AnswerEstimate> {
-    let mut list = Vec::new();
-    let (own, registry): (Vec<_>, Vec<_>) = analyses.iter().partition(|a| a.own_table());
-    list.extend(own.iter().flat_map(|a| a.estimates()));
-    for c in frc.iter().flat_map(|f| &f.curves) {
-        list.push(AnswerEstimate {
-            answer: "frc",
-            order: c.order,
-            epsilon: Some(c.epsilon),
-            estimate: Some(c.error_estimate()),
-            untrusted: c.untrusted,
-            trusted_up_to: None,
-        });
-    }
-    list.extend(registry.iter().flat_map(|a| a.estimates()));
-    list
+/// The error estimate of every estimated answer, in the plan's order
+/// ([`Plan::requested`]: backbone, transient, forced response, then the
+/// analyses of `[analysis]`).
+fn estimates(analyses: &[Box<dyn Finished>]) -> Vec<AnswerEstimate> {
+    analyses.iter().flat_map(|a| a.estimates()).collect()
 }
 
 /// Runs `plan` on `model` within `limits` and assembles its outputs
@@ -403,22 +382,19 @@ pub fn execute(
     let Reduced {
         expansion,
         analyses,
-        frc,
         ..
     } = reduced;
+    let frc = analyses::output_of::<Frc>(&analyses).map(|f| &f.0);
 
     let full = full_system::full_system(
         &stage,
         &expansion,
-        frc.as_ref(),
+        frc,
         &mut accuracy,
         &mut timing,
         &mut warnings,
     )?;
 
-    if let Some(f) = &frc {
-        warnings.extend(f.warnings.iter().cloned());
-    }
     warnings.extend(analyses.iter().flat_map(|a| a.warnings()));
     progress.stage("writing outputs");
     let polar_form = (expansion.dynamics == Dynamics::Flow)
@@ -445,7 +421,6 @@ pub fn execute(
             quotients: &sp.resonances.quotients,
             ssm: &expansion,
             polar: polar_form.as_ref(),
-            frc: frc.as_ref(),
             validation: full.validation.as_ref(),
             report: full.report.as_ref(),
             simulation: full.simulation.as_ref(),
@@ -457,7 +432,12 @@ pub fn execute(
             timing,
         },
     })?;
-    add_analysis_files(&mut outputs, &analyses, &names)?;
+    let beside = Beside {
+        steady: full.validation.as_ref().and_then(|v| v.steady.as_ref()),
+        reference: full.reference.as_ref(),
+    };
+    add_analysis_files(&mut outputs, &analyses, &names, &beside)?;
+    let frc = frc.cloned();
     Ok(JobResult {
         system,
         spectrum: Some(sp.spectrum),
@@ -485,15 +465,16 @@ fn highest_analysis_order(plan: &Plan) -> Result<usize, JobError> {
     Ok(highest)
 }
 
-/// The files of the analyses of `[analysis]`, added to `out`; `names` are
-/// those of `[outputs] coordinates`.
+/// The files of the analyses, added to `out`; `names` are those of
+/// `[outputs] coordinates`, `beside` the full-system answers they may draw.
 fn add_analysis_files(
     out: &mut OutputSet,
     analyses: &[Box<dyn Finished>],
     names: &[String],
+    beside: &Beside<'_>,
 ) -> Result<(), JobError> {
     for a in analyses {
-        for (name, contents) in a.files(names)? {
+        for (name, contents) in a.files(names, beside)? {
             out.add(&name, contents);
         }
     }

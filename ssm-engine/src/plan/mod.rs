@@ -97,12 +97,12 @@ impl Plan {
 
     /// Every analysis of [`crate::analyses::REGISTRY`] the plan asks for,
     /// its spec as JSON: the answers older than the registry that a field
-    /// of their own asks for (`backbone`, `invariance`, `transient`), then
-    /// `analyses`.
+    /// of their own asks for (`backbone`, `invariance`, `transient`, `frc`),
+    /// then `analyses`.
     /// The run's estimates and warnings follow this order.
     pub fn requested(&self) -> Vec<PlannedAnalysis> {
         use crate::analyses::backbone::Backbone;
-        use crate::analyses::{invariance::Invariance, transient::Transient, Analysis};
+        use crate::analyses::{frc::Frc, invariance::Invariance, transient::Transient, Analysis};
         fn own<S: serde::Serialize>(name: &str, spec: Option<&S>) -> Option<PlannedAnalysis> {
             spec.map(|s| PlannedAnalysis {
                 name: name.to_owned(),
@@ -114,6 +114,7 @@ impl Plan {
             own(Backbone::NAME, self.backbone.as_ref()),
             own(Invariance::NAME, self.invariance.as_ref()),
             own(Transient::NAME, self.transient.as_ref()),
+            own(Frc::NAME, self.frc.as_ref()),
         ]
         .into_iter()
         .flatten()

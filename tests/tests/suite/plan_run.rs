@@ -627,3 +627,58 @@ fn the_backbone_runs_as_an_analysis_and_keeps_its_files() {
         "{msg}"
     );
 }
+
+/// The forced response runs as an analysis of the registry
+/// (`ssm_engine::analyses::frc`) and writes what it wrote before its move:
+/// its summary under `frc` of `summary.json` (not under `analyses`),
+/// `frc.csv`, and `frc.svg` with the full system's steady states of
+/// `[validate]` drawn in; `JobResult::frc` holds the curves. Checks: a
+/// determinism check against `forced_response` called on the run's own SSM
+/// (the same code: equal curves, an equal summary); the estimates of
+/// `accuracy.answers` come in the plan's order whatever the order of the
+/// scene's tables (backbone, transient, the two forced responses, then the
+/// damping curve of `[analysis.damping]`).
+#[test]
+fn the_forced_response_runs_as_an_analysis_and_keeps_its_key() {
+    use ssm_core::rom::forced_response::forced_response;
+    use ssm_engine::analyses::frc::FrcSummary;
+    let scene = format!(
+        "[analysis.damping]\nrho_max = 0.2\n{DUFFING}[outputs.transient]\nrho0 = [0.1]\nt_end = 5.0\n\
+         [validate.steady_state]\nepsilon = 0.01\nomega_range = [1.0, 1.1]\npoints = 2\n"
+    );
+    let job = ssm_tests::run_scene_text(&scene).expect("scene runs");
+    ssm_tests::assert_job_summary_valid(&job, "frc-slice");
+    let summary: serde_json::Value =
+        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    let x = job.system.output("x").expect("output x");
+    let spec = FrcSpec {
+        points: 60,
+        ..FrcSpec::new(vec![0.01, 0.02], [0.9, 1.3])
+    };
+    let direct = forced_response(
+        job.ssm.as_ref().expect("an SSM"),
+        &job.system,
+        &job.masters,
+        &spec,
+        &[x],
+        SsmSpec::default().tolerance,
+    )
+    .expect("the forced response");
+    assert_eq!(job.frc.as_ref(), Some(&direct));
+    assert_eq!(
+        summary["frc"],
+        serde_json::to_value(FrcSummary::new(&direct)).expect("json")
+    );
+    assert!(summary["analyses"].get("frc").is_none());
+    let answers: Vec<&str> = summary["accuracy"]["answers"]
+        .as_array()
+        .expect("answers")
+        .iter()
+        .map(|a| a["answer"].as_str().expect("a name"))
+        .collect();
+    assert_eq!(answers, ["backbone", "transient", "frc", "frc", "damping"]);
+    let csv = std::str::from_utf8(job.outputs.get("frc.csv").expect("csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + direct.rows.len());
+    let svg = std::str::from_utf8(job.outputs.get("frc.svg").expect("svg")).unwrap();
+    assert!(svg.contains("full system, eps = 0.01 (steady state)"));
+}

@@ -24,7 +24,7 @@ mod write;
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::{Analysis, Answers, Context, Needs, Sizes, Work};
+use super::{Analysis, Answers, Beside, Context, Needs, Sizes, Work};
 use crate::plot::PlotError;
 use ssm_core::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
 use ssm_core::rom::accuracy::{percent, AnswerEstimate};
@@ -64,7 +64,7 @@ impl Analysis for Backbone {
     }
 
     /// `points` evaluations of the polar form and of `W` at each order.
-    fn work(spec: &BackboneSpec, sizes: &Sizes) -> Work {
+    fn work(spec: &BackboneSpec, sizes: &Sizes<'_>) -> Work {
         let points = spec.points as f64;
         let orders = spec.orders.as_ref().map_or(1, Vec::len) as f64;
         let coords = sizes.outputs as f64;
@@ -137,7 +137,11 @@ impl Analysis for Backbone {
     /// Nothing: its estimates are in `accuracy.answers`.
     fn summarize(_output: &Backbones, _answers: &mut Answers) {}
 
-    fn files(output: &Backbones, outputs: &[String]) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
+    fn files(
+        output: &Backbones,
+        outputs: &[String],
+        _beside: &Beside<'_>,
+    ) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
         let mut files = vec![
             (
                 "backbone.csv".to_owned(),

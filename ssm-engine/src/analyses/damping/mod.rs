@@ -32,7 +32,7 @@ mod write;
 
 pub use curve::{damping_curves, DampingCurve, DampingCurves, DampingError, DampingPoint};
 
-use super::{Analysis, Context, Needs, Sizes, Work};
+use super::{Analysis, Beside, Context, Needs, Sizes, Work};
 use crate::plot::PlotError;
 use ssm_core::rom::accuracy::{percent, AnswerEstimate};
 use ssm_core::spec::{BackboneSpec, SpecError};
@@ -105,7 +105,7 @@ impl Analysis for Damping {
         spec.orders.clone().unwrap_or_default()
     }
 
-    fn work(spec: &DampingSpec, sizes: &Sizes) -> Work {
+    fn work(spec: &DampingSpec, sizes: &Sizes<'_>) -> Work {
         let points = spec.points as f64;
         let orders = spec.orders.as_ref().map_or(1, Vec::len) as f64;
         let coords = sizes.outputs as f64;
@@ -153,7 +153,11 @@ impl Analysis for Damping {
             .collect()
     }
 
-    fn files(out: &DampingCurves, outputs: &[String]) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
+    fn files(
+        out: &DampingCurves,
+        outputs: &[String],
+        _beside: &Beside<'_>,
+    ) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
         Ok(vec![
             ("damping.csv".into(), write::csv(out, outputs).into_bytes()),
             ("damping.svg".into(), write::svg(out, outputs)?.into_bytes()),

@@ -16,7 +16,7 @@ mod write;
 
 pub use write::InvarianceSummary;
 
-use super::{Analysis, Answers, Context, Needs, Sizes, Work};
+use super::{Analysis, Answers, Beside, Context, Needs, Sizes, Work};
 use crate::plot::PlotError;
 use ssm_core::rom::accuracy::AnswerEstimate;
 use ssm_core::rom::autonomous::{invariance_table, ResultError};
@@ -43,7 +43,7 @@ impl Analysis for Invariance {
 
     /// `n_alpha^(pairs - 1) n_theta^pairs` points per radius and order, each
     /// an evaluation of `W` and of the vector field.
-    fn work(spec: &InvarianceSpec, sizes: &Sizes) -> Work {
+    fn work(spec: &InvarianceSpec, sizes: &Sizes<'_>) -> Work {
         let pairs = sizes.pairs.max(1);
         let nvar = 2 * pairs;
         let points =
@@ -75,6 +75,7 @@ impl Analysis for Invariance {
     fn files(
         output: &Self::Output,
         _outputs: &[String],
+        _beside: &Beside<'_>,
     ) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
         if output.is_empty() {
             return Ok(Vec::new());

@@ -18,7 +18,7 @@ mod write;
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::{Analysis, Answers, Context, Needs, Sizes, Work};
+use super::{Analysis, Answers, Beside, Context, Needs, Sizes, Work};
 use crate::plot::PlotError;
 use ssm_core::rom::accuracy::{percent, AnswerEstimate};
 use ssm_core::rom::autonomous::{transient, LiftedTransient, ResultError};
@@ -57,7 +57,7 @@ impl Analysis for Transient {
     /// The reduced integration (`steps` of a 7-stage pair on the reduced
     /// vector field, at most 1e3 multi-indices a stage) and the lift of the
     /// stored samples to the outputs; a map stores every step.
-    fn work(spec: &TransientSpec, sizes: &Sizes) -> Work {
+    fn work(spec: &TransientSpec, sizes: &Sizes<'_>) -> Work {
         let periods = spec.t_end * sizes.periods_per_time;
         let (n, stored) = match sizes.dynamics {
             Dynamics::Map { .. } => (periods, periods.max(spec.samples as f64)),
@@ -132,6 +132,7 @@ impl Analysis for Transient {
     fn files(
         output: &ReducedTransient,
         outputs: &[String],
+        _beside: &Beside<'_>,
     ) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
         Ok(vec![(
             "rom_trajectory.csv".into(),

@@ -20,10 +20,9 @@ pub(crate) use runs::{check_pod, check_pod_reducer};
 
 use super::{Plan, PlanError};
 use ssm_core::model::system::System;
-use ssm_core::spec::{FrcSpec, ReferenceSpec, SsmSpec, ValidationSpec};
+use ssm_core::spec::{ReferenceSpec, SsmSpec, ValidationSpec};
 use ssm_core::spectrum::{MasterMode, Method, DENSE_LIMIT};
 use ssm_core::ssm::Dynamics;
-use ssm_kernel::number::short;
 
 /// Elementary operations per second assumed by the estimates (complex
 /// multiply-adds and sparse-solve entries on one core of a 2-core machine,
@@ -107,6 +106,8 @@ pub(crate) fn check_analyses(
         dynamics,
         periods_per_time: periods_per_time(dynamics, masters),
         steps_per_period: STEPS_PER_PERIOD,
+        masters,
+        fixed_order: plan.ssm.order,
     };
     for a in plan.requested() {
         let entry = crate::analyses::find(&a.name)
@@ -381,10 +382,6 @@ pub fn check(
         let scale = (steps(length), periods(length));
         runs::check_simulate(s, outputs, &sizes, scale, limits)?;
     }
-    if let Some(f) = &plan.frc {
-        let top = plan.ssm.order.unwrap_or(0);
-        check_forcing(f, top, masters, n_idx, coords, limits)?;
-    }
     if let Some(v) = &plan.validation {
         let scale = Scale {
             n_idx,
@@ -474,77 +471,6 @@ fn check_validate(
         )?;
     }
     Ok(())
-}
-
-/// The forced response curves of `f`: one pair, amplitude roots per
-/// frequency; several, continuation steps (up to 20 per point), each a
-/// Newton solve of the reduced equations, and per point the response
-/// sampled from the harmonic table of [`ssm_core::rom::forced_multi`], whose
-/// slots grow with the resonance ratios times the order.
-fn check_forcing(
-    f: &FrcSpec,
-    ssm_order: usize,
-    masters: &[MasterMode],
-    n_idx: f64,
-    coords: f64,
-    limits: &Limits,
-) -> Result<(), PlanError> {
-    let pairs = masters.len().max(1);
-    let nvar = 2.0 * pairs as f64;
-    let points = f.points as f64;
-    let orders = f.orders.as_deref().unwrap_or(&[]);
-    let curves = (f.epsilon.len() * orders.len().max(1)) as f64;
-    let top = orders.iter().copied().max().unwrap_or(0).max(ssm_order);
-    let (slots, samples) = if pairs > 1 {
-        let ratios = ssm_core::rom::forced_response::resonance_ratios(f, masters);
-        ssm_core::rom::forced_multi::harmonic_table(&ratios, top.max(1))
-    } else {
-        (0.0, 0.0)
-    };
-    let per_point = if pairs == 1 {
-        4.0 * n_idx * 64.0
-    } else {
-        20.0 * 8.0 * (4.0 * n_idx * nvar + nvar.powi(3))
-            + coords * (4.0 * n_idx + 4.0 * samples * slots)
-    };
-    let table = Cost {
-        ops: curves * 20.0 * samples * slots,
-        bytes: 16.0 * samples * slots + 16.0 * coords * slots,
-    };
-    let cost = Cost {
-        ops: curves * points * per_point + table.ops,
-        bytes: curves * points * 8.0 * (16.0 + 4.0 * nvar + coords) + table.bytes,
-    };
-    let (key, what) = match &f.resonance {
-        Some(r) if table.bytes * 2.0 > cost.bytes || table.ops * 2.0 > cost.ops => (
-            "forcing.resonance",
-            format!(
-                "forced response curves at resonance ratios {} ({} harmonics sampled at {} phases)",
-                ssm_kernel::number::list(r),
-                short(slots),
-                short(samples)
-            ),
-        ),
-        _ => (
-            "forcing.points",
-            format!(
-                "{} forced response curve(s) of {} points",
-                short(curves),
-                short(points)
-            ),
-        ),
-    };
-    ensure(
-        key,
-        what,
-        &cost,
-        limits,
-        if key == "forcing.points" {
-            "lower the number of points, epsilon values or orders"
-        } else {
-            "use ratios near the master pairs' frequencies over Omega (small integers or fractions)"
-        },
-    )
 }
 
 /// Continuation steps assumed per reference branch when `max_steps` allows

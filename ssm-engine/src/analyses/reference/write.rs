@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::json::Complex;
+use crate::json::Complex;
 use crate::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::fom::periodic::frc::{ReferenceBranch, ReferenceFrc, ReferenceOrbit};
 use ssm_kernel::continuation::Stop;

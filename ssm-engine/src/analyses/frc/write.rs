@@ -6,8 +6,8 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use ssm_kernel::number::short;
 
-use super::json::{Complex, PerPair};
-use super::reference::reference_curves;
+use crate::analyses::reference::write::reference_curves;
+use crate::json::{Complex, PerPair};
 use crate::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::compare::validation::SteadyReference;
 use ssm_core::fom::periodic::frc::ReferenceFrc;
@@ -15,7 +15,7 @@ use ssm_core::rom::accuracy::percent;
 use ssm_core::rom::forced_response::{CurveDetails, ForcedResponse, FrcCurve};
 
 /// `frc.csv`: `order,epsilon,omega,stable,branch,<out>_linf...,rho_1..rho_m,<out>_h1...`.
-pub(crate) fn frc_csv(f: &ForcedResponse) -> String {
+pub(super) fn frc_csv(f: &ForcedResponse) -> String {
     let mut csv = String::from("order,epsilon,omega,stable,branch");
     for o in &f.outputs {
         csv.push_str(&format!(",{o}_linf"));
@@ -106,7 +106,7 @@ fn curves(f: &ForcedResponse) -> Vec<Curve> {
 /// `frc.svg`: amplitude of the first output (or `rho_1`) against `Omega`, with
 /// the full-system steady states of `reference` as circles and the
 /// full-system curves of `[reference]` in black.
-pub(crate) fn frc_svg(
+pub(super) fn frc_svg(
     f: &ForcedResponse,
     reference: Option<&SteadyReference>,
     full: Option<&ReferenceFrc>,
