@@ -79,8 +79,8 @@ pub enum JobError {
 impl JobError {
     /// The failure of an analysis: the typed error of its family where the
     /// engine has one (the answers older than the registry keep theirs, a
-    /// [`ResultError`] or an [`FrcError`], with the same message), else
-    /// [`JobError::Analysis`].
+    /// [`ResultError`], an [`FrcError`] or a failed sampled run, with the
+    /// same message), else [`JobError::Analysis`].
     pub(crate) fn of_analysis(e: crate::analyses::AnalysisError) -> Self {
         use crate::analyses::AnalysisError;
         let AnalysisError::Failed { analysis, source } = e else {
@@ -90,8 +90,20 @@ impl JobError {
             Ok(f) => return JobError::Frc(*f),
             Err(other) => other,
         };
-        match source.downcast::<ResultError>() {
-            Ok(r) => JobError::Result(*r),
+        let source = match source.downcast::<ResultError>() {
+            Ok(r) => return JobError::Result(*r),
+            Err(other) => other,
+        };
+        match source.downcast::<crate::analyses::simulate::SimulateError>() {
+            Ok(e) => match *e {
+                crate::analyses::simulate::SimulateError::Run { run, source } => {
+                    JobError::Simulate { run, source }
+                }
+                other => JobError::Analysis(AnalysisError::Failed {
+                    analysis,
+                    source: Box::new(other),
+                }),
+            },
             Err(source) => JobError::Analysis(AnalysisError::Failed { analysis, source }),
         }
     }

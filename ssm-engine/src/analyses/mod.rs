@@ -8,9 +8,13 @@
 //! The answers older than the registry move into it keeping their scene
 //! table and their key of `summary.json` ([`Analysis::OWN_TABLE`]): so far
 //! the backbone ([`backbone`]), the invariance error ([`invariance`]), the
-//! reduced transient ([`transient`]) and the forced response ([`frc`]). The
-//! full-system answers (`[reference]`, `[validate]`, ...) run after them in
-//! the pipeline; the analyses' writers may draw them ([`Beside`]). Their estimates join the run's accuracy table in the
+//! reduced transient ([`transient`]), the forced response ([`frc`]) and the
+//! sampled full-system runs ([`simulate`]). An analysis of the reduced model
+//! runs on every SSM the run tries while it chooses the expansion order; one
+//! of the full system runs once, on the SSM of the order chosen
+//! ([`Phase`]). The full-system comparisons (`[reference]`, `[validate]`,
+//! `[report]`) still run in the pipeline between the two; the analyses'
+//! writers may draw them ([`Beside`]). Their estimates join the run's accuracy table in the
 //! order of [`crate::plan::Plan::requested`].
 //!
 //! Adding an analysis: a folder with a type implementing [`Analysis`], and a
@@ -21,6 +25,7 @@ pub mod damping;
 pub mod frc;
 pub mod invariance;
 pub mod reference;
+pub mod simulate;
 pub mod transient;
 
 use std::any::Any;
@@ -47,6 +52,7 @@ pub static REGISTRY: &[&dyn Entry] = &[
     &Slice::<invariance::Invariance>(PhantomData),
     &Slice::<transient::Transient>(PhantomData),
     &Slice::<frc::Frc>(PhantomData),
+    &Slice::<simulate::Simulate>(PhantomData),
     &Slice::<damping::Damping>(PhantomData),
 ];
 
@@ -130,6 +136,9 @@ pub struct Sizes<'a> {
     pub periods_per_time: f64,
     /// Integration steps per period assumed for an adaptive integrator.
     pub steps_per_period: f64,
+    /// Operations of one step of an implicit integrator of the full model
+    /// (its sparse factorizations and solves).
+    pub implicit_step: f64,
     /// The master modes.
     pub masters: &'a [MasterMode],
     /// The expansion order when `[ssm] order` fixes it.
@@ -159,6 +168,19 @@ pub struct Answers {
     pub rom_steps: Option<usize>,
     /// `frc`: the summary of [`frc`].
     pub frc: Option<frc::FrcSummary>,
+    /// `simulation`: the summary of [`simulate`].
+    pub simulation: Option<simulate::SimulationSummary>,
+}
+
+/// When an analysis runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// On every SSM the run tries while it chooses the expansion order (its
+    /// estimates take part in the choice).
+    Reduced,
+    /// Once, on the SSM of the order chosen, after the reduced answers and
+    /// the full-system comparisons (a run of the full model).
+    FullSystem,
 }
 
 /// One analysis: its spec, its run and its writer.
@@ -170,6 +192,10 @@ pub trait Analysis {
     /// `summary.json` (set by its [`Analysis::summarize`]); `None` for
     /// `[analysis.<NAME>]` and `analyses.<NAME>`.
     const OWN_TABLE: Option<&'static str> = None;
+    /// When it runs.
+    const PHASE: Phase = Phase::Reduced;
+    /// The progress stage it is shown as, when it is one of its own.
+    const STAGE: Option<&'static str> = None;
     /// What is asked (serde: from the scene's table or from JSON; unknown
     /// keys are refused, defaults documented on the fields).
     type Spec: Serialize + DeserializeOwned;
@@ -221,6 +247,10 @@ pub trait Entry: Sync {
     /// The scene table it is asked for with: `analysis.<name>`, or the
     /// table of an answer older than the registry.
     fn table(&self) -> String;
+    /// When it runs.
+    fn phase(&self) -> Phase;
+    /// Its progress stage, when it is one of its own.
+    fn stage(&self) -> Option<&'static str>;
     /// Reads `json` into its spec and checks it; the spec with every default
     /// filled in.
     fn spec(
@@ -352,6 +382,14 @@ impl<A: Analysis + 'static> Entry for Slice<A> {
 
     fn table(&self) -> String {
         A::OWN_TABLE.map_or_else(|| format!("analysis.{}", A::NAME), str::to_owned)
+    }
+
+    fn phase(&self) -> Phase {
+        A::PHASE
+    }
+
+    fn stage(&self) -> Option<&'static str> {
+        A::STAGE
     }
 
     fn spec(

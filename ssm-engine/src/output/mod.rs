@@ -8,7 +8,6 @@ mod files;
 pub mod identified;
 pub mod pod;
 pub mod report;
-pub mod simulation;
 pub mod ssm;
 pub mod summary;
 pub mod validation;
@@ -67,14 +66,6 @@ pub(crate) fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
         }
         if let Some(r) = steady {
             out.add("steady_state.csv", validation::steady_csv(r));
-        }
-    }
-    if let Some(sim) = s.simulation {
-        for (k, run) in sim.runs.iter().enumerate() {
-            out.add(
-                &simulation::file_name(k),
-                simulation::run_csv(run, &sim.outputs),
-            );
         }
     }
     if let Some(r) = s.reference {

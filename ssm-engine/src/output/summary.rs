@@ -11,19 +11,18 @@ use serde_json::Value;
 
 use super::pod::PodSummary;
 use super::report::ReportSummary;
-use super::simulation::SimulationSummary;
 use super::ssm::{PolarSummary, SsmSummary};
 use super::validation::ValidationSummary;
 use crate::analyses::frc::FrcSummary;
 use crate::analyses::invariance::InvarianceSummary;
 use crate::analyses::reference::write::ReferenceSummary;
+use crate::analyses::simulate::SimulationSummary;
 use crate::analyses::Answers;
 use crate::json::{diagnostics, Complex, Diagnostics};
 use ssm_core::compare::pod::PodStudy;
 use ssm_core::compare::report::Report;
 use ssm_core::compare::validation::Validation;
 use ssm_core::fom::periodic::frc::ReferenceFrc;
-use ssm_core::fom::Simulation;
 use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::System;
 use ssm_core::reduce::Reduction;
@@ -83,8 +82,6 @@ pub(crate) struct Summary<'a> {
     pub validation: Option<&'a Validation>,
     /// Speed-against-error report.
     pub report: Option<&'a Report>,
-    /// Sampled full-system runs of `[simulate]`.
-    pub simulation: Option<&'a Simulation>,
     /// The `[pod]` study.
     pub pod: Option<&'a PodStudy>,
     /// The `[reference]` forced responses of the full system.
@@ -469,7 +466,7 @@ impl RunSummary {
             frc: s.answers.frc.clone(),
             validation: s.validation.map(ValidationSummary::new),
             report: s.report.map(ReportSummary::new),
-            simulation: s.simulation.map(SimulationSummary::new),
+            simulation: s.answers.simulation.clone(),
             pod: s.pod.map(PodSummary::new),
             reference: s.reference.map(ReferenceSummary::new),
             accuracy: accuracy(s.accuracy),

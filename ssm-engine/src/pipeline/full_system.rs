@@ -1,17 +1,17 @@
 //! The full system against the reduced answers: the forced response of
-//! `[reference]`, the transient and steady states of `[validate]`, the
-//! speed-against-error report of `[report]` and the sampled runs of
-//! `[simulate]`; the errors they measure join the run's accuracy table.
+//! `[reference]`, the transient and steady states of `[validate]` and the
+//! speed-against-error report of `[report]`; the errors they measure join
+//! the run's accuracy table. (The sampled runs of `[simulate]` are an
+//! analysis of the full-system phase: `crate::analyses::simulate`.)
 
 use std::time::Instant;
 
-use super::{reference, simulate, JobError, Stage};
+use super::{reference, JobError, Stage};
 use crate::output::summary::Timing;
 use crate::plan::named_outputs;
 use ssm_core::compare::report::{report, Report, ReportInputs};
 use ssm_core::compare::validation::{validation, Validation};
 use ssm_core::fom::periodic::frc::ReferenceFrc;
-use ssm_core::fom::sample::Simulation;
 use ssm_core::rom::accuracy::{Accuracy, MeasuredError};
 use ssm_core::rom::forced_response::ForcedResponse;
 use ssm_core::spec::ValidationSpec;
@@ -25,8 +25,6 @@ pub(super) struct FullSystem {
     pub validation: Option<Validation>,
     /// The speed-against-error report.
     pub report: Option<Report>,
-    /// The sampled runs of `[simulate]`.
-    pub simulation: Option<Simulation>,
 }
 
 /// The full-system stages the plan of `stage` asks for, on the reduced
@@ -117,19 +115,10 @@ pub(super) fn full_system(
     };
     timing.report = t.elapsed().as_secs_f64();
 
-    let simulation = match &plan.simulate {
-        Some(sec) => {
-            progress.stage("sampling full-system runs");
-            Some(simulate::simulate(sec, system, expansion, coordinates)?)
-        }
-        None => None,
-    };
-
     Ok(FullSystem {
         reference: full_frc,
         validation: checked,
         report: speed,
-        simulation,
     })
 }
 

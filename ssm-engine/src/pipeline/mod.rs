@@ -14,7 +14,6 @@
 mod full_system;
 mod pod;
 mod reference;
-mod simulate;
 mod spectral;
 
 use std::time::Instant;
@@ -23,7 +22,7 @@ pub use crate::error::JobError;
 pub use spectral::Spectral;
 
 use crate::analyses::frc::Frc;
-use crate::analyses::{self, Analysis, Answers, Beside, Context, Finished};
+use crate::analyses::{self, Analysis, Answers, Beside, Context, Finished, Phase};
 use crate::output::summary::{Summary, Timing};
 use crate::output::{pod_only_files, result_files, OutputSet, Products};
 use crate::plan::budget::{self, Limits};
@@ -136,6 +135,15 @@ struct Reduced {
     frc_s: f64,
 }
 
+/// The analyses of one phase that ran, and their seconds.
+struct Ran {
+    done: Vec<Box<dyn Finished>>,
+    /// Seconds of all but the forced response.
+    results_s: f64,
+    /// Seconds of the forced response.
+    frc_s: f64,
+}
+
 /// The model a plan runs on.
 #[derive(Debug)]
 pub struct Model {
@@ -168,7 +176,6 @@ impl Stage<'_> {
     /// backbone, the invariance error and the transient of `[outputs]`), the
     /// forced response of `[forcing]`, and their estimates.
     fn at(&self, order: usize) -> Result<Reduced, JobError> {
-        let tolerance = self.plan.ssm.tolerance;
         let (sys, masters) = (self.system, &self.sp.masters);
         self.progress.stage(&format!("SSM to order {order}"));
         let t = Instant::now();
@@ -181,33 +188,55 @@ impl Stage<'_> {
 
         self.progress
             .stage("backbone, invariance error, transients");
-        let cx = Context {
-            system: sys,
-            masters,
-            ssm: &expansion,
-            outputs: self.coordinates,
-            tolerance,
-            signals: self.signals,
-        };
-        // the forced response has its own stage and timing
-        let (mut results_s, mut frc_s) = (0.0, 0.0);
-        let mut analyses = Vec::new();
-        for a in self.plan.requested() {
-            let forced = a.name == Frc::NAME;
-            if forced {
-                self.progress.stage("forced response curves");
-            }
-            let t = Instant::now();
-            let done = analyses::find(&a.name)?.run(&a.spec, &cx);
-            analyses.push(done.map_err(JobError::of_analysis)?);
-            *if forced { &mut frc_s } else { &mut results_s } += t.elapsed().as_secs_f64();
-        }
+        let Ran {
+            done: analyses,
+            results_s,
+            frc_s,
+        } = self.analyses(&expansion, Phase::Reduced)?;
         let estimates = estimates(&analyses);
         Ok(Reduced {
             expansion,
             analyses,
             estimates,
             ssm_s,
+            results_s,
+            frc_s,
+        })
+    }
+
+    /// The analyses of the plan of `phase` on `expansion`, in the plan's
+    /// order, and their seconds.
+    fn analyses(&self, expansion: &SsmExpansion, phase: Phase) -> Result<Ran, JobError> {
+        let cx = Context {
+            system: self.system,
+            masters: &self.sp.masters,
+            ssm: expansion,
+            outputs: self.coordinates,
+            tolerance: self.plan.ssm.tolerance,
+            signals: self.signals,
+        };
+        let (mut results_s, mut frc_s) = (0.0, 0.0);
+        let mut done = Vec::new();
+        for a in self.plan.requested() {
+            let entry = analyses::find(&a.name)?;
+            if entry.phase() != phase {
+                continue;
+            }
+            if let Some(stage) = entry.stage() {
+                self.progress.stage(stage);
+            }
+            let t = Instant::now();
+            let finished = entry.run(&a.spec, &cx);
+            done.push(finished.map_err(JobError::of_analysis)?);
+            let spent = t.elapsed().as_secs_f64();
+            *if a.name == Frc::NAME {
+                &mut frc_s
+            } else {
+                &mut results_s
+            } += spent;
+        }
+        Ok(Ran {
+            done,
             results_s,
             frc_s,
         })
@@ -381,7 +410,7 @@ pub fn execute(
     let (reduced, mut accuracy) = stage.reduce(ceiling, &mut warnings, &mut timing)?;
     let Reduced {
         expansion,
-        analyses,
+        mut analyses,
         ..
     } = reduced;
     let frc = analyses::output_of::<Frc>(&analyses).map(|f| &f.0);
@@ -394,6 +423,8 @@ pub fn execute(
         &mut timing,
         &mut warnings,
     )?;
+    let frc = frc.cloned();
+    analyses.extend(stage.analyses(&expansion, Phase::FullSystem)?.done);
 
     warnings.extend(analyses.iter().flat_map(|a| a.warnings()));
     progress.stage("writing outputs");
@@ -423,7 +454,6 @@ pub fn execute(
             polar: polar_form.as_ref(),
             validation: full.validation.as_ref(),
             report: full.report.as_ref(),
-            simulation: full.simulation.as_ref(),
             pod: pod.as_ref(),
             reference: full.reference.as_ref(),
             answers: &answers_of_analyses,
@@ -437,7 +467,6 @@ pub fn execute(
         reference: full.reference.as_ref(),
     };
     add_analysis_files(&mut outputs, &analyses, &names, &beside)?;
-    let frc = frc.cloned();
     Ok(JobResult {
         system,
         spectrum: Some(sp.spectrum),

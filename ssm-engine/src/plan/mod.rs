@@ -97,12 +97,13 @@ impl Plan {
 
     /// Every analysis of [`crate::analyses::REGISTRY`] the plan asks for,
     /// its spec as JSON: the answers older than the registry that a field
-    /// of their own asks for (`backbone`, `invariance`, `transient`, `frc`),
-    /// then `analyses`.
+    /// of their own asks for (`backbone`, `invariance`, `transient`, `frc`,
+    /// `simulate`), then `analyses`.
     /// The run's estimates and warnings follow this order.
     pub fn requested(&self) -> Vec<PlannedAnalysis> {
         use crate::analyses::backbone::Backbone;
-        use crate::analyses::{frc::Frc, invariance::Invariance, transient::Transient, Analysis};
+        use crate::analyses::{frc::Frc, invariance::Invariance, simulate::Simulate};
+        use crate::analyses::{transient::Transient, Analysis};
         fn own<S: serde::Serialize>(name: &str, spec: Option<&S>) -> Option<PlannedAnalysis> {
             spec.map(|s| PlannedAnalysis {
                 name: name.to_owned(),
@@ -115,6 +116,7 @@ impl Plan {
             own(Invariance::NAME, self.invariance.as_ref()),
             own(Transient::NAME, self.transient.as_ref()),
             own(Frc::NAME, self.frc.as_ref()),
+            own(Simulate::NAME, self.simulate.as_ref()),
         ]
         .into_iter()
         .flatten()

@@ -682,3 +682,89 @@ fn the_forced_response_runs_as_an_analysis_and_keeps_its_key() {
     let svg = std::str::from_utf8(job.outputs.get("frc.svg").expect("svg")).unwrap();
     assert!(svg.contains("full system, eps = 0.01 (steady state)"));
 }
+
+/// Stages seen by a progress display.
+#[derive(Default)]
+struct Stages(std::sync::Mutex<Vec<String>>);
+
+impl pipeline::Progress for Stages {
+    fn stage(&self, name: &str) {
+        self.0.lock().expect("stages").push(name.to_owned());
+    }
+}
+
+/// The sampled full-system runs run as an analysis of the registry's
+/// full-system phase (`ssm_engine::analyses::simulate`): once, on the SSM
+/// of the order the run chose, although the choice tried several orders;
+/// they keep `simulation` of `summary.json` and the files
+/// `simulation_<k>.csv`. Checks: a determinism check against `sample_run`
+/// from the start `Re W(p0)` on the run's own SSM with the spec's default
+/// tolerances (the same code: the same numbers, which the files write in
+/// shortest round-trip form); the damped oscillator's free decay loses
+/// amplitude (the largest `|x|` of the last quarter of the samples below
+/// that of the first).
+#[test]
+fn the_sampled_runs_run_once_after_the_order_is_chosen() {
+    use ssm_core::fom::{sample_run, Integrator, RadauOptions};
+    use ssm_core::rom::autonomous::polar_point;
+    use ssm_core::spec::SimulateSpec;
+    let text = DUFFING.replace("order = 5", "tolerance = 1e-6")
+        + "[simulate]\nperiod = 0.5\nsamples = 41\n[[simulate.run]]\nrho0 = [0.1]\n\
+           [[simulate.run]]\nrho0 = [0.2]\n";
+    let scene = SceneFile::parse(Path::new("simulate.toml"), text).expect("scene");
+    let stages = Stages::default();
+    let job = ssm_engine::job::run(&scene, &mut ssm_tests::registry(), &stages).expect("runs");
+    let stages = stages.0.into_inner().expect("stages");
+    let orders = stages
+        .iter()
+        .filter(|s| s.starts_with("SSM to order"))
+        .count();
+    assert!(orders >= 2, "{stages:?}");
+    let sampled = stages
+        .iter()
+        .filter(|s| *s == "sampling full-system runs")
+        .count();
+    assert_eq!(sampled, 1, "{stages:?}");
+    let summary: serde_json::Value =
+        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    assert_eq!(
+        summary["simulation"]["runs"].as_array().map(Vec::len),
+        Some(2)
+    );
+    assert!(summary.get("analyses").is_none());
+    let ssm = job.ssm.as_ref().expect("an SSM");
+    let x = job.system.output("x").expect("output x");
+    for (k, rho) in [0.1, 0.2].into_iter().enumerate() {
+        let p0 = polar_point(&[rho], &[0.0]);
+        let z0: Vec<f64> = ssm
+            .w_at(&ssm.set.monomials(&p0, ssm.order), ssm.order)
+            .iter()
+            .map(|c| c.re)
+            .collect();
+        let options = RadauOptions {
+            rtol: SimulateSpec::DEFAULT_RTOL,
+            atol: SimulateSpec::DEFAULT_ATOL,
+            ..RadauOptions::default()
+        };
+        let direct = sample_run(
+            &job.system,
+            &z0,
+            &[],
+            0.5,
+            41,
+            &[x],
+            Integrator::Radau(options),
+        )
+        .expect("the run");
+        let name = format!("simulation_{}.csv", k + 1);
+        let csv = std::str::from_utf8(job.outputs.get(&name).expect("csv")).unwrap();
+        let values: Vec<f64> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(1).expect("x").parse().expect("a number"))
+            .collect();
+        assert_eq!(values, direct.values[0], "{name}");
+        let peak = |s: &[f64]| s.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert!(peak(&values[30..]) < peak(&values[..10]), "{name}");
+    }
+}

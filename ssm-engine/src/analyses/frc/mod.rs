@@ -57,6 +57,7 @@ impl JsonSchema for ForcedResponses {
 impl Analysis for Frc {
     const NAME: &'static str = "frc";
     const OWN_TABLE: Option<&'static str> = Some("forcing");
+    const STAGE: Option<&'static str> = Some("forced response curves");
     type Spec = FrcSpec;
     type Output = ForcedResponses;
     type Error = FrcError;

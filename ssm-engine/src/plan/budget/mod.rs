@@ -106,6 +106,7 @@ pub(crate) fn check_analyses(
         dynamics,
         periods_per_time: periods_per_time(dynamics, masters),
         steps_per_period: STEPS_PER_PERIOD,
+        implicit_step: runs::RADAU_STEP * model.sparse_solve(),
         masters,
         fixed_order: plan.ssm.order,
     };
@@ -376,12 +377,6 @@ pub fn check(
         Dynamics::Flow => periods(t_end) * STEPS_PER_PERIOD,
     };
     let coords = plan.coordinates.len() as f64;
-    if let Some(s) = &plan.simulate {
-        let length = s.period * (s.samples as f64 - 1.0);
-        let outputs = s.outputs.as_ref().map_or(coords, |o| o.len() as f64);
-        let scale = (steps(length), periods(length));
-        runs::check_simulate(s, outputs, &sizes, scale, limits)?;
-    }
     if let Some(v) = &plan.validation {
         let scale = Scale {
             n_idx,

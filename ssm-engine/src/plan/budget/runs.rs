@@ -6,7 +6,6 @@
 use super::{ensure, ssm_cost, Cost, Limits, Sizes, OPS_PER_SECOND};
 use crate::plan::{Plan, PlanError};
 use ssm_core::model::system::System;
-use ssm_core::spec::SimulateSpec;
 use ssm_kernel::number::short;
 
 /// Newton iterations assumed per fixed HHT step (the iteration matrix is
@@ -277,46 +276,4 @@ pub(crate) fn check_pod_reducer(
 /// periods of the master mode) 2.1 s, estimated 3.3 s;
 /// `spatial_oscillator_data.toml` (7 states, 2000 samples over 127
 /// periods) 0.25 s, estimated 0.18 s.
-const RADAU_STEP: f64 = 4.0;
-
-/// `[simulate]`: `runs` full-model runs over `(samples - 1) period`, each
-/// of `steps` adaptive integration steps (the caller's estimate from the
-/// master modes' fastest frequency) or at least one step a sample,
-/// [`RADAU_STEP`] sparse solves each; runs share the machine's cores;
-/// memory for the sampled outputs of every run.
-pub(super) fn check_simulate(
-    sec: &SimulateSpec,
-    outputs: f64,
-    sizes: &Sizes,
-    (steps, periods): (f64, f64),
-    limits: &Limits,
-) -> Result<(), PlanError> {
-    let runs = sec.runs.len() as f64;
-    let samples = sec.samples as f64;
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
-    let per_run = steps.max(samples) * RADAU_STEP * sizes.sparse_solve() + samples * 8.0 * outputs;
-    let cost = Cost {
-        ops: per_run * runs / cores.min(runs).max(1.0),
-        bytes: runs * samples * (8.0 * outputs + 8.0) + cores.min(runs) * 64.0 * sizes.states,
-    };
-    let (key, advice) = if steps > samples {
-        (
-            "simulate.period",
-            "shorten the runs: a smaller period or fewer samples",
-        )
-    } else {
-        ("simulate.samples", "take fewer samples (or fewer runs)")
-    };
-    ensure(
-        key,
-        format!(
-            "{} full-system run(s) of {} samples over {} periods of the fastest master mode",
-            short(runs),
-            short(samples),
-            short(periods.round())
-        ),
-        &cost,
-        limits,
-        advice,
-    )
-}
+pub(super) const RADAU_STEP: f64 = 4.0;

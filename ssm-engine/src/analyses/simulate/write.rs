@@ -12,7 +12,7 @@ pub fn file_name(k: usize) -> String {
 }
 
 /// One run as a `[data]` CSV file.
-pub(crate) fn run_csv(run: &SampledRun, outputs: &[String]) -> String {
+pub(super) fn run_csv(run: &SampledRun, outputs: &[String]) -> String {
     let mut s = String::with_capacity(run.times.len() * 24 * (outputs.len() + 1));
     s.push('t');
     for o in outputs {

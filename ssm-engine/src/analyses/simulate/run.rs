@@ -1,12 +1,10 @@
-//! `[simulate]`: the full model sampled from given starts, with optional
-//! additive Gaussian noise, for data-driven reducers.
+//! The sampled runs: starts, the integrations in parallel, the noise.
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::JobError;
-use crate::plan::named_outputs;
+use super::SimulateError;
 use ssm_core::fom::{add_noise, sample_run, Integrator, RadauOptions, Simulation};
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::rom::autonomous::polar_point;
@@ -16,15 +14,21 @@ use ssm_core::ssm::SsmExpansion;
 /// Runs the sampled runs `sec` on the full system (their outputs and sizes
 /// checked by [`crate::plan::Plan::check`]); starts on the SSM use `ssm` at
 /// its order.
-pub fn simulate(
+pub(super) fn simulate(
     sec: &SimulateSpec,
     sys: &System,
     ssm: &SsmExpansion,
     coordinates: &[&OutputMap],
-) -> Result<Simulation, JobError> {
+) -> Result<Simulation, SimulateError> {
     let outputs: Vec<&OutputMap> = match &sec.outputs {
         None => coordinates.to_vec(),
-        Some(names) => named_outputs(sys, names, "simulate.outputs")?,
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                sys.output(n)
+                    .ok_or_else(|| SimulateError::Output(n.clone()))
+            })
+            .collect::<Result<_, _>>()?,
     };
     let samples = sec.samples;
     let (rtol, atol) = (sec.rtol, sec.atol);
@@ -58,7 +62,7 @@ pub fn simulate(
         .collect();
     let mut runs = Vec::with_capacity(results.len());
     for (k, r) in results.into_iter().enumerate() {
-        runs.push(r.map_err(|source| JobError::Simulate { run: k + 1, source })?);
+        runs.push(r.map_err(|source| SimulateError::Run { run: k + 1, source })?);
     }
     let mut rng = ChaCha8Rng::seed_from_u64(sec.seed);
     let noise = sec.noise;
