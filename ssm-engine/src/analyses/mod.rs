@@ -291,9 +291,6 @@ pub(crate) fn outputs_schema(generator: &mut SchemaGenerator) -> Schema {
 pub trait Finished: Debug + Send {
     /// The analysis's name.
     fn name(&self) -> &'static str;
-    /// Whether it is an answer older than the registry
-    /// ([`Analysis::OWN_TABLE`]).
-    fn own_table(&self) -> bool;
     /// Puts its results into the summary.
     fn summarize(&self, answers: &mut Answers);
     /// Its error estimates.
@@ -437,10 +434,6 @@ impl<A: Analysis + 'static> Entry for Slice<A> {
 impl<A: Analysis + 'static> Finished for Done<A> {
     fn name(&self) -> &'static str {
         A::NAME
-    }
-
-    fn own_table(&self) -> bool {
-        A::OWN_TABLE.is_some()
     }
 
     fn summarize(&self, answers: &mut Answers) {
