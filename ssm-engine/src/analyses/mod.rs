@@ -172,6 +172,24 @@ pub struct Answers {
     pub simulation: Option<simulate::SimulationSummary>,
 }
 
+/// The loud warning for an answer (`"backbone O(5)"`, ...) whose error
+/// estimate exceeds the accuracy target `tolerance`, trusted up to an
+/// amplitude or not at all, with the `advice` that makes it trustworthy.
+pub(crate) fn untrusted_warning(
+    answer: &str,
+    estimate: Option<f64>,
+    tolerance: f64,
+    trusted_up_to: Option<f64>,
+    advice: &str,
+) -> String {
+    format!(
+        "{answer}: the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance){}; do not trust it: {advice}",
+        ssm_core::rom::accuracy::percent(estimate.unwrap_or(f64::NAN)),
+        ssm_core::rom::accuracy::percent(tolerance),
+        trusted_up_to.map_or(String::new(), |r| format!(" beyond rho = {r:.4}")),
+    )
+}
+
 /// When an analysis runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Phase {

@@ -379,11 +379,7 @@ fn the_invariance_error_runs_as_an_analysis_and_keeps_its_key() {
     use ssm_core::rom::autonomous::invariance_table;
     use ssm_core::spec::InvarianceSpec;
     let table = "[outputs.invariance_error]\nradii = [0.05, 0.1]\norders = [3, 5]\n";
-    let job = ssm_tests::run_scene_text(&format!("{DUFFING}{table}")).expect("scene runs");
-    ssm_tests::assert_job_summary_valid(&job, "invariance");
-    let summary: serde_json::Value =
-        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
-    assert!(summary.get("analyses").is_none(), "{}", summary["analyses"]);
+    let (job, summary) = run_with(table, "invariance");
     let rows = summary["invariance_error"]
         .as_array()
         .expect("invariance_error");
@@ -412,13 +408,10 @@ fn the_invariance_error_runs_as_an_analysis_and_keeps_its_key() {
     let csv = std::str::from_utf8(job.outputs.get("invariance.csv").expect("csv")).unwrap();
     assert!(csv.starts_with("order,radius,error\n") && csv.lines().count() == 5);
     assert!(job.outputs.get("invariance.svg").is_some());
-    // not an [analysis.*] table
-    let text = format!("{DUFFING}[analysis.invariance]\nradii = [0.1]\norders = [3]\n");
-    let (line, msg) = ssm_tests::scene_error(&text);
-    assert_eq!(line, 1 + DUFFING.lines().count(), "{msg}");
-    assert!(
-        msg.contains("analysis.invariance") && msg.contains("[outputs.invariance_error]"),
-        "{msg}"
+    refused_as_an_analysis(
+        "invariance",
+        "radii = [0.1]\norders = [3]\n",
+        "outputs.invariance_error",
     );
     let mut plan = duffing_plan();
     plan.analyses = vec![plan::PlannedAnalysis {
@@ -448,11 +441,7 @@ fn the_transient_runs_as_an_analysis_and_keeps_its_key() {
     use ssm_core::rom::autonomous::transient;
     use ssm_core::spec::TransientSpec;
     let table = "[outputs.transient]\nrho0 = [0.2]\nt_end = 20.0\nsamples = 11\n";
-    let job = ssm_tests::run_scene_text(&format!("{DUFFING}{table}")).expect("scene runs");
-    ssm_tests::assert_job_summary_valid(&job, "transient");
-    let summary: serde_json::Value =
-        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
-    assert!(summary.get("analyses").is_none(), "{}", summary["analyses"]);
+    let (job, summary) = run_with(table, "transient");
     let answers: Vec<&str> = summary["accuracy"]["answers"]
         .as_array()
         .expect("answers")
@@ -508,8 +497,7 @@ fn the_transient_runs_as_an_analysis_and_keeps_its_key() {
     // far out: untrusted, with the transient's warning
     let far = "[outputs.transient]\nrho0 = [2.0]\nt_end = 1.0\nsamples = 3\n";
     let job = ssm_tests::run_scene_text(&format!("{DUFFING}{far}")).expect("scene runs");
-    let summary: serde_json::Value =
-        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    let summary = summary_of(&job);
     let entry = &summary["accuracy"]["answers"][1];
     assert_eq!(entry["answer"], "transient");
     assert_eq!(entry["untrusted"], true, "{entry}");
@@ -522,13 +510,10 @@ fn the_transient_runs_as_an_analysis_and_keeps_its_key() {
         "{:?}",
         job.warnings
     );
-    // not an [analysis.*] table
-    let text = format!("{DUFFING}[analysis.transient]\nrho0 = [0.1]\nt_end = 1.0\n");
-    let (line, msg) = ssm_tests::scene_error(&text);
-    assert_eq!(line, 1 + DUFFING.lines().count(), "{msg}");
-    assert!(
-        msg.contains("analysis.transient") && msg.contains("[outputs.transient]"),
-        "{msg}"
+    refused_as_an_analysis(
+        "transient",
+        "rho0 = [0.1]\nt_end = 1.0\n",
+        "outputs.transient",
     );
 }
 
@@ -538,8 +523,7 @@ fn the_transient_runs_as_an_analysis_and_keeps_its_key() {
 /// its estimates first in `accuracy.answers`. Checks: a determinism check
 /// against `autonomous::backbone` called on the run's own SSM (the same
 /// code: the same numbers in the file's 10 significant digits, 4 for the
-/// estimates); at `rho =
-/// 0` the curve starts at the master eigenvalue's frequency `Im lambda`
+/// estimates); at `rho = 0` the curve starts at the master eigenvalue's frequency `Im lambda`
 /// (the spectrum's, computed apart from the polar form). Taken far out
 /// (`rho_max = 3`, beyond the expansion's convergence) the curve is
 /// untrusted beyond the amplitude its estimate names, and the run warns
@@ -549,8 +533,7 @@ fn the_transient_runs_as_an_analysis_and_keeps_its_key() {
 fn the_backbone_runs_as_an_analysis_and_keeps_its_files() {
     use ssm_core::rom::autonomous::backbone;
     let job = ssm_tests::run_scene_text(DUFFING).expect("scene runs");
-    let summary: serde_json::Value =
-        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    let summary = summary_of(&job);
     assert!(summary.get("analyses").is_none(), "{}", summary["analyses"]);
     assert!(summary.get("backbone").is_none());
     let x = job.system.output("x").expect("output x");
@@ -602,8 +585,7 @@ fn the_backbone_runs_as_an_analysis_and_keeps_its_files() {
     // far out: untrusted beyond an amplitude, with the backbone's warning
     let far = DUFFING.replace("rho_max = 0.3", "rho_max = 3.0");
     let job = ssm_tests::run_scene_text(&far).expect("scene runs");
-    let summary: serde_json::Value =
-        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    let summary = summary_of(&job);
     let entry = &summary["accuracy"]["answers"][0];
     assert_eq!(entry["untrusted"], true, "{entry}");
     let trusted = entry["trusted_up_to_rho"].as_f64().expect("an amplitude");
@@ -618,14 +600,7 @@ fn the_backbone_runs_as_an_analysis_and_keeps_its_files() {
         "{:?}",
         job.warnings
     );
-    // not an [analysis.*] table
-    let text = format!("{DUFFING}[analysis.backbone]\nrho_max = 0.1\n");
-    let (line, msg) = ssm_tests::scene_error(&text);
-    assert_eq!(line, 1 + DUFFING.lines().count(), "{msg}");
-    assert!(
-        msg.contains("analysis.backbone") && msg.contains("[outputs.backbone]"),
-        "{msg}"
-    );
+    refused_as_an_analysis("backbone", "rho_max = 0.1\n", "outputs.backbone");
 }
 
 /// The forced response runs as an analysis of the registry
@@ -648,8 +623,7 @@ fn the_forced_response_runs_as_an_analysis_and_keeps_its_key() {
     );
     let job = ssm_tests::run_scene_text(&scene).expect("scene runs");
     ssm_tests::assert_job_summary_valid(&job, "frc-slice");
-    let summary: serde_json::Value =
-        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    let summary = summary_of(&job);
     let x = job.system.output("x").expect("output x");
     let spec = FrcSpec {
         points: 60,
@@ -725,8 +699,7 @@ fn the_sampled_runs_run_once_after_the_order_is_chosen() {
         .filter(|s| *s == "sampling full-system runs")
         .count();
     assert_eq!(sampled, 1, "{stages:?}");
-    let summary: serde_json::Value =
-        serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json");
+    let summary = summary_of(&job);
     assert_eq!(
         summary["simulation"]["runs"].as_array().map(Vec::len),
         Some(2)
@@ -767,4 +740,31 @@ fn the_sampled_runs_run_once_after_the_order_is_chosen() {
         let peak = |s: &[f64]| s.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         assert!(peak(&values[30..]) < peak(&values[..10]), "{name}");
     }
+}
+
+/// [`DUFFING`] with `table`: the run, and its `summary.json` checked
+/// against the schema (as `name`) and without `analyses`.
+fn run_with(table: &str, name: &str) -> (JobResult, serde_json::Value) {
+    let job = ssm_tests::run_scene_text(&format!("{DUFFING}{table}")).expect("scene runs");
+    ssm_tests::assert_job_summary_valid(&job, name);
+    let summary = summary_of(&job);
+    assert!(summary.get("analyses").is_none(), "{}", summary["analyses"]);
+    (job, summary)
+}
+
+/// The `summary.json` of a run.
+fn summary_of(job: &JobResult) -> serde_json::Value {
+    serde_json::from_slice(job.outputs.get("summary.json").expect("summary")).expect("json")
+}
+
+/// `[analysis.<name>]` with `body` is refused at its line, naming the
+/// answer's own table `own`.
+fn refused_as_an_analysis(name: &str, body: &str, own: &str) {
+    let text = format!("{DUFFING}[analysis.{name}]\n{body}");
+    let (line, msg) = ssm_tests::scene_error(&text);
+    assert_eq!(line, 1 + DUFFING.lines().count(), "{msg}");
+    assert!(
+        msg.contains(&format!("analysis.{name}")) && msg.contains(&format!("[{own}]")),
+        "{msg}"
+    );
 }

@@ -24,10 +24,10 @@ mod write;
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::{Analysis, Answers, Beside, Context, Needs, Sizes, Work};
+use super::{untrusted_warning, Analysis, Answers, Beside, Context, Needs, Sizes, Work};
 use crate::plot::PlotError;
 use ssm_core::compare::instantaneous::{data_backbones, near_frequency, DataBackbone};
-use ssm_core::rom::accuracy::{percent, AnswerEstimate};
+use ssm_core::rom::accuracy::AnswerEstimate;
 use ssm_core::rom::autonomous::{backbone, BackboneCurve, ResultError};
 use ssm_core::spec::{BackboneSpec, SpecError};
 
@@ -122,13 +122,12 @@ impl Analysis for Backbone {
             .iter()
             .filter(|c| c.untrusted)
             .map(|c| {
-                format!(
-                    "backbone O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance){}; do not trust it: lower [outputs.backbone] rho_max or raise the expansion order",
-                    c.order,
-                    percent(c.error_estimate.unwrap_or(f64::NAN)),
-                    percent(output.tolerance),
-                    c.trusted_up_to
-                        .map_or(String::new(), |r| format!(" beyond rho = {r:.4}")),
+                untrusted_warning(
+                    &format!("backbone O({})", c.order),
+                    c.error_estimate,
+                    output.tolerance,
+                    c.trusted_up_to,
+                    "lower [outputs.backbone] rho_max or raise the expansion order",
                 )
             })
             .collect()

@@ -32,9 +32,10 @@ mod write;
 
 pub use curve::{damping_curves, DampingCurve, DampingCurves, DampingError, DampingPoint};
 
-use super::{Analysis, Beside, Context, Needs, Sizes, Work};
+use super::backbone::Backbone;
+use super::{untrusted_warning, Analysis, Beside, Context, Needs, Sizes, Work};
 use crate::plot::PlotError;
-use ssm_core::rom::accuracy::{percent, AnswerEstimate};
+use ssm_core::rom::accuracy::AnswerEstimate;
 use ssm_core::spec::{BackboneSpec, SpecError};
 
 /// `[analysis.damping]`: damping curves `zeta(rho)` of the master pair, one
@@ -102,19 +103,15 @@ impl Analysis for Damping {
     }
 
     fn orders(spec: &DampingSpec) -> Vec<usize> {
-        spec.orders.clone().unwrap_or_default()
+        Backbone::orders(spec)
     }
 
+    /// A backbone's: the same amplitudes at the same orders.
     fn work(spec: &DampingSpec, sizes: &Sizes<'_>) -> Work {
-        let points = spec.points as f64;
-        let orders = spec.orders.as_ref().map_or(1, Vec::len) as f64;
-        let coords = sizes.outputs as f64;
         Work {
-            ops: points * orders * 4.0 * sizes.multi_indices * (coords + 1.0),
-            bytes: points * orders * 8.0 * (coords + 6.0),
             key: "analysis.damping.points",
-            what: format!("a damping curve of {points:.1e} points"),
-            advice: "lower the number of points",
+            what: format!("a damping curve of {:.1e} points", spec.points as f64),
+            ..Backbone::work(spec, sizes)
         }
     }
 
@@ -141,13 +138,12 @@ impl Analysis for Damping {
             .iter()
             .filter(|c| c.untrusted)
             .map(|c| {
-                format!(
-                    "damping O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance){}; do not trust it: lower [analysis.damping] rho_max or raise the expansion order",
-                    c.order,
-                    percent(c.error_estimate.unwrap_or(f64::NAN)),
-                    percent(out.tolerance),
-                    c.trusted_up_to
-                        .map_or(String::new(), |r| format!(" beyond rho = {r:.4}")),
+                untrusted_warning(
+                    &format!("damping O({})", c.order),
+                    c.error_estimate,
+                    out.tolerance,
+                    c.trusted_up_to,
+                    "lower [analysis.damping] rho_max or raise the expansion order",
                 )
             })
             .collect()

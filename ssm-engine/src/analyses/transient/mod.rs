@@ -18,9 +18,9 @@ mod write;
 use schemars::JsonSchema;
 use serde::Serialize;
 
-use super::{Analysis, Answers, Beside, Context, Needs, Sizes, Work};
+use super::{untrusted_warning, Analysis, Answers, Beside, Context, Needs, Sizes, Work};
 use crate::plot::PlotError;
-use ssm_core::rom::accuracy::{percent, AnswerEstimate};
+use ssm_core::rom::accuracy::AnswerEstimate;
 use ssm_core::rom::autonomous::{transient, LiftedTransient, ResultError};
 use ssm_core::spec::{SpecError, TransientSpec};
 use ssm_core::ssm::Dynamics;
@@ -117,11 +117,12 @@ impl Analysis for Transient {
         if !t.untrusted {
             return Vec::new();
         }
-        vec![format!(
-            "transient O({}): the estimated error, {}, exceeds the accuracy target {} ([ssm] tolerance); do not trust it: start nearer the equilibrium (rho0), shorten t_end or raise the expansion order",
-            t.order,
-            percent(t.error_estimate.unwrap_or(f64::NAN)),
-            percent(output.tolerance),
+        vec![untrusted_warning(
+            &format!("transient O({})", t.order),
+            t.error_estimate,
+            output.tolerance,
+            None,
+            "start nearer the equilibrium (rho0), shorten t_end or raise the expansion order",
         )]
     }
 
