@@ -84,14 +84,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..BackboneSpec::up_to(0.3)
     };
     let curves = backbone(&expansion, &sys, &masters[0], &spec, &[x], tolerance)?;
-    let cx = Context {
-        system: &sys,
-        masters: &masters,
-        ssm: &expansion,
-        outputs: &[x],
-        tolerance,
-        signals: None,
-    };
+    let outputs = [x];
+    let cx = Context::new(&sys, &masters, &expansion, &outputs, tolerance);
     let damping = damping_curves(
         &DampingSpec {
             points: 6,

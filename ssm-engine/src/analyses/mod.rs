@@ -74,8 +74,9 @@ pub fn find(name: &str) -> Result<&'static dyn Entry, AnalysisError> {
 
 /// What an analysis reads: the model, its master modes and the SSM at the
 /// order the run chose (and the signals a model identified from data came
-/// from).
+/// from). Built with [`Context::new`] (its fields may grow).
 #[derive(Debug, Clone, Copy)]
+#[non_exhaustive]
 pub struct Context<'a> {
     /// The model.
     pub system: &'a System,
@@ -89,6 +90,32 @@ pub struct Context<'a> {
     pub tolerance: f64,
     /// The `[data]` signals of a model a reducer identified from them.
     pub signals: Option<&'a ssm_api::Signals>,
+}
+
+impl<'a> Context<'a> {
+    /// The context of an SSM `ssm` of `system` on its `masters`, the answers
+    /// read at `outputs` and held to the relative `tolerance`; no signals.
+    pub fn new(
+        system: &'a System,
+        masters: &'a [MasterMode],
+        ssm: &'a SsmExpansion,
+        outputs: &'a [&'a OutputMap],
+        tolerance: f64,
+    ) -> Self {
+        Self {
+            system,
+            masters,
+            ssm,
+            outputs,
+            tolerance,
+            signals: None,
+        }
+    }
+
+    /// With the `[data]` signals of a model identified from them.
+    pub fn with_signals(self, signals: Option<&'a ssm_api::Signals>) -> Self {
+        Self { signals, ..self }
+    }
 }
 
 /// What an analysis's spec is checked against before anything runs.

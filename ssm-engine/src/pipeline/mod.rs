@@ -207,14 +207,14 @@ impl Stage<'_> {
     /// The analyses of the plan of `phase` on `expansion`, in the plan's
     /// order, and their seconds.
     fn analyses(&self, expansion: &SsmExpansion, phase: Phase) -> Result<Ran, JobError> {
-        let cx = Context {
-            system: self.system,
-            masters: &self.sp.masters,
-            ssm: expansion,
-            outputs: self.coordinates,
-            tolerance: self.plan.ssm.tolerance,
-            signals: self.signals,
-        };
+        let cx = Context::new(
+            self.system,
+            &self.sp.masters,
+            expansion,
+            self.coordinates,
+            self.plan.ssm.tolerance,
+        )
+        .with_signals(self.signals);
         let (mut results_s, mut frc_s) = (0.0, 0.0);
         let mut done = Vec::new();
         for a in self.plan.requested() {

@@ -56,14 +56,8 @@ fn curves(
     spec: &DampingSpec,
 ) -> DampingCurves {
     let x = sys.output("x").expect("the Duffing model names x");
-    let cx = Context {
-        system: sys,
-        masters: std::slice::from_ref(master),
-        ssm,
-        outputs: &[x],
-        tolerance: 0.01,
-        signals: None,
-    };
+    let outputs = [x];
+    let cx = Context::new(sys, std::slice::from_ref(master), ssm, &outputs, 0.01);
     damping_curves(spec, &cx).expect("damping curves")
 }
 
