@@ -21,7 +21,7 @@ pub enum FrcError {
     #[error("FRC: {0}")]
     Unsupported(String),
     /// A curve has no point in the frequency range.
-    #[error("FRC O({order}), eps = {epsilon}: no response found in the frequency range with amplitudes up to rho_max = {rho_max:e}; every forcing frequency has one, so the amplitude grid missed them: set [forcing] rho_max near the expected peak amplitude (or raise points)")]
+    #[error("FRC O({order}), eps = {}: no response found in the frequency range with amplitudes up to rho_max = {rho_max:e}; every forcing frequency has one, so the amplitude grid missed them: set [forcing] rho_max near the expected peak amplitude (or raise points)", ssm_kernel::number::short(.epsilon))]
     Empty {
         /// Expansion order.
         order: usize,

@@ -60,6 +60,22 @@ fn steady_state_epsilon_may_be_a_list_of_one_but_not_of_two() {
     assert!(msg.contains("one steady-state epsilon"), "{msg}");
 }
 
+/// A forcing amplitude of 1e300 has no response in the amplitude grid: the
+/// typed error names it as the scene wrote it (`eps = 1e300`), not as 301
+/// digits.
+#[test]
+fn a_huge_forcing_amplitude_is_named_in_short_form() {
+    match run_scene_text(&duffing_frc("0.01", "[1e300]")) {
+        Err(e @ JobError::Frc(FrcError::Empty { .. })) => {
+            let msg = e.to_string();
+            assert!(msg.starts_with("FRC O(5), eps = 1e300: "), "{msg}");
+            assert!(msg.len() < 400, "{} characters: {msg}", msg.len());
+        }
+        Err(e) => panic!("expected FrcError::Empty, got {e}"),
+        Ok(_) => panic!("expected an error"),
+    }
+}
+
 /// Very light damping put the default amplitude bound (three times the
 /// linear peak, 1e5 here) far above the response, and the amplitude grid
 /// missed every fixed point; the default grid now ends near the response
