@@ -79,12 +79,38 @@ pub enum JobError {
 impl JobError {
     /// The failure of an analysis: the typed error of its family where the
     /// engine has one (the answers older than the registry keep theirs, a
-    /// [`ResultError`], an [`FrcError`] or a failed sampled run, with the
-    /// same message), else [`JobError::Analysis`].
+    /// [`ResultError`], an [`FrcError`], a failed full-system run of
+    /// `[validate]`, `[reference]` or `[simulate]`, a failed report, with the
+    /// same message),
+    /// else [`JobError::Analysis`].
     pub(crate) fn of_analysis(e: crate::analyses::AnalysisError) -> Self {
+        use crate::analyses::reference::ReferenceRunError;
+        use crate::analyses::report::SpeedReportError;
+        use crate::analyses::validation::ValidationError;
         use crate::analyses::AnalysisError;
         let AnalysisError::Failed { analysis, source } = e else {
             return JobError::Analysis(e);
+        };
+        let source = match source.downcast::<ValidationError>() {
+            Ok(v) => match *v {
+                ValidationError::Run(e) => return JobError::Validate(e),
+                other => Box::new(other),
+            },
+            Err(other) => other,
+        };
+        let source = match source.downcast::<SpeedReportError>() {
+            Ok(r) => match *r {
+                SpeedReportError::Report(e) => return JobError::Report(e),
+                other => Box::new(other),
+            },
+            Err(other) => other,
+        };
+        let source = match source.downcast::<ReferenceRunError>() {
+            Ok(r) => match *r {
+                ReferenceRunError::Frc(e) => return JobError::Reference(e),
+                other => Box::new(other),
+            },
+            Err(other) => other,
         };
         let source = match source.downcast::<FrcError>() {
             Ok(f) => return JobError::Frc(*f),

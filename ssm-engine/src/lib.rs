@@ -45,6 +45,7 @@ pub mod output;
 pub mod pipeline;
 pub mod plan;
 pub mod plot;
+pub mod progress;
 pub mod scene;
 
 pub use ssm_core::C64;

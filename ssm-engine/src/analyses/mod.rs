@@ -5,17 +5,20 @@
 //! checked, costed by the run's one gate, and run on the SSM the run chose
 //! (computed once and shared with the other answers). Its results land in
 //! `summary.json` under `analyses.<name>` and in the files its writer names.
-//! The answers older than the registry move into it keeping their scene
-//! table and their key of `summary.json` ([`Analysis::OWN_TABLE`]): so far
-//! the backbone ([`backbone`]), the invariance error ([`invariance`]), the
-//! reduced transient ([`transient`]), the forced response ([`frc`]) and the
-//! sampled full-system runs ([`simulate`]). An analysis of the reduced model
-//! runs on every SSM the run tries while it chooses the expansion order; one
-//! of the full system runs once, on the SSM of the order chosen
-//! ([`Phase`]). The full-system comparisons (`[reference]`, `[validate]`,
-//! `[report]`) still run in the pipeline between the two; the analyses'
-//! writers may draw them ([`Beside`]). Their estimates join the run's accuracy table in the
-//! order of [`crate::plan::Plan::requested`].
+//! The answers older than the registry moved into it keeping their scene
+//! table and their key of `summary.json` ([`Analysis::OWN_TABLE`]): the
+//! backbone ([`backbone`]), the invariance error ([`invariance`]), the
+//! reduced transient ([`transient`]), the forced response ([`frc`]), the
+//! full-system comparisons ([`validation`]), the full system's forced
+//! responses ([`reference`]), the speed-against-error report ([`report`])
+//! and the sampled full-system runs ([`simulate`]). An analysis of the
+//! reduced model runs on every SSM the run tries while it chooses the
+//! expansion order; one of the full system runs once, on the SSM of the
+//! order chosen ([`Phase`]). Each reads the results of those that ran
+//! before it ([`Context::earlier`], [`output_of`]); a writer may draw the
+//! full-system answers computed after its own ([`Beside`]). Estimates,
+//! measured errors and warnings follow the order of
+//! [`crate::plan::Plan::requested`].
 //!
 //! Adding an analysis: a folder with a type implementing [`Analysis`], and a
 //! line in [`REGISTRY`] (and its section in `docs/scene.md`).
@@ -25,8 +28,10 @@ pub mod damping;
 pub mod frc;
 pub mod invariance;
 pub mod reference;
+pub mod report;
 pub mod simulate;
 pub mod transient;
+pub mod validation;
 
 use std::any::Any;
 use std::collections::BTreeMap;
@@ -38,10 +43,12 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use crate::plot::PlotError;
+use crate::progress::{Progress, Quiet};
+use crate::C64;
 use ssm_core::compare::validation::SteadyReference;
 use ssm_core::fom::periodic::frc::ReferenceFrc;
 use ssm_core::model::system::{OutputMap, System};
-use ssm_core::rom::accuracy::AnswerEstimate;
+use ssm_core::rom::accuracy::{AnswerEstimate, MeasuredError};
 use ssm_core::spec::SpecError;
 use ssm_core::spectrum::MasterMode;
 use ssm_core::ssm::{Dynamics, SsmExpansion};
@@ -52,6 +59,9 @@ pub static REGISTRY: &[&dyn Entry] = &[
     &Slice::<invariance::Invariance>(PhantomData),
     &Slice::<transient::Transient>(PhantomData),
     &Slice::<frc::Frc>(PhantomData),
+    &Slice::<validation::Validate>(PhantomData),
+    &Slice::<reference::Reference>(PhantomData),
+    &Slice::<report::SpeedReport>(PhantomData),
     &Slice::<simulate::Simulate>(PhantomData),
     &Slice::<damping::Damping>(PhantomData),
 ];
@@ -73,15 +83,19 @@ pub fn find(name: &str) -> Result<&'static dyn Entry, AnalysisError> {
 }
 
 /// What an analysis reads: the model, its master modes and the SSM at the
-/// order the run chose (and the signals a model identified from data came
-/// from). Built with [`Context::new`] (its fields may grow).
-#[derive(Debug, Clone, Copy)]
+/// order the run chose, the results of the analyses that ran before it (and
+/// the signals a model identified from data came from), and where it
+/// reports its progress. Built with [`Context::new`] (its fields may grow).
+#[derive(Clone, Copy)]
 #[non_exhaustive]
 pub struct Context<'a> {
     /// The model.
     pub system: &'a System,
     /// The master modes of the SSM.
     pub masters: &'a [MasterMode],
+    /// The eigenvalues of the spectrum that are not masters (an SSM of
+    /// another order is computed against them).
+    pub others: &'a [C64],
     /// The SSM (shared with every other answer of the run).
     pub ssm: &'a SsmExpansion,
     /// The outputs of `[outputs] coordinates`.
@@ -90,11 +104,32 @@ pub struct Context<'a> {
     pub tolerance: f64,
     /// The `[data]` signals of a model a reducer identified from them.
     pub signals: Option<&'a ssm_api::Signals>,
+    /// The results of the analyses that ran before this one, on this SSM
+    /// (read with [`output_of`]).
+    pub earlier: &'a [Box<dyn Finished>],
+    /// Where it reports its stages.
+    pub progress: &'a dyn Progress,
+}
+
+impl Debug for Context<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Context")
+            .field("system", &self.system.name)
+            .field("masters", &self.masters.len())
+            .field("order", &self.ssm.order)
+            .field("tolerance", &self.tolerance)
+            .field(
+                "earlier",
+                &self.earlier.iter().map(|e| e.name()).collect::<Vec<_>>(),
+            )
+            .finish_non_exhaustive()
+    }
 }
 
 impl<'a> Context<'a> {
     /// The context of an SSM `ssm` of `system` on its `masters`, the answers
-    /// read at `outputs` and held to the relative `tolerance`; no signals.
+    /// read at `outputs` and held to the relative `tolerance`; no other
+    /// eigenvalues, no signals, no earlier results, no progress display.
     pub fn new(
         system: &'a System,
         masters: &'a [MasterMode],
@@ -105,16 +140,34 @@ impl<'a> Context<'a> {
         Self {
             system,
             masters,
+            others: &[],
             ssm,
             outputs,
             tolerance,
             signals: None,
+            earlier: &[],
+            progress: &Quiet,
         }
     }
 
     /// With the `[data]` signals of a model identified from them.
     pub fn with_signals(self, signals: Option<&'a ssm_api::Signals>) -> Self {
         Self { signals, ..self }
+    }
+
+    /// With the non-master eigenvalues `others` of the spectrum.
+    pub fn with_others(self, others: &'a [C64]) -> Self {
+        Self { others, ..self }
+    }
+
+    /// With the results of the analyses that ran before.
+    pub fn with_earlier(self, earlier: &'a [Box<dyn Finished>]) -> Self {
+        Self { earlier, ..self }
+    }
+
+    /// Reporting to `progress`.
+    pub fn with_progress(self, progress: &'a dyn Progress) -> Self {
+        Self { progress, ..self }
     }
 }
 
@@ -166,6 +219,11 @@ pub struct Sizes<'a> {
     /// Operations of one step of an implicit integrator of the full model
     /// (its sparse factorizations and solves).
     pub implicit_step: f64,
+    /// Stored entries of the model's matrices `A` and `B`.
+    pub nnz: f64,
+    /// Operations of one sparse factorization and solve of the pencil's
+    /// size.
+    pub sparse_solve: f64,
     /// The master modes.
     pub masters: &'a [MasterMode],
     /// The expansion order when `[ssm] order` fixes it.
@@ -197,6 +255,12 @@ pub struct Answers {
     pub frc: Option<frc::FrcSummary>,
     /// `simulation`: the summary of [`simulate`].
     pub simulation: Option<simulate::SimulationSummary>,
+    /// `validation`: the summary of [`validation`].
+    pub validation: Option<validation::write::ValidationSummary>,
+    /// `reference`: the summary of [`reference`].
+    pub reference: Option<reference::write::ReferenceSummary>,
+    /// `report`: the summary of [`report`].
+    pub report: Option<report::write::ReportSummary>,
 }
 
 /// The loud warning for an answer (`"backbone O(5)"`, ...) whose error
@@ -264,6 +328,11 @@ pub trait Analysis {
     fn estimates(output: &Self::Output) -> Vec<AnswerEstimate>;
     /// Its warnings (e.g. an answer whose estimate exceeds the tolerance).
     fn warnings(_output: &Self::Output) -> Vec<String> {
+        Vec::new()
+    }
+    /// The errors it measured of the reduced answers against the full
+    /// system (they join `accuracy.measured`).
+    fn measured(_output: &Self::Output) -> Vec<MeasuredError> {
         Vec::new()
     }
     /// Puts its results into the summary: `analyses.<NAME>` unless it has
@@ -342,6 +411,8 @@ pub trait Finished: Debug + Send {
     fn estimates(&self) -> Vec<AnswerEstimate>;
     /// Its warnings.
     fn warnings(&self) -> Vec<String>;
+    /// The errors it measured against the full system.
+    fn measured(&self) -> Vec<MeasuredError>;
     /// Its files.
     fn files(
         &self,
@@ -491,6 +562,10 @@ impl<A: Analysis + 'static> Finished for Done<A> {
 
     fn warnings(&self) -> Vec<String> {
         A::warnings(&self.0)
+    }
+
+    fn measured(&self) -> Vec<MeasuredError> {
+        A::measured(&self.0)
     }
 
     fn files(

@@ -7,12 +7,9 @@ pub mod checkpoint;
 mod files;
 pub mod identified;
 pub mod pod;
-pub mod report;
 pub mod ssm;
 pub mod summary;
-pub mod validation;
 
-use crate::analyses::reference::write as reference;
 use crate::plot::PlotError;
 pub use files::{check_not_input, InputInOutput, OutputError, OutputSet, MARKER};
 use ssm_core::spectrum::ModalFigures;
@@ -58,35 +55,6 @@ pub(crate) struct Products<'a> {
 pub(crate) fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
     let s = &p.summary;
     let mut out = OutputSet::default();
-    let steady = s.validation.and_then(|v| v.steady.as_ref());
-    if let Some(v) = s.validation {
-        if let Some(t) = &v.transient {
-            out.add("validation.csv", validation::transient_csv(t));
-            out.add("validation.svg", validation::transient_svg(t)?);
-        }
-        if let Some(r) = steady {
-            out.add("steady_state.csv", validation::steady_csv(r));
-        }
-    }
-    if let Some(r) = s.reference {
-        out.add("reference_frc.csv", reference::reference_csv(r));
-        // with [forcing], frc.svg draws it
-        if s.answers.frc.is_none() {
-            out.add("reference_frc.svg", reference::reference_svg(r)?);
-        }
-        if !r.amplitude.is_empty() {
-            out.add("reference_amplitude.csv", reference::amplitude_csv(r));
-            out.add("reference_amplitude.svg", reference::amplitude_svg(r)?);
-        }
-    }
-    if let Some(r) = s.report {
-        out.add("report.csv", report::csv(r));
-        out.add(
-            "report.md",
-            report::markdown(&s.system.name, s.system.n_states(), r),
-        );
-        out.add("report.svg", report::svg(r)?);
-    }
     if let Some(study) = s.pod {
         pod_files(&mut out, &s.system.name, study)?;
     }

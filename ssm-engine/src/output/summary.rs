@@ -10,19 +10,16 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use super::pod::PodSummary;
-use super::report::ReportSummary;
 use super::ssm::{PolarSummary, SsmSummary};
-use super::validation::ValidationSummary;
 use crate::analyses::frc::FrcSummary;
 use crate::analyses::invariance::InvarianceSummary;
 use crate::analyses::reference::write::ReferenceSummary;
+use crate::analyses::report::write::ReportSummary;
 use crate::analyses::simulate::SimulationSummary;
+use crate::analyses::validation::write::ValidationSummary;
 use crate::analyses::Answers;
 use crate::json::{diagnostics, Complex, Diagnostics};
 use ssm_core::compare::pod::PodStudy;
-use ssm_core::compare::report::Report;
-use ssm_core::compare::validation::Validation;
-use ssm_core::fom::periodic::frc::ReferenceFrc;
 use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::System;
 use ssm_core::reduce::Reduction;
@@ -78,14 +75,8 @@ pub(crate) struct Summary<'a> {
     pub ssm: &'a SsmExpansion,
     /// Polar form of a two-dimensional SSM of a flow.
     pub polar: Option<&'a Polar>,
-    /// Full-system comparisons.
-    pub validation: Option<&'a Validation>,
-    /// Speed-against-error report.
-    pub report: Option<&'a Report>,
     /// The `[pod]` study.
     pub pod: Option<&'a PodStudy>,
-    /// The `[reference]` forced responses of the full system.
-    pub reference: Option<&'a ReferenceFrc>,
     /// What the analyses of the registry put into the summary.
     pub answers: &'a Answers,
     /// The accuracy target, the order and every answer's estimate.
@@ -464,11 +455,11 @@ impl RunSummary {
             invariance_error: s.answers.invariance_error.clone(),
             rom_steps: s.answers.rom_steps,
             frc: s.answers.frc.clone(),
-            validation: s.validation.map(ValidationSummary::new),
-            report: s.report.map(ReportSummary::new),
+            validation: s.answers.validation.clone(),
+            report: s.answers.report.clone(),
             simulation: s.answers.simulation.clone(),
             pod: s.pod.map(PodSummary::new),
-            reference: s.reference.map(ReferenceSummary::new),
+            reference: s.answers.reference.clone(),
             accuracy: accuracy(s.accuracy),
             warnings: s.warnings.to_vec(),
             timing_s: TimingSummary {

@@ -1,27 +1,32 @@
 //! Running a [`Plan`] on a model, one stage after the other: the POD
-//! study, the spectral stage, the SSM, the answers read off the reduced
-//! model (backbone, invariance error, transient, forced response, the
-//! analyses of [`crate::analyses`]), the full-system comparisons and the
-//! speed-against-error report. Each stage returns typed results;
-//! [`crate::output`] turns them into files. Nothing here reads a scene: a
-//! plan comes from code or from [`crate::plan::resolve`].
+//! study, the spectral stage, the SSM (one expansion per order tried), and
+//! the analyses of [`crate::analyses`] in the plan's order: those of the
+//! reduced model on every SSM tried while the expansion order is chosen
+//! (backbone, invariance error, transient, forced response, ...), then,
+//! once, those of the full system on the SSM chosen (`[validate]`,
+//! `[reference]`, `[report]`, `[simulate]`). Each returns typed results;
+//! [`crate::output`] and the analyses' writers turn them into files.
+//! Nothing here reads a scene: a plan comes from code or from
+//! [`crate::plan::resolve`].
 //!
 //! Adding an analysis: one folder under [`crate::analyses`] holding its spec,
 //! run and writer, and one line in its registry; the scene's
 //! `[analysis.<name>]` table reaches it through the plan and the one gate,
 //! and [`execute`] needs no change.
 
-mod full_system;
 mod pod;
-mod reference;
 mod spectral;
 
 use std::time::Instant;
 
 pub use crate::error::JobError;
+pub use crate::progress::{Progress, Quiet};
 pub use spectral::Spectral;
 
 use crate::analyses::frc::Frc;
+use crate::analyses::reference::Reference;
+use crate::analyses::report::SpeedReport;
+use crate::analyses::validation::Validate;
 use crate::analyses::{self, Analysis, Answers, Beside, Context, Finished, Phase};
 use crate::output::summary::{Summary, Timing};
 use crate::output::{pod_only_files, result_files, OutputSet, Products};
@@ -31,8 +36,7 @@ use crate::C64;
 use ssm_core::compare::pod::PodStudy;
 use ssm_core::compare::report::Report;
 use ssm_core::compare::validation::Validation;
-use ssm_core::fom::periodic::frc::{ReferenceFrc, ReferenceOrbit};
-use ssm_core::fom::periodic::OrbitInfo;
+use ssm_core::fom::periodic::frc::ReferenceFrc;
 use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::{OutputMap, System};
 use ssm_core::reduce::Reduction;
@@ -41,34 +45,6 @@ use ssm_core::rom::forced_response::ForcedResponse;
 use ssm_core::spectrum::{MasterMode, Spectrum};
 use ssm_core::ssm::analysis::polar;
 use ssm_core::ssm::{self, Dynamics, SsmExpansion, SsmOptions};
-use ssm_kernel::continuation::Ledger;
-
-/// Stages reported to a progress display.
-pub trait Progress {
-    /// A new stage begins.
-    fn stage(&self, name: &str);
-    /// Where a long stage is (e.g. the frequency a continuation reached);
-    /// a display may show it in place of the stage's name.
-    fn detail(&self, _what: &str) {}
-    /// One orbit of the full-system reference (`[reference]`), as it is
-    /// accepted, with the names of its output amplitudes: a display may write
-    /// it down, so that a run stopped before its outputs are written keeps
-    /// what it computed.
-    fn reference_orbit(&self, _outputs: &[String], _orbit: &ReferenceOrbit) {}
-    /// The ledger of the full-system reference's continuation runs: a
-    /// checkpoint that keeps each step, from which a stopped run resumes
-    /// (none by default).
-    fn checkpoint(&self) -> Option<&dyn Ledger<OrbitInfo>> {
-        None
-    }
-}
-
-/// No progress display.
-pub struct Quiet;
-
-impl Progress for Quiet {
-    fn stage(&self, _name: &str) {}
-}
 
 /// Everything a run computed.
 #[derive(Debug)]
@@ -135,13 +111,25 @@ struct Reduced {
     frc_s: f64,
 }
 
-/// The analyses of one phase that ran, and their seconds.
+/// The seconds of the analyses of one phase.
 struct Ran {
-    done: Vec<Box<dyn Finished>>,
     /// Seconds of all but the forced response.
     results_s: f64,
     /// Seconds of the forced response.
     frc_s: f64,
+    /// Seconds of each analysis, by name.
+    each: Vec<(&'static str, f64)>,
+}
+
+impl Ran {
+    /// The seconds of the analysis `name` (0 when it did not run).
+    fn of(&self, name: &str) -> f64 {
+        self.each
+            .iter()
+            .filter(|(n, _)| *n == name)
+            .map(|(_, s)| s)
+            .sum()
+    }
 }
 
 /// The model a plan runs on.
@@ -188,11 +176,10 @@ impl Stage<'_> {
 
         self.progress
             .stage("backbone, invariance error, transients");
+        let mut analyses = Vec::new();
         let Ran {
-            done: analyses,
-            results_s,
-            frc_s,
-        } = self.analyses(&expansion, Phase::Reduced)?;
+            results_s, frc_s, ..
+        } = self.analyses(&expansion, Phase::Reduced, &mut analyses)?;
         let estimates = estimates(&analyses);
         Ok(Reduced {
             expansion,
@@ -205,18 +192,26 @@ impl Stage<'_> {
     }
 
     /// The analyses of the plan of `phase` on `expansion`, in the plan's
-    /// order, and their seconds.
-    fn analyses(&self, expansion: &SsmExpansion, phase: Phase) -> Result<Ran, JobError> {
-        let cx = Context::new(
+    /// order, added to `done` (each reads the results of those before it);
+    /// their seconds.
+    fn analyses(
+        &self,
+        expansion: &SsmExpansion,
+        phase: Phase,
+        done: &mut Vec<Box<dyn Finished>>,
+    ) -> Result<Ran, JobError> {
+        let base = Context::new(
             self.system,
             &self.sp.masters,
             expansion,
             self.coordinates,
             self.plan.ssm.tolerance,
         )
-        .with_signals(self.signals);
+        .with_signals(self.signals)
+        .with_others(self.others)
+        .with_progress(self.progress);
         let (mut results_s, mut frc_s) = (0.0, 0.0);
-        let mut done = Vec::new();
+        let mut each = Vec::new();
         for a in self.plan.requested() {
             let entry = analyses::find(&a.name)?;
             if entry.phase() != phase {
@@ -226,9 +221,10 @@ impl Stage<'_> {
                 self.progress.stage(stage);
             }
             let t = Instant::now();
-            let finished = entry.run(&a.spec, &cx);
+            let finished = entry.run(&a.spec, &base.with_earlier(done));
             done.push(finished.map_err(JobError::of_analysis)?);
             let spent = t.elapsed().as_secs_f64();
+            each.push((entry.name(), spent));
             *if a.name == Frc::NAME {
                 &mut frc_s
             } else {
@@ -236,9 +232,9 @@ impl Stage<'_> {
             } += spent;
         }
         Ok(Ran {
-            done,
             results_s,
             frc_s,
+            each,
         })
     }
 
@@ -413,18 +409,13 @@ pub fn execute(
         mut analyses,
         ..
     } = reduced;
-    let frc = analyses::output_of::<Frc>(&analyses).map(|f| &f.0);
-
-    let full = full_system::full_system(
-        &stage,
-        &expansion,
-        frc,
-        &mut accuracy,
-        &mut timing,
-        &mut warnings,
-    )?;
-    let frc = frc.cloned();
-    analyses.extend(stage.analyses(&expansion, Phase::FullSystem)?.done);
+    let full = stage.analyses(&expansion, Phase::FullSystem, &mut analyses)?;
+    timing.validation = full.of(Validate::NAME);
+    timing.reference = full.of(Reference::NAME);
+    accuracy.measured = analyses.iter().flat_map(|a| a.measured()).collect();
+    let validation = analyses::output_of::<Validate>(&analyses).map(|c| &c.0);
+    let reference = analyses::output_of::<Reference>(&analyses).map(|r| &r.frc);
+    timing.report = full.of(SpeedReport::NAME);
 
     warnings.extend(analyses.iter().flat_map(|a| a.warnings()));
     progress.stage("writing outputs");
@@ -452,10 +443,7 @@ pub fn execute(
             quotients: &sp.resonances.quotients,
             ssm: &expansion,
             polar: polar_form.as_ref(),
-            validation: full.validation.as_ref(),
-            report: full.report.as_ref(),
             pod: pod.as_ref(),
-            reference: full.reference.as_ref(),
             answers: &answers_of_analyses,
             accuracy: &accuracy,
             warnings: &warnings,
@@ -463,8 +451,8 @@ pub fn execute(
         },
     })?;
     let beside = Beside {
-        steady: full.validation.as_ref().and_then(|v| v.steady.as_ref()),
-        reference: full.reference.as_ref(),
+        steady: validation.and_then(|v| v.steady.as_ref()),
+        reference,
     };
     add_analysis_files(&mut outputs, &analyses, &names, &beside)?;
     Ok(JobResult {
@@ -473,10 +461,10 @@ pub fn execute(
         masters: sp.masters,
         ssm: Some(expansion),
         pod,
-        frc,
-        reference: full.reference,
-        validation: full.validation,
-        report: full.report,
+        frc: analyses::output_of::<Frc>(&analyses).map(|f| f.0.clone()),
+        reference: reference.cloned(),
+        validation: validation.cloned(),
+        report: analyses::output_of::<SpeedReport>(&analyses).map(|r| r.report.clone()),
         warnings,
         plugins,
         outputs,

@@ -25,8 +25,8 @@ use crate::scene::{SceneError, SceneFile};
 use budget::Limits;
 use ssm_core::model::system::System;
 use ssm_core::spec::{
-    BackboneSpec, FrcSpec, InvarianceSpec, PodSpec, ReferenceSpec, ReportSpec, SimulateSpec,
-    SpecError, SpectrumSpec, SsmSpec, TransientSpec, ValidationSpec,
+    BackboneSpec, FrcSpec, InvarianceSpec, PodSpec, ReferenceSpec, ReferenceStart, ReportSpec,
+    SimulateSpec, SpecError, SpectrumSpec, SsmSpec, TransientSpec, ValidationSpec,
 };
 
 /// Everything a run computes, as specs: the SSM and its spectrum, the
@@ -98,12 +98,15 @@ impl Plan {
     /// Every analysis of [`crate::analyses::REGISTRY`] the plan asks for,
     /// its spec as JSON: the answers older than the registry that a field
     /// of their own asks for (`backbone`, `invariance`, `transient`, `frc`,
-    /// `simulate`), then `analyses`.
-    /// The run's estimates and warnings follow this order.
+    /// `validation`, `reference`, `report`, `simulate`), then `analyses`. The analyses of each
+    /// phase run in this order (an analysis reads the results of those
+    /// before it), and the run's estimates, measured errors and warnings
+    /// follow it.
     pub fn requested(&self) -> Vec<PlannedAnalysis> {
         use crate::analyses::backbone::Backbone;
         use crate::analyses::{frc::Frc, invariance::Invariance, simulate::Simulate};
-        use crate::analyses::{transient::Transient, Analysis};
+        use crate::analyses::{reference::Reference, transient::Transient, Analysis};
+        use crate::analyses::{report::SpeedReport, validation::Validate};
         fn own<S: serde::Serialize>(name: &str, spec: Option<&S>) -> Option<PlannedAnalysis> {
             spec.map(|s| PlannedAnalysis {
                 name: name.to_owned(),
@@ -116,12 +119,50 @@ impl Plan {
             own(Invariance::NAME, self.invariance.as_ref()),
             own(Transient::NAME, self.transient.as_ref()),
             own(Frc::NAME, self.frc.as_ref()),
+            own(Validate::NAME, self.validation.as_ref()),
+            own(Reference::NAME, self.resolved_reference().as_ref()),
+            own(SpeedReport::NAME, self.resolved_report().as_ref()),
             own(Simulate::NAME, self.simulate.as_ref()),
         ]
         .into_iter()
         .flatten()
         .chain(self.analyses.iter().cloned())
         .collect()
+    }
+
+    /// `[reference]` with what it takes from the forced response resolved:
+    /// its frequency range (the forced response's when it gives none) and
+    /// where its branches start (also from the forced response's branches
+    /// when the plan has one and the spec does not say).
+    fn resolved_reference(&self) -> Option<ReferenceSpec> {
+        self.reference.as_ref().map(|r| {
+            let forcing = self.frc.as_ref().map(|f| f.omega_range);
+            ReferenceSpec {
+                omega_range: r.omega_range(forcing).map(|(a, b)| [a, b]),
+                start: Some(if r.from_ssm(self.frc.is_some()) {
+                    ReferenceStart::Ssm
+                } else {
+                    ReferenceStart::Rest
+                }),
+                ..r.clone()
+            }
+        })
+    }
+
+    /// `[report]` with what it takes from the rest of the plan: the forced
+    /// response it recomputes, the outputs and integrator tolerance of
+    /// `[validate]`, the SSM's resonance tolerance.
+    fn resolved_report(&self) -> Option<crate::analyses::report::ReportRequest> {
+        let validation = self.validation.as_ref();
+        self.report
+            .as_ref()
+            .map(|r| crate::analyses::report::ReportRequest {
+                orders: r.orders.clone(),
+                forcing: self.frc.clone(),
+                outputs: validation.and_then(|v| v.outputs.clone()),
+                rtol: validation.map_or(ValidationSpec::DEFAULT_RTOL, |v| v.rtol),
+                resonance_tol: self.ssm.resonance_tol,
+            })
     }
 
     /// The highest expansion order an answer names itself (`orders` lists,

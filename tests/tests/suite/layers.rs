@@ -568,7 +568,9 @@ fn no_file_over_800_lines_and_no_pipeline_function_over_150() {
     );
     let mut pipeline = Vec::new();
     rust_files(&root.join("ssm-engine/src/pipeline"), &mut pipeline);
-    assert!(pipeline.len() >= 5, "{pipeline:?}");
+    // the pipeline shrinks as its stages move into the analyses: what is
+    // left is its runner, the spectral stage and the POD study
+    assert!(pipeline.len() >= 3, "{pipeline:?}");
     let long: Vec<String> = pipeline
         .iter()
         .flat_map(|f| {

@@ -1,13 +1,12 @@
-//! `[reference]`: the full system's forced response curves by harmonic
-//! balance and continuation, one branch per forcing amplitude (and one
-//! amplitude response per frequency of `amplitude_at`), with the
-//! warnings a user must see (truncation estimate above the accuracy target,
+//! The run of `[reference]`: one branch per forcing amplitude (and one
+//! amplitude response per frequency of `amplitude_at`), with the warnings a
+//! user must see (truncation estimate above the accuracy target,
 //! multipliers not computed, a branch that stopped short).
 
 use std::time::Instant;
 
-use super::{JobError, Progress};
-use crate::plan::{named_outputs, Plan};
+use super::ReferenceRunError;
+use crate::progress::Progress;
 use ssm_core::compare::seeds::ssm_seeds;
 use ssm_core::compare::validation::{frc_error_at, reference_points};
 use ssm_core::fom::periodic::frc::{ReferenceBranch, ReferenceFrc};
@@ -22,36 +21,33 @@ use ssm_core::spec::ReferenceSpec;
 use ssm_core::ssm::SsmExpansion;
 use ssm_kernel::continuation::{NoLedger, Stop};
 
-/// Runs the reference `sec` of `plan`, with seeds from the reduced model's
-/// forced response `reduced` where it starts from the SSM; returns the
-/// curves and the warnings.
-pub(crate) fn reference_stage(
-    plan: &Plan,
+/// Runs the reference `sec` (its frequency range and start resolved by the
+/// plan), with seeds from the reduced model's forced response `reduced`
+/// where it starts from the SSM; returns the curves and the warnings.
+pub(super) fn reference_stage(
     sec: &ReferenceSpec,
     system: &System,
     coordinates: &[&OutputMap],
     reduced: Option<(&SsmExpansion, &ForcedResponse)>,
     tolerance: f64,
     progress: &dyn Progress,
-) -> Result<(ReferenceFrc, Vec<String>), JobError> {
+) -> Result<(ReferenceFrc, Vec<String>), ReferenceRunError> {
     let t = Instant::now();
     let outputs: Vec<OutputMap> = match &sec.outputs {
-        Some(names) => named_outputs(system, names, "reference.outputs")?
-            .into_iter()
-            .cloned()
-            .collect(),
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                system
+                    .output(n)
+                    .cloned()
+                    .ok_or_else(|| ReferenceRunError::Output(n.clone()))
+            })
+            .collect::<Result<_, _>>()?,
         None => coordinates.iter().map(|o| (*o).clone()).collect(),
     };
     let h = sec.harmonics;
-    let forced = plan.frc.is_some();
-    let range = sec
-        .omega_range(plan.frc.as_ref().map(|f| f.omega_range))
-        .ok_or_else(|| {
-            crate::plan::PlanError::new(
-                "reference.omega_range",
-                "give omega_range here or in [forcing]".into(),
-            )
-        })?;
+    let from_ssm = sec.from_ssm(false);
+    let range = sec.omega_range(None).ok_or(ReferenceRunError::NoRange)?;
     let mut warnings = Vec::new();
     let names: Vec<String> = outputs.iter().map(|o| o.name.clone()).collect();
     let ledger = progress.checkpoint().unwrap_or(&NoLedger);
@@ -59,11 +55,11 @@ pub(crate) fn reference_stage(
     let mut samples = 0;
     for &eps in &sec.epsilon {
         progress.stage(&format!("full-system reference, eps = {eps:e}"));
-        let seeds = match reduced.filter(|_| sec.from_ssm(forced)) {
+        let seeds = match reduced.filter(|_| from_ssm) {
             Some((ssm, frc)) => ssm_seeds(ssm, frc, system.n_states(), eps, range, h),
             None => Vec::new(),
         };
-        if sec.from_ssm(forced) && seeds.is_empty() {
+        if from_ssm && seeds.is_empty() {
             warnings.push(format!(
                 "[reference] eps = {eps}: no forced response of the reduced model at this amplitude to start from; the reference starts from rest only (add eps to [forcing] epsilon)", eps = ssm_kernel::number::short(eps)
             ));
@@ -171,7 +167,7 @@ impl AmplitudeResponses<'_> {
         &self,
         samples: &mut usize,
         warnings: &mut Vec<String>,
-    ) -> Result<Vec<ReferenceBranch>, JobError> {
+    ) -> Result<Vec<ReferenceBranch>, ReferenceRunError> {
         let (sec, system, outputs, names) = (self.sec, self.system, self.outputs, self.names);
         let (tolerance, progress) = (self.tolerance, self.progress);
         let ledger = progress.checkpoint().unwrap_or(&NoLedger);
@@ -259,7 +255,7 @@ fn branch_warnings(
 /// forcing amplitude: per output both have, the largest amplitude error over
 /// the reference's orbits (stable and unstable) relative to the reference's
 /// largest amplitude.
-pub(crate) fn reference_errors(f: &ForcedResponse, r: &ReferenceFrc) -> Vec<MeasuredError> {
+pub(super) fn reference_errors(f: &ForcedResponse, r: &ReferenceFrc) -> Vec<MeasuredError> {
     let mut list = Vec::new();
     for c in &f.curves {
         let Some(points) = reference_points(r, c.epsilon) else {
