@@ -12,6 +12,7 @@ mod divider;
 mod docs;
 mod examples;
 mod frc;
+mod full_system_phase;
 mod fuzz;
 mod fuzz_checkpoints;
 mod fuzz_inputs;
