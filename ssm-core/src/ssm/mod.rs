@@ -41,6 +41,7 @@ pub mod homological;
 pub mod modal_residual;
 pub mod nonautonomous;
 pub mod rom;
+pub mod spectral;
 
 use std::time::Instant;
 

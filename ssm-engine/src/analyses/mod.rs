@@ -27,6 +27,7 @@ pub mod backbone;
 pub mod damping;
 pub mod frc;
 pub mod invariance;
+pub mod pod;
 pub mod reference;
 pub mod report;
 pub mod simulate;

@@ -6,7 +6,6 @@
 pub mod checkpoint;
 mod files;
 pub mod identified;
-pub mod pod;
 pub mod ssm;
 pub mod summary;
 
@@ -69,16 +68,8 @@ pub(crate) fn result_files(p: &Products<'_>) -> Result<OutputSet, PlotError> {
 
 /// The files of a `[pod]` study.
 fn pod_files(out: &mut OutputSet, model: &str, study: &PodStudy) -> Result<(), PlotError> {
-    out.add("pod_comparison.csv", pod::comparison_csv(study));
-    out.add("pod_report.md", pod::report_md(model, study));
-    out.add("pod_povs.csv", pod::povs_csv(study));
-    out.add("pod_povs.svg", pod::povs_svg(study)?);
-    out.add("pod_constraints.csv", pod::constraints_csv(study));
-    for (k, case) in study.cases.iter().enumerate() {
-        out.add(
-            &format!("pod_case_{}.csv", k + 1),
-            pod::case_csv(study, case),
-        );
+    for (name, contents) in crate::analyses::pod::files(model, study)? {
+        out.add(&name, contents);
     }
     Ok(())
 }

@@ -9,10 +9,10 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::pod::PodSummary;
 use super::ssm::{PolarSummary, SsmSummary};
 use crate::analyses::frc::FrcSummary;
 use crate::analyses::invariance::InvarianceSummary;
+use crate::analyses::pod::write::PodSummary;
 use crate::analyses::reference::write::ReferenceSummary;
 use crate::analyses::report::write::ReportSummary;
 use crate::analyses::simulate::SimulationSummary;

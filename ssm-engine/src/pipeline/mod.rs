@@ -14,16 +14,14 @@
 //! `[analysis.<name>]` table reaches it through the plan and the one gate,
 //! and [`execute`] needs no change.
 
-mod pod;
-mod spectral;
-
 use std::time::Instant;
 
 pub use crate::error::JobError;
 pub use crate::progress::{Progress, Quiet};
-pub use spectral::Spectral;
+pub use ssm_core::ssm::spectral::Spectral;
 
 use crate::analyses::frc::Frc;
+use crate::analyses::pod::PodError;
 use crate::analyses::reference::Reference;
 use crate::analyses::report::SpeedReport;
 use crate::analyses::validation::Validate;
@@ -42,7 +40,7 @@ use ssm_core::model::system::{OutputMap, System};
 use ssm_core::reduce::Reduction;
 use ssm_core::rom::accuracy::{percent, Accuracy, AnswerEstimate, OrdersTried};
 use ssm_core::rom::forced_response::ForcedResponse;
-use ssm_core::spectrum::{MasterMode, Spectrum};
+use ssm_core::spectrum::{MasterMode, Spectrum, SpectrumError};
 use ssm_core::ssm::analysis::polar;
 use ssm_core::ssm::{self, Dynamics, SsmExpansion, SsmOptions};
 
@@ -384,7 +382,13 @@ pub fn execute(
 
     let ceiling = budget::check_spectrum(plan, &system, limits)?;
     progress.stage("spectrum");
-    let sp = spectral::spectral(&plan.ssm, &plan.spectrum, &system, ceiling)?;
+    let sp = spectral(
+        &plan.ssm,
+        &plan.spectrum,
+        &system,
+        ceiling,
+        "ssm.master_pairs",
+    )?;
     timing.spectrum = sp.spectrum_s;
     timing.resonance_check = sp.resonance_s;
     budget::check(plan, &system, &sp.masters, ceiling, limits)?;
@@ -510,7 +514,23 @@ fn pod_study(
         return Ok(None);
     };
     let t = Instant::now();
-    let (study, w) = pod::pod_stage(plan, spec, model, system, progress)?;
+    let outputs = crate::plan::pod_outputs(plan, system)?;
+    let (study, w) = analyses::pod::study(
+        spec,
+        (&plan.ssm, &plan.spectrum),
+        model,
+        system,
+        &outputs,
+        progress,
+    )
+    .map_err(|e| match e {
+        PodError::Study(e) => JobError::Pod(e),
+        PodError::Ssm(e) => JobError::Ssm(e),
+        PodError::Spectrum(e @ SpectrumError::PairOutOfRange { .. }) => {
+            JobError::Plan(crate::plan::PlanError::new("pod.ssm_pairs", e.to_string()))
+        }
+        PodError::Spectrum(e) => JobError::Spectrum(e),
+    })?;
     Ok(Some((study, w, t.elapsed().as_secs_f64())))
 }
 
@@ -521,4 +541,21 @@ fn reducer_warnings(r: &Reduction) -> Vec<String> {
         .filter(|d| d.name.starts_with("warning"))
         .map(|d| format!("reducer '{}': {}", r.reducer, d.text))
         .collect()
+}
+
+/// The spectral stage of `ssm` ([`ssm_core::ssm::spectral::spectral`]); a
+/// master pair beyond the spectrum is the plan's error at `key`.
+pub(crate) fn spectral(
+    ssm: &ssm_core::spec::SsmSpec,
+    spectrum: &ssm_core::spec::SpectrumSpec,
+    system: &System,
+    order: usize,
+    key: &str,
+) -> Result<Spectral, JobError> {
+    ssm_core::ssm::spectral::spectral(ssm, spectrum, system, order).map_err(|e| match e {
+        ssm_core::spectrum::SpectrumError::PairOutOfRange { .. } => {
+            JobError::Plan(crate::plan::PlanError::new(key, e.to_string()))
+        }
+        other => JobError::Spectrum(other),
+    })
 }

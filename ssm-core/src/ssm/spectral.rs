@@ -1,19 +1,25 @@
-//! The spectral stage of a run: the finite spectrum of the pencil with the
-//! plan's options (falling back to the sparse path where the dense one fails
-//! on a stiff pencil), the master modes, and the non-resonance checks.
+//! What an SSM needs of the spectrum, computed once per run: the finite
+//! spectrum of the pencil with the spec's options (falling back to the
+//! sparse path where the dense one fails on a stiff pencil, widened on the
+//! sparse path until it covers the resonances up to the expansion order),
+//! the master modes, and the non-resonance checks, with the warnings a user
+//! must see.
+//!
+//! # References
+//! M. Li, S. Jain, G. Haller, *Model reduction for constrained mechanical
+//! systems via spectral submanifolds*, Nonlinear Dyn. 111 (2023), Sect. 3.2
+//! (eqs. 53-58: the spectral quotients and non-resonance conditions).
 
 use std::time::Instant;
 
-use super::JobError;
-use crate::plan::PlanError;
-use crate::C64;
-use ssm_core::model::system::System;
-use ssm_core::spec::{SpectrumSpec, SsmSpec};
-use ssm_core::spectrum::{
+use super::Dynamics;
+use crate::model::system::System;
+use crate::spec::{SpectrumSpec, SsmSpec};
+use crate::spectrum::{
     self, check_resonances, MasterMode, Method, ResonanceReport, Spectrum, SpectrumError,
     SpectrumOptions,
 };
-use ssm_core::ssm::Dynamics;
+use crate::C64;
 
 /// What the spectral stage found.
 #[derive(Debug, Clone)]
@@ -37,13 +43,14 @@ pub struct Spectral {
 
 /// The spectral stage of the SSM `ssm` (its master pairs, scaling and
 /// resonance tolerance) with the solver of `spec` on `system`, the
-/// resonance checks up to `order`.
+/// resonance checks up to `order`. A master pair beyond the spectrum is
+/// [`SpectrumError::PairOutOfRange`].
 pub fn spectral(
     ssm: &SsmSpec,
     spec: &SpectrumSpec,
     system: &System,
     order: usize,
-) -> Result<Spectral, JobError> {
+) -> Result<Spectral, SpectrumError> {
     let t_spec = Instant::now();
     let mut warnings = Vec::new();
     let pairs = &ssm.master_pairs;
@@ -101,14 +108,7 @@ pub fn spectral(
     if mechanical_layout.is_some() && spectrum.eigenvalues.len() >= n_finite {
         spectrum.complete = true;
     }
-    let masters = spectrum::master_modes(system, &spectrum, pairs, opts.normalization).map_err(
-        |e| match e {
-            SpectrumError::PairOutOfRange { .. } => {
-                JobError::Plan(PlanError::new("ssm.master_pairs", e.to_string()))
-            }
-            other => JobError::Spectrum(other),
-        },
-    )?;
+    let masters = spectrum::master_modes(system, &spectrum, pairs, opts.normalization)?;
     let spectrum_s = t_spec.elapsed().as_secs_f64();
     let master_indices: Vec<usize> = masters.iter().map(|m| m.index).collect();
     warnings.extend(repeated_masters(
@@ -171,7 +171,7 @@ fn compute_with_fallback(
     pencil_b: faer::sparse::SparseColMatRef<'_, usize, f64>,
     opts: &SpectrumOptions,
     warnings: &mut Vec<String>,
-) -> Result<Spectrum, JobError> {
+) -> Result<Spectrum, SpectrumError> {
     match spectrum::compute(pencil_a, pencil_b, opts) {
         // a stiff pencil (e.g. light pendulums on a heavy slider) can defeat the
         // dense path's rank decisions; the sparse path needs only the slow modes
@@ -194,19 +194,17 @@ fn compute_with_fallback(
                 method: Some(Method::Sparse),
                 ..opts.clone()
             };
-            Err(JobError::Spectrum(
-                match spectrum::compute(pencil_a, pencil_b, &sparse) {
-                    Ok(_) => SpectrumError::DenseTooStiff {
-                        detail: match &e {
-                            SpectrumError::SingularPencil { detail } => detail.clone(),
-                            other => other.to_string(),
-                        },
+            Err(match spectrum::compute(pencil_a, pencil_b, &sparse) {
+                Ok(_) => SpectrumError::DenseTooStiff {
+                    detail: match &e {
+                        SpectrumError::SingularPencil { detail } => detail.clone(),
+                        other => other.to_string(),
                     },
-                    Err(_) => e,
                 },
-            ))
+                Err(_) => e,
+            })
         }
-        r => Ok(r?),
+        r => r,
     }
 }
 
@@ -259,7 +257,7 @@ fn cover_resonances(
     mut found: Spectrum,
     (pairs, order, tol): (&[usize], usize, f64),
     automatic: bool,
-) -> Result<(Spectrum, Option<Coverage>), JobError> {
+) -> Result<(Spectrum, Option<Coverage>), SpectrumError> {
     let n = a.nrows();
     let mut modes = opts.modes;
     loop {

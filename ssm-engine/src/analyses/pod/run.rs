@@ -1,21 +1,23 @@
-//! The `[pod]` stage: the training run, the POD models of each truncation,
-//! the SSM models of `ssm_pairs`, and every model run on every load
-//! ([`ssm_core::compare::pod`]).
+//! The run of the `[pod]` study: the training run, the POD models of each
+//! truncation, the SSM models of `ssm_pairs`, and every model run on every
+//! load ([`ssm_core::compare::pod`]).
 
 use std::time::Instant;
 
-use super::spectral::spectral;
-use super::{JobError, Progress};
-use crate::plan::{Plan, PlanError};
+use super::PodError;
+use crate::progress::Progress;
 use ssm_core::compare::pod::SsmRom;
 use ssm_core::compare::pod::{
     full_run, pod_case_run, pod_roms, CaseRun, LoadCase, PodStudy, StudySettings,
 };
 use ssm_core::compare::ssm_run::ssm_case_run;
 use ssm_core::fom::hht::load_sampling;
+use ssm_core::model::system::OutputMap;
 use ssm_core::model::system::System;
 use ssm_core::reduce::pod::Truncation;
+use ssm_core::spec::SpectrumSpec;
 use ssm_core::spec::{PodRunSpec, PodSpec, PodTruncations, SsmSpec};
+use ssm_core::ssm::spectral::spectral;
 use ssm_core::ssm::{self, SsmOptions};
 
 /// The load case of a POD run.
@@ -50,25 +52,27 @@ fn truncations(sec: &PodSpec) -> Vec<(String, Truncation)> {
 }
 
 /// The SSM models of `ssm_pairs`: for each set, the spectral stage with
-/// those master pairs and the SSM to the study's order.
-fn ssm_roms(plan: &Plan, sys: &System, sec: &PodSpec) -> Result<Vec<SsmRom>, JobError> {
-    let order = sec.ssm_order(plan.ssm.order);
+/// those master pairs (the rest of the SSM's spec `ssm`, the eigensolver's
+/// `spectrum`) and the SSM to the study's order.
+fn ssm_roms(
+    (ssm_spec, spectrum): (&SsmSpec, &SpectrumSpec),
+    sys: &System,
+    sec: &PodSpec,
+) -> Result<Vec<SsmRom>, PodError> {
+    let order = sec.ssm_order(ssm_spec.order);
     sec.ssm_pairs
         .iter()
         .map(|pairs| {
             let t = Instant::now();
             let with_pairs = SsmSpec {
                 master_pairs: pairs.clone(),
-                ..plan.ssm.clone()
+                ..ssm_spec.clone()
             };
-            let sp = spectral(&with_pairs, &plan.spectrum, sys, order).map_err(|e| match e {
-                JobError::Plan(e) => JobError::Plan(PlanError::new("pod.ssm_pairs", e.problem)),
-                other => other,
-            })?;
+            let sp = spectral(&with_pairs, spectrum, sys, order)?;
             let others = ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
             let options = SsmOptions {
                 order,
-                resonance_tol: plan.ssm.resonance_tol,
+                resonance_tol: ssm_spec.resonance_tol,
             };
             let expansion = ssm::compute(sys, &sp.masters, &others, &options)?;
             Ok(SsmRom {
@@ -89,17 +93,18 @@ fn ssm_roms(plan: &Plan, sys: &System, sec: &PodSpec) -> Result<Vec<SsmRom>, Job
         .collect()
 }
 
-/// Runs the POD study `sec` of `plan` on the full plugin model
-/// `full_model` (validated into `sys`; the outputs and the runs' states
-/// checked by [`Plan::check`]).
-pub(crate) fn pod_stage(
-    plan: &Plan,
+/// Runs the POD study `sec` on the full plugin model `full_model`
+/// (validated into `sys`; the runs' states checked by the plan), comparing
+/// `outputs`; its SSM models follow `specs` (the SSM's and the
+/// eigensolver's specs of the plan).
+pub(super) fn pod_stage(
     sec: &PodSpec,
+    specs: (&SsmSpec, &SpectrumSpec),
     full_model: &ssm_api::Model,
     sys: &System,
+    outputs: &[&OutputMap],
     progress: &dyn Progress,
-) -> Result<(PodStudy, Vec<String>), JobError> {
-    let outputs = crate::plan::pod_outputs(plan, sys)?;
+) -> Result<(PodStudy, Vec<String>), PodError> {
     let settings = StudySettings {
         step: sec.step,
         alpha: sec.hht_alpha,
@@ -111,7 +116,7 @@ pub(crate) fn pod_stage(
         cases.push(load_case(run, format!("test {}", k + 1), false));
     }
     progress.stage("POD: training run of the full model");
-    let training = full_run(sys, &cases[0], &settings, &outputs)?;
+    let training = full_run(sys, &cases[0], &settings, outputs)?;
     progress.stage("POD: reduced models");
     let pod = pod_roms(
         full_model,
@@ -123,7 +128,7 @@ pub(crate) fn pod_stage(
     if !sec.ssm_pairs.is_empty() {
         progress.stage("POD: SSM models for comparison");
     }
-    let ssm = ssm_roms(plan, sys, sec)?;
+    let ssm = ssm_roms(specs, sys, sec)?;
     let mut warnings: Vec<String> = cases
         .iter()
         .filter_map(|c| {
@@ -139,16 +144,16 @@ pub(crate) fn pod_stage(
         let full = if k == 0 {
             training.clone()
         } else {
-            full_run(sys, &case, &settings, &outputs)?
+            full_run(sys, &case, &settings, outputs)?
         };
         let mut run = CaseRun::new(case, &full);
         run.pod = pod
             .iter()
-            .map(|rom| pod_case_run(rom, sys, &run.case, &full, &settings, &outputs))
+            .map(|rom| pod_case_run(rom, sys, &run.case, &full, &settings, outputs))
             .collect();
         run.ssm = ssm
             .iter()
-            .map(|rom| ssm_case_run(rom, sys, &run.case, &full, &outputs))
+            .map(|rom| ssm_case_run(rom, sys, &run.case, &full, outputs))
             .collect();
         let labels = pod
             .iter()
