@@ -24,6 +24,21 @@
 //! - [`spec`]: the span-free specs of the answers, with documented defaults,
 //!   to and from JSON.
 //!
+//! ## The front door
+//!
+//! The path most programs take is re-exported at the crate root: a
+//! [`System`] (from a plugin's model, a model folder or matrices), the
+//! spectral stage [`spectral`] on an [`SsmSpec`] and a [`SpectrumSpec`]
+//! (spectrum, master modes, non-resonance checks and their warnings), the
+//! SSM [`compute_ssm`] to an order, and the answers read off it, each with
+//! its error estimate: [`backbone`] ([`BackboneSpec`]), [`forced_response`]
+//! ([`FrcSpec`]) and [`transient`] ([`TransientSpec`]); and the full
+//! system's periodic orbits [`reference_frc`] ([`ReferenceSettings`]) to
+//! compare with. `ssm-engine/examples/duffing.rs` takes this path from the
+//! matrices of the Duffing oscillator. The folders below hold the rest
+//! (the solvers' options, the comparisons, the reducers, the full-order
+//! integrators); modules that only serve others are private.
+//!
 //! Below it, `ssm-kernel` holds the series, Chebyshev tables and the
 //! continuation core. No two files or folders import each other (checked by
 //! the suite's `layers::no_import_cycles_between_files_or_folders`), and the
@@ -41,3 +56,12 @@ pub mod spectrum;
 pub mod ssm;
 
 pub use ssm_kernel::C64;
+
+pub use fom::periodic::frc::{reference_frc, ReferenceFrc, ReferenceSettings};
+pub use model::system::System;
+pub use rom::autonomous::{backbone, transient, BackboneCurve, LiftedTransient};
+pub use rom::forced_response::{forced_response, ForcedResponse};
+pub use spec::{BackboneSpec, FrcSpec, SpectrumSpec, SsmSpec, TransientSpec};
+pub use spectrum::{MasterMode, Spectrum};
+pub use ssm::spectral::{spectral, Spectral};
+pub use ssm::{compute as compute_ssm, SsmExpansion, SsmOptions};

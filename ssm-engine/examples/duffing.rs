@@ -12,14 +12,11 @@
 //! estimate.
 
 use ssm_api::{Harmonic, PolyVector, SparseMatrix};
-use ssm_core::fom::periodic::frc::{reference_frc, ReferenceSettings};
-use ssm_core::model::system::System;
-use ssm_core::rom::autonomous::backbone;
-use ssm_core::rom::forced_response::forced_response;
-use ssm_core::spec::{BackboneSpec, FrcSpec};
 use ssm_core::spectrum::Normalization;
-use ssm_core::spectrum::{self, SpectrumOptions};
-use ssm_core::ssm::{self, SsmOptions};
+use ssm_core::{
+    backbone, compute_ssm, forced_response, reference_frc, spectral, BackboneSpec, FrcSpec,
+    ReferenceSettings, SpectrumSpec, SsmOptions, SsmSpec, System,
+};
 use ssm_engine::analyses::damping::{damping_curves, DampingSpec};
 use ssm_engine::analyses::Context;
 use ssm_plugin_kit::MechanicalSystem;
@@ -54,23 +51,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let x = sys.output("x").ok_or("the model names its output x")?;
     let tolerance = 0.01;
 
-    // spectrum, master pair and the SSM to O(7)
-    let options = SpectrumOptions {
-        method: None,
-        modes: 0,
-        shift: 0.0,
+    // spectrum, master pair and non-resonance checks, then the SSM to O(7)
+    let ssm_spec = SsmSpec {
+        master_pairs: vec![1],
+        order: Some(7),
         normalization: Normalization::Unit,
+        ..SsmSpec::default()
     };
-    let sp = spectrum::compute(sys.a.as_ref(), sys.b.as_ref(), &options)?;
-    let masters = spectrum::master_modes(&sys, &sp, &[1], Normalization::Unit)?;
-    let others = ssm::non_master(&sp.eigenvalues, &masters);
-    let expansion = ssm::compute(
+    let sp = spectral(&ssm_spec, &SpectrumSpec::default(), &sys, 7)?;
+    for w in &sp.warnings {
+        println!("warning: {w}");
+    }
+    let masters = sp.masters;
+    let others = ssm_core::ssm::non_master(&sp.spectrum.eigenvalues, &masters);
+    let expansion = compute_ssm(
         &sys,
         &masters,
         &others,
         &SsmOptions {
             order: 7,
-            resonance_tol: 0.02,
+            resonance_tol: ssm_spec.resonance_tol,
         },
     )?;
     println!(

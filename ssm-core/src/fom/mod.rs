@@ -58,10 +58,10 @@
 pub mod consistent;
 pub mod hht;
 pub mod periodic;
-pub mod problem;
+pub(crate) mod problem;
 pub mod radau;
 pub mod sample;
-pub mod steady;
+pub(crate) mod steady;
 
 pub(crate) use consistent::consistent_initial_keeping;
 pub use consistent::{consistent_initial, given_start, Consistent};

@@ -24,7 +24,7 @@ pub mod dense;
 mod krylov;
 pub mod modes;
 mod normalization;
-pub mod resonance;
+pub(crate) mod resonance;
 pub mod sparse;
 
 use crate::C64;

@@ -9,7 +9,7 @@
 //!
 //! `(i kappa_h Omega B - A) x_h + B V s_h = F_h`,
 //!
-//! the homological equation of [`super::homological`] at `Lambda = i kappa_h Omega`.
+//! the homological equation of `ssm::homological` at `Lambda = i kappa_h Omega`.
 //! Normal-form style: `s_h` has a component on the master coordinate `p_j`
 //! exactly when the harmonic is externally resonant with it, `kappa_h = r_j`
 //! for the resonance ratio vector `r` of eq. (16) (`lambda_j ~ i r_j Omega`);

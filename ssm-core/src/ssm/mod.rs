@@ -37,10 +37,10 @@
 
 pub mod analysis;
 pub mod forced;
-pub mod homological;
+pub(crate) mod homological;
 pub mod modal_residual;
 pub mod nonautonomous;
-pub mod rom;
+pub(crate) mod rom;
 pub mod spectral;
 
 use std::time::Instant;

@@ -10,7 +10,7 @@
 //! backbone ([`backbone`]), the invariance error ([`invariance`]), the
 //! reduced transient ([`transient`]), the forced response ([`frc`]), the
 //! full-system comparisons ([`validation`]), the full system's forced
-//! responses ([`reference`]), the speed-against-error report ([`report`])
+//! responses ([`reference`](mod@reference)), the speed-against-error report ([`report`])
 //! and the sampled full-system runs ([`simulate`]). An analysis of the
 //! reduced model runs on every SSM the run tries while it chooses the
 //! expansion order; one of the full system runs once, on the SSM of the
@@ -258,7 +258,7 @@ pub struct Answers {
     pub simulation: Option<simulate::SimulationSummary>,
     /// `validation`: the summary of [`validation`].
     pub validation: Option<validation::write::ValidationSummary>,
-    /// `reference`: the summary of [`reference`].
+    /// `reference`: the summary of [`reference`](mod@reference).
     pub reference: Option<reference::write::ReferenceSummary>,
     /// `report`: the summary of [`report`].
     pub report: Option<report::write::ReportSummary>,

@@ -53,7 +53,7 @@
 //! The harmonic balance method with arc-length continuation in rotor/stator
 //! contact problems, J. Sound Vib. 241 (2001) 223-233.
 
-pub mod amplitude;
+pub(crate) mod amplitude;
 mod branch;
 mod doubling;
 pub mod floquet;
@@ -62,8 +62,8 @@ mod gauge;
 pub mod monodromy;
 mod multipliers;
 mod problem;
-pub mod runs;
-pub mod seed;
+pub(crate) mod runs;
+pub(crate) mod seed;
 
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 
