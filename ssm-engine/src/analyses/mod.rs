@@ -282,6 +282,48 @@ pub(crate) fn untrusted_warning(
     )
 }
 
+/// The outputs `names` of `system` (`None`: `default`, the plan's
+/// coordinates); an unknown name is `missing(name)`.
+pub(crate) fn outputs_named<'a, E>(
+    system: &'a System,
+    names: Option<&[String]>,
+    default: &[&'a OutputMap],
+    missing: impl Fn(String) -> E,
+) -> Result<Vec<&'a OutputMap>, E> {
+    match names {
+        None => Ok(default.to_vec()),
+        Some(names) => names
+            .iter()
+            .map(|n| system.output(n).ok_or_else(|| missing(n.clone())))
+            .collect(),
+    }
+}
+
+/// `Serialize` and `JsonSchema` for an analysis's output `$output` as its
+/// summary `$summary`, made by `$new` from a `&$output` (the shape
+/// `summary.json` keeps for the answers older than the registry).
+macro_rules! serialized_as {
+    ($output:ty, $summary:ty, $new:expr) => {
+        impl serde::Serialize for $output {
+            fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+                let new: fn(&$output) -> $summary = $new;
+                serde::Serialize::serialize(&new(self), serializer)
+            }
+        }
+
+        impl schemars::JsonSchema for $output {
+            fn schema_name() -> std::borrow::Cow<'static, str> {
+                <$summary as schemars::JsonSchema>::schema_name()
+            }
+
+            fn json_schema(generator: &mut schemars::SchemaGenerator) -> schemars::Schema {
+                <$summary as schemars::JsonSchema>::json_schema(generator)
+            }
+        }
+    };
+}
+pub(crate) use serialized_as;
+
 /// When an analysis runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Phase {
@@ -315,18 +357,25 @@ pub trait Analysis {
     /// Why it failed.
     type Error: std::error::Error + Send + Sync + 'static;
 
-    /// Checks `spec` against what the run offers.
-    fn check(spec: &Self::Spec, needs: &Needs) -> Result<(), SpecError>;
+    /// Checks `spec` against what the run offers (by default nothing: an
+    /// answer older than the registry is checked by the plan).
+    fn check(_spec: &Self::Spec, _needs: &Needs) -> Result<(), SpecError> {
+        Ok(())
+    }
     /// The expansion orders the spec names (the run computes at least the
-    /// highest).
-    fn orders(spec: &Self::Spec) -> Vec<usize>;
+    /// highest; by default none).
+    fn orders(_spec: &Self::Spec) -> Vec<usize> {
+        Vec::new()
+    }
     /// Its work and memory.
     fn work(spec: &Self::Spec, sizes: &Sizes<'_>) -> Work;
     /// Runs it.
     fn run(spec: &Self::Spec, cx: &Context<'_>) -> Result<Self::Output, Self::Error>;
     /// The error estimates of its answers (they take part in choosing the
-    /// expansion order).
-    fn estimates(output: &Self::Output) -> Vec<AnswerEstimate>;
+    /// expansion order; by default none).
+    fn estimates(_output: &Self::Output) -> Vec<AnswerEstimate> {
+        Vec::new()
+    }
     /// Its warnings (e.g. an answer whose estimate exceeds the tolerance).
     fn warnings(_output: &Self::Output) -> Vec<String> {
         Vec::new()

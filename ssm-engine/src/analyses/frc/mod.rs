@@ -20,8 +20,6 @@ mod write;
 
 pub use write::{FrcBifurcationSummary, FrcCurveSummary, FrcSummary};
 
-use schemars::{JsonSchema, Schema, SchemaGenerator};
-use serde::{Serialize, Serializer};
 use ssm_kernel::number::short;
 
 use super::{Analysis, Answers, Beside, Context, Needs, Sizes, Work};
@@ -38,21 +36,7 @@ pub struct Frc;
 #[derive(Debug, Clone, PartialEq)]
 pub struct ForcedResponses(pub ForcedResponse);
 
-impl Serialize for ForcedResponses {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        FrcSummary::new(&self.0).serialize(serializer)
-    }
-}
-
-impl JsonSchema for ForcedResponses {
-    fn schema_name() -> std::borrow::Cow<'static, str> {
-        FrcSummary::schema_name()
-    }
-
-    fn json_schema(generator: &mut SchemaGenerator) -> Schema {
-        FrcSummary::json_schema(generator)
-    }
-}
+super::serialized_as!(ForcedResponses, FrcSummary, |f| FrcSummary::new(&f.0));
 
 impl Analysis for Frc {
     const NAME: &'static str = "frc";

@@ -18,7 +18,6 @@ pub use write::InvarianceSummary;
 
 use super::{Analysis, Answers, Beside, Context, Needs, Sizes, Work};
 use crate::plot::PlotError;
-use ssm_core::rom::accuracy::AnswerEstimate;
 use ssm_core::rom::autonomous::{invariance_table, ResultError};
 use ssm_core::spec::{InvarianceSpec, SpecError};
 
@@ -62,10 +61,6 @@ impl Analysis for Invariance {
         Ok(InvarianceSummary::new(&invariance_table(
             cx.ssm, cx.system, spec,
         )?))
-    }
-
-    fn estimates(_output: &Self::Output) -> Vec<AnswerEstimate> {
-        Vec::new()
     }
 
     fn summarize(output: &Self::Output, answers: &mut Answers) {

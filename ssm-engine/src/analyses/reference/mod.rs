@@ -22,16 +22,13 @@
 mod run;
 pub mod write;
 
-use schemars::{JsonSchema, Schema, SchemaGenerator};
-use serde::{Serialize, Serializer};
-
 use super::frc::Frc;
-use super::{output_of, Analysis, Answers, Beside, Context, Needs, Phase, Sizes, Work};
+use super::{output_of, Analysis, Answers, Beside, Context, Phase, Sizes, Work};
 use crate::plot::PlotError;
 use ssm_core::fom::periodic::frc::ReferenceFrc;
 use ssm_core::fom::periodic::{floquet, monodromy};
-use ssm_core::rom::accuracy::{AnswerEstimate, MeasuredError};
-use ssm_core::spec::{ReferenceSpec, SpecError};
+use ssm_core::rom::accuracy::MeasuredError;
+use ssm_core::spec::ReferenceSpec;
 use write::ReferenceSummary;
 
 /// The full system's forced responses as an analysis of the registry.
@@ -55,21 +52,11 @@ pub struct ReferenceCurves {
     pub drawn_with_frc: bool,
 }
 
-impl Serialize for ReferenceCurves {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        ReferenceSummary::new(&self.frc).serialize(serializer)
-    }
-}
-
-impl JsonSchema for ReferenceCurves {
-    fn schema_name() -> std::borrow::Cow<'static, str> {
-        ReferenceSummary::schema_name()
-    }
-
-    fn json_schema(generator: &mut SchemaGenerator) -> Schema {
-        ReferenceSummary::json_schema(generator)
-    }
-}
+super::serialized_as!(
+    ReferenceCurves,
+    ReferenceSummary,
+    |r| ReferenceSummary::new(&r.frc)
+);
 
 /// Why the reference failed.
 #[derive(Debug, thiserror::Error)]
@@ -116,16 +103,6 @@ impl Analysis for Reference {
     type Spec = ReferenceSpec;
     type Output = ReferenceCurves;
     type Error = ReferenceRunError;
-
-    /// The plan checks the spec (its range against the forced response's)
-    /// and resolves its range and start before it reaches the registry.
-    fn check(_spec: &ReferenceSpec, _needs: &Needs) -> Result<(), SpecError> {
-        Ok(())
-    }
-
-    fn orders(_spec: &ReferenceSpec) -> Vec<usize> {
-        Vec::new()
-    }
 
     /// Per step five sparse factorizations of the harmonic-balance Jacobian
     /// (a dense `(2H+1)^2` block per nonzero of the pencil, eliminated at
@@ -221,10 +198,6 @@ impl Analysis for Reference {
             measured,
             drawn_with_frc: reduced.is_some(),
         })
-    }
-
-    fn estimates(_output: &ReferenceCurves) -> Vec<AnswerEstimate> {
-        Vec::new()
     }
 
     fn warnings(output: &ReferenceCurves) -> Vec<String> {

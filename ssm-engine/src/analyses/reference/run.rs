@@ -33,18 +33,15 @@ pub(super) fn reference_stage(
     progress: &dyn Progress,
 ) -> Result<(ReferenceFrc, Vec<String>), ReferenceRunError> {
     let t = Instant::now();
-    let outputs: Vec<OutputMap> = match &sec.outputs {
-        Some(names) => names
-            .iter()
-            .map(|n| {
-                system
-                    .output(n)
-                    .cloned()
-                    .ok_or_else(|| ReferenceRunError::Output(n.clone()))
-            })
-            .collect::<Result<_, _>>()?,
-        None => coordinates.iter().map(|o| (*o).clone()).collect(),
-    };
+    let outputs: Vec<OutputMap> = super::super::outputs_named(
+        system,
+        sec.outputs.as_deref(),
+        coordinates,
+        ReferenceRunError::Output,
+    )?
+    .into_iter()
+    .cloned()
+    .collect();
     let h = sec.harmonics;
     let from_ssm = sec.from_ssm(false);
     let range = sec.omega_range(None).ok_or(ReferenceRunError::NoRange)?;

@@ -16,17 +16,15 @@
 
 pub mod write;
 
-use schemars::{JsonSchema, Schema, SchemaGenerator};
-use serde::{Deserialize, Serialize, Serializer};
+use serde::{Deserialize, Serialize};
 use ssm_kernel::number::short;
 
 use super::reference::Reference;
 use super::validation::Validate;
-use super::{output_of, Analysis, Answers, Beside, Context, Needs, Phase, Sizes, Work};
+use super::{output_of, outputs_named, Analysis, Answers, Beside, Context, Phase, Sizes, Work};
 use crate::plot::PlotError;
 use ssm_core::compare::report::{report, Report, ReportError, ReportInputs};
-use ssm_core::rom::accuracy::AnswerEstimate;
-use ssm_core::spec::{FrcSpec, SpecError};
+use ssm_core::spec::FrcSpec;
 use write::ReportSummary;
 
 /// The report as an analysis of the registry.
@@ -76,21 +74,9 @@ pub struct ReportOfModel {
     pub states: usize,
 }
 
-impl Serialize for ReportOfModel {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        ReportSummary::new(&self.report).serialize(serializer)
-    }
-}
-
-impl JsonSchema for ReportOfModel {
-    fn schema_name() -> std::borrow::Cow<'static, str> {
-        ReportSummary::schema_name()
-    }
-
-    fn json_schema(generator: &mut SchemaGenerator) -> Schema {
-        ReportSummary::json_schema(generator)
-    }
-}
+super::serialized_as!(ReportOfModel, ReportSummary, |r| ReportSummary::new(
+    &r.report
+));
 
 /// Why the report failed.
 #[derive(Debug, thiserror::Error)]
@@ -111,11 +97,6 @@ impl Analysis for SpeedReport {
     type Spec = ReportRequest;
     type Output = ReportOfModel;
     type Error = SpeedReportError;
-
-    /// The plan checks `[report]` before it reaches the registry.
-    fn check(_spec: &ReportRequest, _needs: &Needs) -> Result<(), SpecError> {
-        Ok(())
-    }
 
     fn orders(spec: &ReportRequest) -> Vec<usize> {
         spec.orders.clone().unwrap_or_default()
@@ -153,17 +134,12 @@ impl Analysis for SpeedReport {
     }
 
     fn run(spec: &ReportRequest, cx: &Context<'_>) -> Result<ReportOfModel, SpeedReportError> {
-        let compared = match &spec.outputs {
-            Some(names) => names
-                .iter()
-                .map(|n| {
-                    cx.system
-                        .output(n)
-                        .ok_or_else(|| SpeedReportError::Output(n.clone()))
-                })
-                .collect::<Result<Vec<_>, _>>()?,
-            None => cx.outputs.to_vec(),
-        };
+        let compared = outputs_named(
+            cx.system,
+            spec.outputs.as_deref(),
+            cx.outputs,
+            SpeedReportError::Output,
+        )?;
         let validation = output_of::<Validate>(cx.earlier).map(|c| &c.0);
         let orders = spec.orders_up_to(cx.ssm.order);
         let inputs = ReportInputs {
@@ -186,10 +162,6 @@ impl Analysis for SpeedReport {
             model: cx.system.name.clone(),
             states: cx.system.n_states(),
         })
-    }
-
-    fn estimates(_output: &ReportOfModel) -> Vec<AnswerEstimate> {
-        Vec::new()
     }
 
     fn summarize(output: &ReportOfModel, answers: &mut Answers) {

@@ -14,14 +14,11 @@ mod write;
 
 pub use write::{file_name, SampledRunSummary, SimulationSummary};
 
-use schemars::{JsonSchema, Schema, SchemaGenerator};
-use serde::{Serialize, Serializer};
 use ssm_kernel::number::short;
 
 use super::{Analysis, Answers, Beside, Context, Needs, Phase, Sizes, Work};
 use crate::plot::PlotError;
 use ssm_core::fom::{SimError, Simulation};
-use ssm_core::rom::accuracy::AnswerEstimate;
 use ssm_core::spec::{SimulateSpec, SpecError};
 
 /// The sampled runs as an analysis of the registry.
@@ -32,21 +29,9 @@ pub struct Simulate;
 #[derive(Debug, Clone)]
 pub struct SampledRuns(pub Simulation);
 
-impl Serialize for SampledRuns {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        SimulationSummary::new(&self.0).serialize(serializer)
-    }
-}
-
-impl JsonSchema for SampledRuns {
-    fn schema_name() -> std::borrow::Cow<'static, str> {
-        SimulationSummary::schema_name()
-    }
-
-    fn json_schema(generator: &mut SchemaGenerator) -> Schema {
-        SimulationSummary::json_schema(generator)
-    }
-}
+super::serialized_as!(SampledRuns, SimulationSummary, |s| SimulationSummary::new(
+    &s.0
+));
 
 /// Why a sampled run failed.
 #[derive(Debug, thiserror::Error)]
@@ -75,10 +60,6 @@ impl Analysis for Simulate {
 
     fn check(spec: &SimulateSpec, needs: &Needs) -> Result<(), SpecError> {
         spec.check(needs.pairs)
-    }
-
-    fn orders(_spec: &SimulateSpec) -> Vec<usize> {
-        Vec::new()
     }
 
     /// `runs` full-model runs over `(samples - 1) period`, each of the
@@ -121,10 +102,6 @@ impl Analysis for Simulate {
 
     fn run(spec: &SimulateSpec, cx: &Context<'_>) -> Result<SampledRuns, SimulateError> {
         run::simulate(spec, cx.system, cx.ssm, cx.outputs).map(SampledRuns)
-    }
-
-    fn estimates(_output: &SampledRuns) -> Vec<AnswerEstimate> {
-        Vec::new()
     }
 
     fn summarize(output: &SampledRuns, answers: &mut Answers) {

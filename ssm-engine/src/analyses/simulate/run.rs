@@ -20,16 +20,12 @@ pub(super) fn simulate(
     ssm: &SsmExpansion,
     coordinates: &[&OutputMap],
 ) -> Result<Simulation, SimulateError> {
-    let outputs: Vec<&OutputMap> = match &sec.outputs {
-        None => coordinates.to_vec(),
-        Some(names) => names
-            .iter()
-            .map(|n| {
-                sys.output(n)
-                    .ok_or_else(|| SimulateError::Output(n.clone()))
-            })
-            .collect::<Result<_, _>>()?,
-    };
+    let outputs = super::super::outputs_named(
+        sys,
+        sec.outputs.as_deref(),
+        coordinates,
+        SimulateError::Output,
+    )?;
     let samples = sec.samples;
     let (rtol, atol) = (sec.rtol, sec.atol);
     let integrator = match sec.hht_alpha {

@@ -19,16 +19,13 @@
 
 pub mod write;
 
-use schemars::{JsonSchema, Schema, SchemaGenerator};
-use serde::{Serialize, Serializer};
-
 use super::frc::Frc;
-use super::{output_of, Analysis, Answers, Beside, Context, Needs, Phase, Sizes, Work};
+use super::{output_of, outputs_named, Analysis, Answers, Beside, Context, Phase, Sizes, Work};
 use crate::plot::PlotError;
 use ssm_core::compare::validation::{validation, Validation};
 use ssm_core::compare::ValidateError;
-use ssm_core::rom::accuracy::{AnswerEstimate, MeasuredError};
-use ssm_core::spec::{SpecError, ValidationSpec};
+use ssm_core::rom::accuracy::MeasuredError;
+use ssm_core::spec::ValidationSpec;
 use ssm_core::ssm::Dynamics;
 use write::ValidationSummary;
 
@@ -40,21 +37,9 @@ pub struct Validate;
 #[derive(Debug, Clone)]
 pub struct Comparisons(pub Validation);
 
-impl Serialize for Comparisons {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        ValidationSummary::new(&self.0).serialize(serializer)
-    }
-}
-
-impl JsonSchema for Comparisons {
-    fn schema_name() -> std::borrow::Cow<'static, str> {
-        ValidationSummary::schema_name()
-    }
-
-    fn json_schema(generator: &mut SchemaGenerator) -> Schema {
-        ValidationSummary::json_schema(generator)
-    }
-}
+super::serialized_as!(Comparisons, ValidationSummary, |c| ValidationSummary::new(
+    &c.0
+));
 
 /// Why the comparisons failed.
 #[derive(Debug, thiserror::Error)]
@@ -75,12 +60,6 @@ impl Analysis for Validate {
     type Spec = ValidationSpec;
     type Output = Comparisons;
     type Error = ValidationError;
-
-    /// The plan checks the spec (against its forced response and model)
-    /// before it reaches the registry.
-    fn check(_spec: &ValidationSpec, _needs: &Needs) -> Result<(), SpecError> {
-        Ok(())
-    }
 
     fn orders(spec: &ValidationSpec) -> Vec<usize> {
         spec.transient.iter().filter_map(|t| t.order).collect()
@@ -177,25 +156,16 @@ impl Analysis for Validate {
     }
 
     fn run(spec: &ValidationSpec, cx: &Context<'_>) -> Result<Comparisons, ValidationError> {
-        let compared = match &spec.outputs {
-            Some(names) => names
-                .iter()
-                .map(|n| {
-                    cx.system
-                        .output(n)
-                        .ok_or_else(|| ValidationError::Output(n.clone()))
-                })
-                .collect::<Result<Vec<_>, _>>()?,
-            None => cx.outputs.to_vec(),
-        };
+        let compared = outputs_named(
+            cx.system,
+            spec.outputs.as_deref(),
+            cx.outputs,
+            ValidationError::Output,
+        )?;
         let frc = output_of::<Frc>(cx.earlier).map(|f| f.0.rows.as_slice());
         Ok(Comparisons(validation(
             cx.ssm, cx.system, spec, &compared, cx.outputs, cx.masters, frc,
         )?))
-    }
-
-    fn estimates(_output: &Comparisons) -> Vec<AnswerEstimate> {
-        Vec::new()
     }
 
     fn measured(output: &Comparisons) -> Vec<MeasuredError> {
