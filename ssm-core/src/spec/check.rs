@@ -22,6 +22,10 @@ pub const MAX_REFERENCE_STEPS: usize = 100_000;
 /// Most samples per sampled run (a CSV of this many rows is already ~100 MB
 /// per output).
 pub const MAX_SIMULATE_SAMPLES: usize = 2_000_000;
+/// Most frequencies of the steady states of `[validate.steady_state]` (each
+/// an integration of up to `max_periods` periods; the list is held, and
+/// handed around as JSON, before the cost gate runs).
+pub const MAX_STEADY_STATES: usize = 10_000;
 /// Most reduced models of a POD study (truncations plus SSM pair sets).
 pub const MAX_POD_ROMS: usize = 16;
 /// Most test runs of a POD study.
@@ -308,6 +312,15 @@ impl SteadyStateSpec {
             return Err(SpecError::new(
                 "validate.steady_state.omega",
                 "give one or more positive frequencies".into(),
+            ));
+        }
+        if self.omegas.len() > MAX_STEADY_STATES {
+            return Err(SpecError::new(
+                "validate.steady_state.omega",
+                format!(
+                    "give at most {MAX_STEADY_STATES} frequencies, found {}",
+                    self.omegas.len()
+                ),
             ));
         }
         if self.start == super::SteadyStart::Ssm && !forced {

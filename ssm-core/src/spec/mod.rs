@@ -11,7 +11,7 @@ mod runs;
 
 pub use check::{
     MAX_HARMONICS, MAX_POD_ROMS, MAX_POD_TESTS, MAX_REFERENCE_CURVES, MAX_REFERENCE_STEPS,
-    MAX_SIMULATE_SAMPLES,
+    MAX_SIMULATE_SAMPLES, MAX_STEADY_STATES,
 };
 pub use runs::{
     PodRunSpec, PodSpec, PodTruncations, ReferenceSpec, ReferenceStart, ReportSpec, SimulateSpec,

@@ -203,11 +203,15 @@ impl SceneFile {
                         "give [Omega_min, Omega_max] with 0 < Omega_min < Omega_max".into(),
                     ));
                 }
-                if *s.points.get_ref() < 1 {
+                let points = *s.points.get_ref();
+                if !(1..=ssm_core::spec::MAX_STEADY_STATES).contains(&points) {
                     return Err(self.invalid(
                         s.points.span(),
                         "validate.steady_state.points",
-                        "must be at least 1".into(),
+                        format!(
+                            "must lie in 1..={}, found {points}",
+                            ssm_core::spec::MAX_STEADY_STATES
+                        ),
                     ));
                 }
             }

@@ -60,6 +60,38 @@ fn steady_state_epsilon_may_be_a_list_of_one_but_not_of_two() {
     assert!(msg.contains("one steady-state epsilon"), "{msg}");
 }
 
+/// A billion steady-state frequencies (`omega_range` with `points`) are
+/// refused at the scene's line before the list is made: the list was
+/// materialized (8 GB) before the cost gate, and handed around as JSON (32
+/// GB) since the comparisons became analyses, which aborted the run. A
+/// plan built in code with more frequencies than the cap is refused by its
+/// check.
+#[test]
+fn a_billion_steady_state_frequencies_are_refused_before_anything_is_allocated() {
+    let text = format!(
+        "{}[validate.steady_state]\nepsilon = 0.01\nomega_range = [1.0, 1.1]\npoints = 1000000000\n",
+        duffing_frc("0.01", "0.01")
+    );
+    let (line, msg) = scene_error(&text);
+    assert_eq!(line, 16, "{msg}");
+    assert!(
+        msg.starts_with("validate.steady_state.points: must lie in 1..=10000"),
+        "{msg}"
+    );
+    use ssm_core::spec::{SteadyStart, SteadyStateSpec};
+    let spec = SteadyStateSpec {
+        epsilon: 0.01,
+        omegas: SteadyStateSpec::uniform([1.0, 1.1], 10_001),
+        delta: SteadyStateSpec::DEFAULT_DELTA,
+        max_periods: SteadyStateSpec::DEFAULT_MAX_PERIODS,
+        samples_per_period: SteadyStateSpec::DEFAULT_SAMPLES_PER_PERIOD,
+        max_period_multiple: SteadyStateSpec::DEFAULT_MAX_PERIOD_MULTIPLE,
+        start: SteadyStart::Rest,
+    };
+    let err = spec.check(false).expect_err("over the cap");
+    assert_eq!(err.key, "validate.steady_state.omega");
+}
+
 /// A forcing amplitude of 1e300 has no response in the amplitude grid: the
 /// typed error names it as the scene wrote it (`eps = 1e300`), not as 301
 /// digits.
