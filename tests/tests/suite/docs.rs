@@ -195,7 +195,9 @@ fn states_a_figure(unit: &str) -> bool {
 }
 
 /// The tests a unit cites: `` `test: module::name` `` (a module of this
-/// suite) or `` `test: path/to/file.rs::name` `` (a unit test elsewhere).
+/// suite), `` `test: path/to/file.rs::name` `` (a unit test elsewhere) or
+/// `` `test: python/tests/file.py::test_name` `` (a test of the Python
+/// package's pytest suite).
 fn citations(unit: &str) -> Vec<String> {
     unit.split("`test: ")
         .skip(1)
@@ -219,6 +221,21 @@ fn resolve(citation: &str) -> Result<(), String> {
     };
     let source = std::fs::read_to_string(&path)
         .map_err(|e| format!("`{citation}`: {} ({e})", path.display()))?;
+    if file.ends_with(".py") {
+        // a pytest test: a module-level `def test_...(`
+        return if name.starts_with("test_")
+            && source
+                .lines()
+                .any(|l| l.starts_with(&format!("def {name}(")))
+        {
+            Ok(())
+        } else {
+            Err(format!(
+                "`{citation}`: no pytest test {name} in {}",
+                path.display()
+            ))
+        };
+    }
     let lines: Vec<&str> = source.lines().collect();
     let at = lines
         .iter()
@@ -286,6 +303,11 @@ fn the_figure_check_sees_figures_and_citations() {
     assert!(resolve("docs::the_figure_check_sees_figures_and_citations").is_ok());
     assert!(resolve("docs::units").is_err());
     assert!(resolve("docs::no_such_test").is_err());
+    assert!(resolve(
+        "python/tests/test_models.py::test_dense_and_sparse_inputs_give_the_same_model"
+    )
+    .is_ok());
+    assert!(resolve("python/tests/test_models.py::chain").is_err());
 }
 
 /// `.ci/run` runs the README's test command, as written there.

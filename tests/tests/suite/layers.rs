@@ -539,6 +539,7 @@ fn no_file_over_800_lines_and_no_pipeline_function_over_150() {
         "ssm-plugin-kit",
         "model-files",
         "plugins",
+        "python",
         "tests",
         "benches",
     ] {

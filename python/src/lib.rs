@@ -1,0 +1,26 @@
+//! `ssm._ssm`: the engine's core for Python, a thin layer that converts
+//! arrays and results and releases the GIL while the core computes. The
+//! Python package `ssm` (`python/ssm`) wraps it: it accepts dense and
+//! `scipy.sparse` arrays, turns results into objects with `.to_pandas()`,
+//! and owns the exception and warning classes this module raises
+//! (`ssm.errors`).
+//!
+//! Every computation runs on the typed API of `ssm-core` (models through the
+//! model-files path of `ssm-model-files` and `ssm-plugin-kit`, the spectral
+//! stage, the SSM, the backbone and the forced response with their specs);
+//! no TOML is written.
+
+mod errors;
+mod model;
+mod reduced;
+
+use pyo3::prelude::*;
+
+/// The module `ssm._ssm`.
+#[pymodule]
+fn _ssm(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<model::Model>()?;
+    m.add_class::<reduced::Ssm>()?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

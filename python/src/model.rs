@@ -1,0 +1,354 @@
+//! Models from arrays and from model folders: both fill the engine's
+//! [`ModelFiles`] and take the path of the `matrix-model` plugin
+//! (`mechanical_from_files`, then the engine's validation), so a model
+//! given as arrays is the same model as its folder.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use numpy::{Complex64, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+use crate::errors::{raise, Failure, Family};
+use ssm_api::{PolyVector, SparseMatrix};
+use ssm_core::spectrum::{self, SpectrumOptions};
+use ssm_core::System;
+use ssm_model_files::{mass_defect, ModelFiles};
+
+/// A sparse matrix as coordinate arrays `(rows, cols, values)`, 0-based.
+type Coo<'py> = (
+    PyReadonlyArray1<'py, i64>,
+    PyReadonlyArray1<'py, i64>,
+    PyReadonlyArray1<'py, f64>,
+);
+
+/// A force tensor as `(indices, values)`: row `r` of `indices` is
+/// `(i, j, k)` (`f_i += v x_j x_k`) or `(i, j, k, l)`, 0-based.
+type Tensor<'py> = (PyReadonlyArray2<'py, i64>, PyReadonlyArray1<'py, f64>);
+
+/// A model of the engine: its first-order system `B z' = A z + F(z)` (a
+/// mechanical model `M x'' + C x' + K x + f(x) = eps fext cos(Omega t)` with
+/// constraints, in the engine's form).
+#[pyclass(module = "ssm._ssm", frozen)]
+pub struct Model {
+    pub(crate) system: Arc<System>,
+}
+
+/// The slice of a read-only array, or the error naming `arg`.
+fn slice<'a, T: numpy::Element>(
+    py: Python<'_>,
+    a: &'a PyReadonlyArray1<'_, T>,
+    arg: &str,
+) -> PyResult<&'a [T]> {
+    a.as_slice().map_err(|_| {
+        raise(
+            py,
+            Family::Input,
+            format!("{arg}: the array is not contiguous"),
+        )
+    })
+}
+
+/// The `nrows x ncols` matrix `arg` from its coordinates: indices in range,
+/// values finite.
+fn matrix(
+    py: Python<'_>,
+    arg: &str,
+    (rows, cols, vals): &Coo<'_>,
+    (nrows, ncols): (usize, usize),
+) -> PyResult<SparseMatrix> {
+    let (r, c, v) = (
+        slice(py, rows, arg)?,
+        slice(py, cols, arg)?,
+        slice(py, vals, arg)?,
+    );
+    if r.len() != v.len() || c.len() != v.len() {
+        return Err(raise(
+            py,
+            Family::Input,
+            format!(
+                "{arg}: {} row indices, {} column indices and {} values",
+                r.len(),
+                c.len(),
+                v.len()
+            ),
+        ));
+    }
+    let mut m = SparseMatrix::zeros(nrows, ncols);
+    for ((&i, &j), &x) in r.iter().zip(c).zip(v) {
+        let (Some(i), Some(j)) = (index(i, nrows), index(j, ncols)) else {
+            return Err(raise(
+                py,
+                Family::Input,
+                format!("{arg}: entry ({i}, {j}) lies outside the {nrows} x {ncols} matrix"),
+            ));
+        };
+        if !x.is_finite() {
+            return Err(raise(
+                py,
+                Family::Input,
+                format!("{arg}: entry ({i}, {j}) is {x}; every value must be finite"),
+            ));
+        }
+        m.push(i, j, x);
+    }
+    Ok(m)
+}
+
+/// `i` as an index below `n`.
+fn index(i: i64, n: usize) -> Option<usize> {
+    usize::try_from(i).ok().filter(|&i| i < n)
+}
+
+/// The degree-`degree` tensor `arg` added to `poly` (`n_eq` equations in
+/// `n` displacements).
+fn tensor(
+    py: Python<'_>,
+    arg: &str,
+    (idx, vals): &Tensor<'_>,
+    degree: usize,
+    poly: &mut PolyVector,
+    n: usize,
+) -> PyResult<()> {
+    let idx = idx.as_array();
+    let v = slice(py, vals, arg)?;
+    if idx.ncols() != degree + 1 || idx.nrows() != v.len() {
+        return Err(raise(
+            py,
+            Family::Input,
+            format!(
+                "{arg}: indices of shape ({}, {}) and {} values; a degree-{degree} tensor takes indices of shape (k, {}) and k values",
+                idx.nrows(),
+                idx.ncols(),
+                v.len(),
+                degree + 1
+            ),
+        ));
+    }
+    let n_eq = poly.n_eq as usize;
+    let mut factors = Vec::with_capacity(degree);
+    for (row, &x) in idx.rows().into_iter().zip(v) {
+        let Some(eq) = index(row[0], n_eq) else {
+            return Err(raise(
+                py,
+                Family::Input,
+                format!("{arg}: equation index {} outside 0..{n_eq}", row[0]),
+            ));
+        };
+        factors.clear();
+        for &j in row.iter().skip(1) {
+            let Some(j) = index(j, n) else {
+                return Err(raise(
+                    py,
+                    Family::Input,
+                    format!("{arg}: displacement index {j} outside 0..{n}"),
+                ));
+            };
+            factors.push((j, 1));
+        }
+        if !x.is_finite() {
+            return Err(raise(
+                py,
+                Family::Input,
+                format!("{arg}: a value is {x}; every value must be finite"),
+            ));
+        }
+        poly.push(eq, x, &factors);
+    }
+    Ok(())
+}
+
+/// The engine's model of the folder contents `files`, named `name`.
+fn build(files: ModelFiles, name: &str, rayleigh: Option<(f64, f64)>) -> Result<System, Failure> {
+    if let Some(problem) = mass_defect(&files.mass, files.constraint_jacobian.is_some()) {
+        return Err(Failure(Family::Model, format!("M: {problem}")));
+    }
+    let mechanical =
+        ssm_plugin_kit::mechanical_from_files(files, name, rayleigh.map(|(a, b)| [a, b]))
+            .map_err(|e| Failure(Family::Input, format!("outputs: {e}")))?;
+    let model = mechanical
+        .into_model()
+        .map_err(|e| Failure::of(Family::Model, e))?;
+    System::from_model(name, model).map_err(|e| Failure::of(Family::Model, e))
+}
+
+#[pymethods]
+impl Model {
+    /// The model `M x'' + C x' + K x + f2(x) + f3(x) = eps fext cos(Omega t)`
+    /// with constraints `G x + g2(x) + g3(x) = 0`, from 0-based coordinate
+    /// arrays (see `ssm.from_arrays`, which makes them from dense or sparse
+    /// matrices).
+    #[staticmethod]
+    #[pyo3(signature = (name, n, mass, stiffness, damping=None, rayleigh=None, f2=None, f3=None, constraints=None, g2=None, g3=None, fext=None, outputs=Vec::new()))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_coo(
+        py: Python<'_>,
+        name: &str,
+        n: usize,
+        mass: Coo<'_>,
+        stiffness: Coo<'_>,
+        damping: Option<Coo<'_>>,
+        rayleigh: Option<(f64, f64)>,
+        f2: Option<Tensor<'_>>,
+        f3: Option<Tensor<'_>>,
+        constraints: Option<(usize, Coo<'_>)>,
+        g2: Option<Tensor<'_>>,
+        g3: Option<Tensor<'_>>,
+        fext: Option<PyReadonlyArray1<'_, f64>>,
+        outputs: Vec<(String, Vec<(usize, f64)>)>,
+    ) -> PyResult<Model> {
+        if n == 0 {
+            return Err(raise(
+                py,
+                Family::Input,
+                "M: the model has no degree of freedom",
+            ));
+        }
+        let mass = matrix(py, "M", &mass, (n, n))?;
+        if let Some((i, j, a, b)) = mass.asymmetry(1e-12) {
+            return Err(raise(
+                py,
+                Family::Input,
+                format!("M: not symmetric: M[{i}, {j}] = {a} but M[{j}, {i}] = {b}"),
+            ));
+        }
+        let stiffness = matrix(py, "K", &stiffness, (n, n))?;
+        let damping = damping.map(|c| matrix(py, "C", &c, (n, n))).transpose()?;
+        if let (Some(_), Some(_)) = (&damping, rayleigh) {
+            return Err(raise(
+                py,
+                Family::Input,
+                "rayleigh: give C or Rayleigh damping, not both",
+            ));
+        }
+        let mut internal_force = PolyVector::zeros(n, n);
+        if let Some(t) = &f2 {
+            tensor(py, "f2", t, 2, &mut internal_force, n)?;
+        }
+        if let Some(t) = &f3 {
+            tensor(py, "f3", t, 3, &mut internal_force, n)?;
+        }
+        let nc = constraints.as_ref().map_or(0, |(nc, _)| *nc);
+        let constraint_jacobian = constraints
+            .map(|(nc, g)| matrix(py, "G", &g, (nc, n)))
+            .transpose()?;
+        let mut constraint_terms = PolyVector::zeros(nc, n);
+        for (arg, t, degree) in [("g2", &g2, 2), ("g3", &g3, 3)] {
+            if let Some(t) = t {
+                if nc == 0 {
+                    return Err(raise(py, Family::Input, format!("{arg}: give G first")));
+                }
+                tensor(py, arg, t, degree, &mut constraint_terms, n)?;
+            }
+        }
+        let load = match fext {
+            Some(f) => {
+                let f = slice(py, &f, "fext")?;
+                if f.len() != n || f.iter().any(|v| !v.is_finite()) {
+                    return Err(raise(
+                        py,
+                        Family::Input,
+                        format!("fext: {} finite values are needed, found {}", n, f.len()),
+                    ));
+                }
+                Some(f.to_vec())
+            }
+            None => None,
+        };
+        for (name, weights) in &outputs {
+            if let Some((j, _)) = weights.iter().find(|(j, _)| *j >= n) {
+                return Err(raise(
+                    py,
+                    Family::Input,
+                    format!("outputs: '{name}' weighs displacement {j}, outside 0..{n}"),
+                ));
+            }
+        }
+        let files = ModelFiles {
+            mass,
+            stiffness,
+            damping,
+            constraint_jacobian,
+            internal_force,
+            constraint_terms,
+            load,
+            outputs,
+        };
+        let name = name.to_owned();
+        let system = py
+            .detach(move || build(files, &name, rayleigh))
+            .map_err(|f| f.raise(py))?;
+        Ok(Model {
+            system: Arc::new(system),
+        })
+    }
+
+    /// The model of the folder `dir` (the files of `docs/models.md`), with
+    /// Rayleigh damping `C = alpha M + beta K` when it has no `C.mtx`.
+    #[staticmethod]
+    #[pyo3(signature = (dir, rayleigh=None))]
+    fn from_files(py: Python<'_>, dir: PathBuf, rayleigh: Option<(f64, f64)>) -> PyResult<Model> {
+        let system = py
+            .detach(move || {
+                let files = ModelFiles::read(&dir, &mut |_| {})
+                    .map_err(|e| Failure::of(Family::Input, e))?;
+                build(files, "model-files", rayleigh)
+            })
+            .map_err(|f| f.raise(py))?;
+        Ok(Model {
+            system: Arc::new(system),
+        })
+    }
+
+    /// The model's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.system.name.clone()
+    }
+
+    /// States of the first-order system.
+    #[getter]
+    fn n_states(&self) -> usize {
+        self.system.n_states()
+    }
+
+    /// The names of the model's outputs.
+    #[getter]
+    fn outputs(&self) -> Vec<String> {
+        self.system.outputs.iter().map(|o| o.name.clone()).collect()
+    }
+
+    /// The finite eigenvalues of the pencil `(A, B)` (dense up to 100 states,
+    /// else the `modes` nearest the origin by the sparse path).
+    #[pyo3(signature = (modes=None))]
+    fn spectrum<'py>(
+        &self,
+        py: Python<'py>,
+        modes: Option<usize>,
+    ) -> PyResult<Bound<'py, PyArray1<Complex64>>> {
+        let system = Arc::clone(&self.system);
+        let eigenvalues = py
+            .detach(move || {
+                let options = SpectrumOptions {
+                    method: None,
+                    modes: modes.unwrap_or(12),
+                    shift: 0.0,
+                    normalization: Default::default(),
+                };
+                spectrum::compute(system.a.as_ref(), system.b.as_ref(), &options)
+                    .map(|s| s.eigenvalues)
+                    .map_err(|e| Failure::of(Family::Spectrum, e))
+            })
+            .map_err(|f| f.raise(py))?;
+        Ok(PyArray1::from_vec(py, eigenvalues))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Model('{}', {} states, outputs {:?})",
+            self.system.name,
+            self.system.n_states(),
+            self.outputs()
+        )
+    }
+}

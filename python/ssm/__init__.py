@@ -1,0 +1,388 @@
+"""Nonlinear model reduction of mechanical systems on spectral submanifolds.
+
+A model comes from arrays (:func:`from_arrays`) or from a model folder
+(:func:`from_files`); :func:`compute_ssm` computes its spectral submanifold
+(SSM) over chosen master mode pairs, and the SSM answers with error
+estimates: :meth:`Ssm.backbone` and :meth:`Ssm.forced_response`. The
+computations run in the Rust engine with the GIL released.
+
+Example
+-------
+>>> import numpy as np, ssm
+>>> model = ssm.from_arrays(
+...     M=np.eye(1), K=np.eye(1), C=0.02 * np.eye(1),
+...     f3=(np.array([[0, 0, 0, 0]]), np.array([0.5])),
+...     fext=np.ones(1), outputs={"x": 0},
+... )
+>>> s = ssm.compute_ssm(model, master_pairs=[1], order=5)
+>>> curve = s.backbone(rho_max=0.3, outputs=["x"])[0]
+>>> round(float(curve.omega[0]), 6)
+0.99995
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import errors
+from ._ssm import Model, __version__
+from ._ssm import Ssm as _Ssm
+from .errors import InputError, SsmWarning, UntrustedAnswerWarning
+
+__all__ = [
+    "Backbone",
+    "ForcedResponse",
+    "Model",
+    "Ssm",
+    "__version__",
+    "compute_ssm",
+    "errors",
+    "from_arrays",
+    "from_files",
+]
+
+
+def _float_array(arg: str, a: Any) -> np.ndarray:
+    """``a`` as float64 values, refusing integer, boolean and complex dtypes."""
+    a = np.asarray(a)
+    if a.dtype.kind == "c":
+        raise InputError(f"{arg}: complex values ({a.dtype}); the model is real")
+    if a.dtype.kind != "f":
+        raise InputError(f"{arg}: dtype {a.dtype}; give floating-point values")
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _index_array(arg: str, a: Any) -> np.ndarray:
+    """``a`` as int64 indices, refusing non-integer dtypes."""
+    a = np.asarray(a)
+    if a.dtype.kind not in "iu":
+        raise InputError(f"{arg}: indices of dtype {a.dtype}; give integers")
+    return np.ascontiguousarray(a, dtype=np.int64)
+
+
+def _coo(arg: str, a: Any, shape: tuple[int, int]) -> tuple[np.ndarray, ...]:
+    """The coordinates ``(rows, cols, values)`` of the dense or
+    ``scipy.sparse`` matrix ``a`` of shape ``shape``."""
+    if hasattr(a, "tocoo"):
+        if a.dtype.kind != "f":
+            _float_array(arg, np.zeros(0, dtype=a.dtype))
+        coo = a.tocoo()
+        got = coo.shape
+        rows, cols, vals = coo.row, coo.col, coo.data
+    else:
+        dense = np.asarray(a)
+        got = dense.shape
+        if dense.ndim != 2:
+            raise InputError(
+                f"{arg}: a matrix is needed, found {dense.ndim} dimension(s)"
+            )
+        dense = _float_array(arg, dense)
+        rows, cols = np.nonzero(dense)
+        vals = dense[rows, cols]
+    if tuple(got) != tuple(shape):
+        raise InputError(f"{arg}: shape {tuple(got)}, expected {tuple(shape)}")
+    return (
+        _index_array(arg, rows),
+        _index_array(arg, cols),
+        _float_array(arg, vals),
+    )
+
+
+def _tensor(arg: str, t: Any, degree: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """A force tensor ``(indices, values)``: indices of shape
+    ``(k, degree + 1)``, 0-based."""
+    if t is None:
+        return None
+    try:
+        idx, vals = t
+    except (TypeError, ValueError):
+        raise InputError(f"{arg}: give (indices, values)") from None
+    idx = _index_array(arg, idx)
+    if idx.ndim != 2 or idx.shape[1] != degree + 1:
+        raise InputError(
+            f"{arg}: indices of shape {idx.shape}; expected (k, {degree + 1})"
+        )
+    return idx, _float_array(arg, vals)
+
+
+def _outputs(
+    outputs: Mapping[str, Any] | None,
+) -> list[tuple[str, list[tuple[int, float]]]]:
+    """Named outputs: a displacement index, or weights ``{index: weight}``."""
+    named = []
+    for name, spec in (outputs or {}).items():
+        if isinstance(spec, (int, np.integer)):
+            weights = [(int(spec), 1.0)]
+        elif isinstance(spec, Mapping):
+            weights = [(int(i), float(w)) for i, w in spec.items()]
+        else:
+            weights = [(int(i), float(w)) for i, w in spec]
+        if any(i < 0 for i, _ in weights):
+            raise InputError(f"outputs: '{name}' weighs a negative index")
+        named.append((str(name), weights))
+    return named
+
+
+def from_arrays(
+    M: Any,
+    K: Any,
+    C: Any = None,
+    *,
+    rayleigh: tuple[float, float] | None = None,
+    f2: Any = None,
+    f3: Any = None,
+    G: Any = None,
+    g2: Any = None,
+    g3: Any = None,
+    fext: Any = None,
+    outputs: Mapping[str, Any] | None = None,
+    name: str = "model",
+) -> Model:
+    """The model ``M x'' + C x' + K x + f2(x) + f3(x) = eps fext cos(Omega t)``
+    with constraints ``G x + g2(x) + g3(x) = 0``.
+
+    Parameters
+    ----------
+    M, K, C : (n, n) arrays, dense or ``scipy.sparse``
+        Mass (symmetric, every degree of freedom with mass unless a
+        constraint fixes it), stiffness and damping; floating-point.
+    rayleigh : (alpha, beta), optional
+        ``C = alpha M + beta K`` (instead of ``C``).
+    f2, f3 : (indices, values), optional
+        Quadratic and cubic internal forces: row ``(i, j, k)`` of the
+        ``(m, 3)`` indices adds ``value x_j x_k`` to ``f_i``; ``(i, j, k, l)``
+        adds ``value x_j x_k x_l``. Indices are 0-based.
+    G : (n_c, n) array, optional
+        Linear constraint Jacobian; ``g2``, ``g3`` its nonlinear terms as
+        ``f2``, ``f3`` (rows index constraints).
+    fext : (n,) array, optional
+        Load shape of the harmonic forcing.
+    outputs : mapping, optional
+        Named outputs: a displacement index, or ``{index: weight}``.
+    name : str
+        The model's name.
+
+    Raises
+    ------
+    ssm.errors.InputError
+        A wrong shape, dtype, value or index (the message names the argument).
+    ssm.errors.ModelError
+        An inconsistent model (e.g. a massless degree of freedom).
+    """
+    m = np.asarray(M) if not hasattr(M, "tocoo") else M
+    if m.ndim != 2 or m.shape[0] != m.shape[1]:
+        raise InputError(f"M: a square matrix is needed, found shape {m.shape}")
+    n = int(m.shape[0])
+    if n == 0:
+        raise InputError("M: the model has no degree of freedom (shape (0, 0))")
+    constraints = None
+    if G is not None:
+        g = np.asarray(G) if not hasattr(G, "tocoo") else G
+        if g.ndim != 2:
+            raise InputError(f"G: a matrix is needed, found {g.ndim} dimension(s)")
+        constraints = (int(g.shape[0]), _coo("G", G, (g.shape[0], n)))
+    load = None
+    if fext is not None:
+        load = _float_array("fext", fext)
+        if load.shape != (n,):
+            raise InputError(f"fext: shape {load.shape}, expected ({n},)")
+    return Model.from_coo(
+        name,
+        n,
+        _coo("M", M, (n, n)),
+        _coo("K", K, (n, n)),
+        damping=None if C is None else _coo("C", C, (n, n)),
+        rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
+        f2=_tensor("f2", f2, 2),
+        f3=_tensor("f3", f3, 3),
+        constraints=constraints,
+        g2=_tensor("g2", g2, 2),
+        g3=_tensor("g3", g3, 3),
+        fext=load,
+        outputs=_outputs(outputs),
+    )
+
+
+def from_files(folder: str, rayleigh: tuple[float, float] | None = None) -> Model:
+    """The model of a folder of files (``M.mtx``, ``K.mtx``, ``f3.coo``, ...;
+    see ``docs/models.md``; the files' indices are 1-based)."""
+    return Model.from_files(str(folder), rayleigh)
+
+
+def _warn(messages: Sequence[str], category: type = SsmWarning) -> None:
+    for m in messages:
+        warnings.warn(m, category, stacklevel=3)
+
+
+@dataclass
+class Backbone:
+    """A backbone curve: the frequency ``omega`` of the free oscillation on
+    the SSM against its polar amplitude ``rho`` and the outputs' amplitudes,
+    each point with its error estimate (NaN where none is made)."""
+
+    order: int
+    rho: np.ndarray
+    omega: np.ndarray
+    amplitudes: dict[str, np.ndarray]
+    error_estimate: np.ndarray
+    curve_error_estimate: float | None
+    untrusted: bool
+    trusted_up_to: float | None
+
+    def to_pandas(self) -> Any:
+        """The curve as a ``pandas.DataFrame`` (pandas is optional)."""
+        import pandas as pd
+
+        columns = {"rho": self.rho, "omega": self.omega}
+        columns.update(self.amplitudes)
+        columns["error_estimate"] = self.error_estimate
+        return pd.DataFrame(columns)
+
+
+@dataclass
+class ForcedResponse:
+    """Forced response curves: one row per point (order, epsilon, omega,
+    branch, stability, polar amplitude, outputs' amplitudes), and per curve
+    its error estimate, ``untrusted`` flag and bifurcations."""
+
+    columns: dict[str, np.ndarray]
+    amplitudes: dict[str, np.ndarray]
+    curves: list[dict[str, Any]] = field(default_factory=list)
+
+    def to_pandas(self) -> Any:
+        """The points as a ``pandas.DataFrame`` (pandas is optional)."""
+        import pandas as pd
+
+        data = dict(self.columns)
+        data.update(self.amplitudes)
+        return pd.DataFrame(data)
+
+
+class Ssm:
+    """The SSM of a model over its master pairs (see :func:`compute_ssm`)."""
+
+    def __init__(self, inner: _Ssm) -> None:
+        self._inner = inner
+
+    @property
+    def order(self) -> int:
+        """The expansion order."""
+        return self._inner.order
+
+    @property
+    def master_eigenvalues(self) -> np.ndarray:
+        """The master eigenvalues."""
+        return self._inner.master_eigenvalues
+
+    @property
+    def w(self) -> np.ndarray:
+        """The coefficients of ``W``: a row per multi-index, a column per state."""
+        return self._inner.w
+
+    def backbone(
+        self,
+        rho_max: float,
+        points: int = 101,
+        orders: Sequence[int] | None = None,
+        outputs: Sequence[str] = (),
+        tolerance: float = 0.01,
+    ) -> list[Backbone]:
+        """Backbone curves of one master pair up to the polar amplitude
+        ``rho_max``, one per order of ``orders`` (default: the SSM's); an
+        untrusted curve (estimate above ``tolerance``) warns with
+        :class:`ssm.errors.UntrustedAnswerWarning`."""
+        raw = self._inner.backbone(
+            float(rho_max),
+            int(points),
+            None if orders is None else [int(o) for o in orders],
+            [str(o) for o in outputs],
+            float(tolerance),
+        )
+        curves = []
+        for c in raw:
+            amps = {name: c["amplitudes"][:, k] for k, name in enumerate(c["outputs"])}
+            curve = Backbone(
+                order=c["order"],
+                rho=c["rho"],
+                omega=c["omega"],
+                amplitudes=amps,
+                error_estimate=c["error_estimate"],
+                curve_error_estimate=c["curve_error_estimate"],
+                untrusted=c["untrusted"],
+                trusted_up_to=c["trusted_up_to"],
+            )
+            if curve.untrusted:
+                _warn(
+                    [
+                        f"backbone O({curve.order}): the estimated error exceeds the "
+                        f"accuracy target {tolerance:g}"
+                        + (
+                            f" beyond rho = {curve.trusted_up_to:.4g}"
+                            if curve.trusted_up_to is not None
+                            else ""
+                        )
+                    ],
+                    UntrustedAnswerWarning,
+                )
+            curves.append(curve)
+        return curves
+
+    def forced_response(
+        self,
+        epsilon: Sequence[float],
+        omega_range: tuple[float, float],
+        points: int = 200,
+        orders: Sequence[int] | None = None,
+        outputs: Sequence[str] = (),
+        tolerance: float = 0.01,
+    ) -> ForcedResponse:
+        """Forced response curves of the reduced model to
+        ``eps fext cos(Omega t)``, one per amplitude of ``epsilon`` (and
+        order of ``orders``) over ``omega_range``."""
+        eps = [float(e) for e in np.atleast_1d(epsilon)]
+        raw = self._inner.forced_response(
+            eps,
+            (float(omega_range[0]), float(omega_range[1])),
+            int(points),
+            None if orders is None else [int(o) for o in orders],
+            [str(o) for o in outputs],
+            float(tolerance),
+        )
+        _warn(raw["warnings"], UntrustedAnswerWarning)
+        columns = {
+            k: raw[k] for k in ("order", "epsilon", "omega", "branch", "stable", "rho")
+        }
+        amps = {name: raw["amplitudes"][:, k] for k, name in enumerate(raw["outputs"])}
+        return ForcedResponse(
+            columns=columns, amplitudes=amps, curves=list(raw["curves"])
+        )
+
+    def __repr__(self) -> str:
+        return repr(self._inner)
+
+
+def compute_ssm(
+    model: Model,
+    master_pairs: Sequence[int] = (1,),
+    order: int = 5,
+    resonance_tol: float = 0.02,
+    normalization: str = "unit",
+) -> Ssm:
+    """The SSM of ``model`` over ``master_pairs`` (1-based underdamped pairs,
+    slowest first) to ``order``: the spectrum, the master modes and the
+    non-resonance checks first (their findings warn with
+    :class:`ssm.errors.SsmWarning`)."""
+    inner = _Ssm.compute(
+        model,
+        [int(p) for p in master_pairs],
+        int(order),
+        float(resonance_tol),
+        str(normalization),
+    )
+    _warn(inner.warnings)
+    return Ssm(inner)
