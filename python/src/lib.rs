@@ -12,6 +12,7 @@
 
 mod errors;
 mod model;
+mod plan;
 mod reduced;
 
 use pyo3::prelude::*;
@@ -21,6 +22,7 @@ use pyo3::prelude::*;
 fn _ssm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Model>()?;
     m.add_class::<reduced::Ssm>()?;
+    m.add_function(wrap_pyfunction!(plan::run_plan, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import errors
-from ._ssm import Model, __version__
+from ._ssm import Model, __version__, run_plan
 from ._ssm import Ssm as _Ssm
 from .errors import InputError, SsmWarning, UntrustedAnswerWarning
 
@@ -38,12 +38,14 @@ __all__ = [
     "Backbone",
     "ForcedResponse",
     "Model",
+    "Run",
     "Ssm",
     "__version__",
     "compute_ssm",
     "errors",
     "from_arrays",
     "from_files",
+    "run",
 ]
 
 
@@ -364,6 +366,44 @@ class Ssm:
 
     def __repr__(self) -> str:
         return repr(self._inner)
+
+
+@dataclass
+class Run:
+    """What a plan's run wrote: ``summary.json`` as a dictionary and every
+    file (CSV tables, SVG plots) by name."""
+
+    summary: dict[str, Any]
+    files: dict[str, bytes]
+
+    def table(self, name: str) -> Any:
+        """The CSV file ``name`` (e.g. ``"reference_frc.csv"``) as a
+        ``pandas.DataFrame``."""
+        import io
+
+        import pandas as pd
+
+        if name not in self.files:
+            raise InputError(
+                f"name: the run wrote no '{name}'; it wrote {sorted(self.files)}"
+            )
+        return pd.read_csv(io.BytesIO(self.files[name]))
+
+
+def run(model: Model, plan: Mapping[str, Any]) -> Run:
+    """Runs a whole plan on ``model``: the engine's pipeline, as a scene's run
+    does, within the machine's limits (the engine's cost gate refuses what
+    would not fit). ``plan`` holds the sections of a scene as a dictionary
+    (the engine's ``Plan`` in JSON: ``ssm``, ``coordinates``, ``backbone``,
+    ``invariance``, ``transient``, ``frc``, ``validation``, ``reference``,
+    ``report``, ``simulate``, ``analyses``; see ``docs/python.md``). The
+    run's warnings are issued as :class:`ssm.errors.SsmWarning`."""
+    import json
+
+    files = dict(run_plan(model, json.dumps(plan)))
+    summary = json.loads(files["summary.json"])
+    _warn(summary.get("warnings", []))
+    return Run(summary=summary, files=files)
 
 
 def compute_ssm(
