@@ -13,6 +13,7 @@
 mod errors;
 mod model;
 mod plan;
+mod plugin;
 mod reduced;
 
 use pyo3::prelude::*;
@@ -23,6 +24,7 @@ fn _ssm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Model>()?;
     m.add_class::<reduced::Ssm>()?;
     m.add_function(wrap_pyfunction!(plan::run_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(plugin::model_from_plugin, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

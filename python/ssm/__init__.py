@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import errors
-from ._ssm import Model, __version__, run_plan
+from ._ssm import Model, __version__, model_from_plugin, run_plan
 from ._ssm import Ssm as _Ssm
 from .errors import InputError, SsmWarning, UntrustedAnswerWarning
 
@@ -45,6 +45,7 @@ __all__ = [
     "errors",
     "from_arrays",
     "from_files",
+    "from_plugin",
     "run",
 ]
 
@@ -214,6 +215,15 @@ def from_files(folder: str, rayleigh: tuple[float, float] | None = None) -> Mode
     """The model of a folder of files (``M.mtx``, ``K.mtx``, ``f3.coo``, ...;
     see ``docs/models.md``; the files' indices are 1-based)."""
     return Model.from_files(str(folder), rayleigh)
+
+
+def from_plugin(plugin: str, model: str = "", **params: Any) -> Model:
+    """The model ``model`` (default: the plugin's first) of the plugin
+    library ``plugin``: a name found on ``SSM_PLUGIN_PATH`` or a path to its
+    ``.so``; ``params`` are its parameters (``ssm-engine plugins`` lists
+    them, with their defaults). A plugin that fails or panics raises
+    :class:`ssm.errors.ModelError` with its message."""
+    return model_from_plugin(str(plugin), model, params)
 
 
 def _warn(messages: Sequence[str], category: type = SsmWarning) -> None:
