@@ -18,6 +18,8 @@ use ssm_core::{
     backbone, compute_ssm, forced_response, spectral, BackboneSpec, FrcSpec, SpectrumSpec,
     SsmExpansion, SsmOptions, SsmSpec, System,
 };
+use ssm_engine::plan::budget::{self, Limits};
+use ssm_engine::plan::Plan;
 
 /// An SSM of a model: its master modes, the expansion and the warnings of
 /// its spectral stage (resonances, fallbacks).
@@ -79,6 +81,22 @@ fn table<'py>(py: Python<'py>, rows: &[Vec<f64>], width: usize) -> Bound<'py, Py
         .unwrap_or_else(|_| PyArray2::zeros(py, [n, width], false))
 }
 
+impl Ssm {
+    /// The engine's one gate for the answers `plan` asks of this SSM: their
+    /// work and memory within the machine's limits, before anything is
+    /// allocated.
+    fn gate(&self, py: Python<'_>, plan: Plan) -> PyResult<()> {
+        budget::check_analyses(
+            &plan,
+            &self.system,
+            &self.masters,
+            self.expansion.order,
+            &Limits::of_machine(),
+        )
+        .map_err(|e| raise(py, Family::Input, e.to_string()))
+    }
+}
+
 #[pymethods]
 impl Ssm {
     /// The SSM of `model` over the master pairs `master_pairs` (1-based,
@@ -101,18 +119,35 @@ impl Ssm {
             resonance_tol,
             ..SsmSpec::default()
         };
-        spec.check()
-            .map_err(|e| raise(py, Family::Input, e.to_string()))?;
         let system = Arc::clone(&model.system);
         let sys = Arc::clone(&system);
         let (masters, expansion, warnings) = py
             .detach(move || {
-                let sp = spectral(&spec, &SpectrumSpec::default(), &sys, order)
+                // the engine's one gate, as for a scene: the spec's values,
+                // the spectrum's and the order's cost within the machine's
+                // limits, before anything is allocated
+                let plan = Plan {
+                    ssm: spec,
+                    ..Plan::default()
+                };
+                let limits = Limits::of_machine();
+                plan.check(&sys, &limits)
+                    .map_err(|e| Failure::of(Family::Input, e))?;
+                let ceiling = budget::check_spectrum(&plan, &sys, &limits)
+                    .map_err(|e| Failure::of(Family::Input, e))?;
+                let spec = plan.ssm;
+                let sp = spectral(&spec, &SpectrumSpec::default(), &sys, ceiling)
                     .map_err(|e| Failure::of(Family::Spectrum, e))?;
                 let others = ssm_core::ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
+                let plan = Plan {
+                    ssm: spec,
+                    ..Plan::default()
+                };
+                budget::check(&plan, &sys, &sp.masters, ceiling, &limits)
+                    .map_err(|e| Failure::of(Family::Input, e))?;
                 let options = SsmOptions {
-                    order,
-                    resonance_tol: spec.resonance_tol,
+                    order: ceiling,
+                    resonance_tol: plan.ssm.resonance_tol,
                 };
                 let expansion = compute_ssm(&sys, &sp.masters, &others, &options)
                     .map_err(|e| Failure::of(Family::Expansion, e))?;
@@ -184,6 +219,14 @@ impl Ssm {
         spec.check(self.masters.len(), self.expansion.order)
             .map_err(|e| raise(py, Family::Input, e.to_string()))?;
         let outs = self::outputs(py, &self.system, &outputs)?;
+        self.gate(
+            py,
+            Plan {
+                coordinates: outputs.clone(),
+                backbone: Some(spec.clone()),
+                ..Plan::default()
+            },
+        )?;
         let maps: Vec<_> = outs.into_iter().cloned().collect();
         let (system, expansion) = (Arc::clone(&self.system), Arc::clone(&self.expansion));
         let master = self.masters[0].clone();
@@ -254,6 +297,14 @@ impl Ssm {
             ));
         }
         let outs = self::outputs(py, &self.system, &outputs)?;
+        self.gate(
+            py,
+            Plan {
+                coordinates: outputs.clone(),
+                frc: Some(spec.clone()),
+                ..Plan::default()
+            },
+        )?;
         let maps: Vec<_> = outs.into_iter().cloned().collect();
         let (system, expansion) = (Arc::clone(&self.system), Arc::clone(&self.expansion));
         let masters = self.masters.clone();

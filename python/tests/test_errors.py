@@ -70,3 +70,16 @@ def test_bad_requests_are_refused_naming_the_argument():
 def test_a_missing_folder_is_an_input_error(tmp_path):
     with pytest.raises(InputError):
         ssm.from_files(tmp_path / "nowhere")
+
+
+def test_oversized_requests_are_refused_by_the_cost_gate():
+    """The engine's one gate, as for a scene: an order of 1e9 and 1e12
+    points are refused before anything is allocated, naming the key that
+    sets the size (they hung or ran out of memory before the gate)."""
+    with pytest.raises(InputError, match="ssm.order"):
+        ssm.compute_ssm(model(), [1], 10**9)
+    s = ssm.compute_ssm(model(), [1], 5)
+    with pytest.raises(InputError, match="backbone.points"):
+        s.backbone(0.1, points=10**12)
+    with pytest.raises(InputError, match="forcing.points"):
+        s.forced_response([0.01], (0.9, 1.1), points=10**12)

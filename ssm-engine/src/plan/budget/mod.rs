@@ -85,10 +85,10 @@ fn periods_per_time(dynamics: Dynamics, masters: &[MasterMode]) -> f64 {
     }
 }
 
-/// The work of each analysis of `[analysis]` on an SSM of the masters'
-/// pairs to `order` within `limits`; a refusal names the key that sets the
-/// size.
-pub(crate) fn check_analyses(
+/// The work of each analysis the plan asks for ([`Plan::requested`]) on an
+/// SSM of the masters' pairs to `order` within `limits`; a refusal names
+/// the key that sets the size.
+pub fn check_analyses(
     plan: &Plan,
     system: &System,
     masters: &[MasterMode],
@@ -233,13 +233,9 @@ fn within(cost: &Cost, limits: &Limits) -> bool {
 
 /// Before the spectral stage: the dense spectrum (a QZ iteration on the
 /// `N x N` pencil, about `70 N^3` operations on 6 dense complex matrices) and
-/// the SSM order (see [`order_ceiling`]); returns the highest order the run
+/// the SSM order (see `order_ceiling`); returns the highest order the run
 /// may compute.
-pub(crate) fn check_spectrum(
-    plan: &Plan,
-    system: &System,
-    limits: &Limits,
-) -> Result<usize, PlanError> {
+pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<usize, PlanError> {
     let n = system.n_states() as f64;
     let dense = match plan.spectrum.method {
         Some(Method::Dense) => true,
