@@ -82,10 +82,23 @@ fn table<'py>(py: Python<'py>, rows: &[Vec<f64>], width: usize) -> Bound<'py, Py
 }
 
 impl Ssm {
-    /// The engine's one gate for the answers `plan` asks of this SSM: their
-    /// work and memory within the machine's limits, before anything is
-    /// allocated.
-    fn gate(&self, py: Python<'_>, plan: Plan) -> PyResult<()> {
+    /// The model's outputs `names`, once the engine's one gate has passed
+    /// the answers `plan` asks of this SSM at them: their work and memory
+    /// within the machine's limits, before anything is allocated.
+    fn gate(
+        &self,
+        py: Python<'_>,
+        names: &[String],
+        plan: Plan,
+    ) -> PyResult<Vec<ssm_core::model::system::OutputMap>> {
+        let maps: Vec<_> = outputs(py, &self.system, names)?
+            .into_iter()
+            .cloned()
+            .collect();
+        let plan = Plan {
+            coordinates: names.to_vec(),
+            ..plan
+        };
         budget::check_analyses(
             &plan,
             &self.system,
@@ -93,7 +106,8 @@ impl Ssm {
             self.expansion.order,
             &Limits::of_machine(),
         )
-        .map_err(|e| raise(py, Family::Input, e.to_string()))
+        .map_err(|e| raise(py, Family::Input, e.to_string()))?;
+        Ok(maps)
     }
 }
 
@@ -218,16 +232,14 @@ impl Ssm {
         };
         spec.check(self.masters.len(), self.expansion.order)
             .map_err(|e| raise(py, Family::Input, e.to_string()))?;
-        let outs = self::outputs(py, &self.system, &outputs)?;
-        self.gate(
+        let maps = self.gate(
             py,
+            &outputs,
             Plan {
-                coordinates: outputs.clone(),
                 backbone: Some(spec.clone()),
                 ..Plan::default()
             },
         )?;
-        let maps: Vec<_> = outs.into_iter().cloned().collect();
         let (system, expansion) = (Arc::clone(&self.system), Arc::clone(&self.expansion));
         let master = self.masters[0].clone();
         let curves = py
@@ -296,16 +308,14 @@ impl Ssm {
                 "fext: the model has no load shape to force it with",
             ));
         }
-        let outs = self::outputs(py, &self.system, &outputs)?;
-        self.gate(
+        let maps = self.gate(
             py,
+            &outputs,
             Plan {
-                coordinates: outputs.clone(),
                 frc: Some(spec.clone()),
                 ..Plan::default()
             },
         )?;
-        let maps: Vec<_> = outs.into_iter().cloned().collect();
         let (system, expansion) = (Arc::clone(&self.system), Arc::clone(&self.expansion));
         let masters = self.masters.clone();
         let frc = py
