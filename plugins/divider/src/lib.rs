@@ -20,7 +20,7 @@
 //! `w_hori_mid` and `w_vert_mid` are the transverse deflections at the beams'
 //! midpoints (Figs. 19 and 22).
 //!
-//! The model `beam` ([`beam`]) is one clamped-clamped beam of the same
+//! The model `beam` is one clamped-clamped beam of the same
 //! element, the stand-in for the experiment of the NAR paper (Sect. 9b).
 //!
 //! # References

@@ -41,7 +41,7 @@ pub const MAX_CONDITION: f64 = 1e12;
 pub const RCOND_MAX: f64 = 0.1;
 
 /// The residual a regularization may leave beyond the data's own (see
-/// [`Fit::excess`]), as a fraction of the signal: a misfit of one part in
+/// [`FitError::Regularized`]), as a fraction of the signal: a misfit of one part in
 /// a million moves the identified multipliers by about as much (first-order
 /// perturbation of the companion matrix), below the decay per sample of
 /// any damping the identification reports (`zeta omega T` of 1e-4 and up).
