@@ -30,6 +30,12 @@ pub enum DopriError {
         /// `|p|` (largest component) there.
         norm: f64,
     },
+    /// The work was asked to stop ([`crate::cancel`]).
+    #[error("interrupted at t = {t}")]
+    Interrupted {
+        /// Time reached.
+        t: f64,
+    },
 }
 
 // Dormand-Prince 5(4) tableau.
@@ -166,6 +172,9 @@ impl<F: Fn(f64, &[C64]) -> Vec<C64>> Stepper for DormandPrince<F> {
         if self.fsal {
             self.k[0] = self.k[6].clone();
             self.fsal = false;
+        }
+        if crate::cancel::requested() {
+            return Err(DopriError::Interrupted { t: self.t });
         }
         loop {
             let (t, h_min) = (self.t, self.h_min);
@@ -305,6 +314,7 @@ mod tests {
         let e = sample(&mut dp, &[0.5, 2.0], 2.0, |_, _| {}).unwrap_err();
         let t = match e {
             DopriError::NonFinite { t } | DopriError::StepCollapse { t, .. } => t,
+            DopriError::Interrupted { .. } => panic!("not cancellable: {e}"),
         };
         assert!(t < 1.0 + 1e-6, "{e:?}");
     }

@@ -11,10 +11,12 @@
 //! - [`stepper`]: the one interface of the time integrators, and sampling
 //!   any of them at given times;
 //! - [`dopri`]: the Dormand-Prince 5(4) pair on complex states;
-//! - [`number`]: numbers from user input in messages and CSV files.
+//! - [`number`]: numbers from user input in messages and CSV files;
+//! - [`cancel`]: cooperative cancellation of the long loops.
 
 #![warn(missing_docs)]
 
+pub mod cancel;
 pub mod chebyshev;
 pub mod continuation;
 pub mod dopri;

@@ -21,8 +21,6 @@
 //! dynamics in high-dimensional finite element models*, Nonlinear Dyn. 107
 //! (2022), Sect. 3 (order-by-order composition of multivariate polynomials).
 
-use std::collections::HashMap;
-
 use ssm_api::PolyVector;
 
 use crate::C64;
@@ -35,7 +33,9 @@ pub struct MultiIndexSet {
     max_order: usize,
     exps: Vec<u16>,
     order_start: Vec<usize>,
-    lookup: HashMap<Vec<u16>, usize>,
+    /// `C(n, m)` at `n * (nvar + 1) + m`, for `n <= max_order + nvar`: the
+    /// counts that rank a multi-index ([`Self::index`]).
+    choose: Vec<usize>,
     conj: Vec<usize>,
     split_start: Vec<usize>,
     splits: Vec<(u32, u32)>,
@@ -56,33 +56,40 @@ impl MultiIndexSet {
         if nvar == 0 {
             order_start = vec![0, 1];
         }
-        let len = order_start[order_start.len() - 1];
-        let mut lookup = HashMap::with_capacity(len);
-        for i in 0..len {
-            lookup.insert(exps[i * nvar..(i + 1) * nvar].to_vec(), i);
+        let cols = nvar + 1;
+        let rows = max_order + nvar + 1;
+        let mut choose = vec![0usize; rows * cols];
+        for n in 0..rows {
+            choose[n * cols] = 1;
+            for m in 1..cols.min(n + 1) {
+                let above = if m < n { choose[(n - 1) * cols + m] } else { 0 };
+                choose[n * cols + m] = choose[(n - 1) * cols + m - 1].saturating_add(above);
+            }
         }
-        let conj = (0..len)
-            .map(|i| {
-                let mut e = exps[i * nvar..(i + 1) * nvar].to_vec();
-                for pair in e.chunks_mut(2) {
-                    if pair.len() == 2 {
-                        pair.swap(0, 1);
-                    }
-                }
-                lookup[&e]
-            })
-            .collect();
         let mut set = Self {
             nvar,
             max_order,
             exps,
             order_start,
-            lookup,
-            conj,
+            choose,
+            conj: Vec::new(),
             split_start: Vec::new(),
             splits: Vec::new(),
             lower: Vec::new(),
         };
+        let len = set.order_start[set.order_start.len() - 1];
+        let mut e = vec![0u16; nvar];
+        set.conj = (0..len)
+            .map(|i| {
+                e.copy_from_slice(set.exponents(i));
+                for pair in e.chunks_mut(2) {
+                    if pair.len() == 2 {
+                        pair.swap(0, 1);
+                    }
+                }
+                set.rank(&e)
+            })
+            .collect();
         set.build_splits();
         set.build_lower();
         set
@@ -122,7 +129,7 @@ impl MultiIndexSet {
                     for v in 0..nvar {
                         b[v] = m[v] - a[v];
                     }
-                    splits.push((self.lookup[&a] as u32, self.lookup[&b] as u32));
+                    splits.push((self.rank(&a) as u32, self.rank(&b) as u32));
                 }
                 let mut v = 0;
                 while v < nvar {
@@ -151,7 +158,7 @@ impl MultiIndexSet {
                 e.copy_from_slice(self.exponents(idx));
                 if e[v] > 0 {
                     e[v] -= 1;
-                    lower[idx * self.nvar + v] = self.lookup[&e] as u32;
+                    lower[idx * self.nvar + v] = self.rank(&e) as u32;
                 }
             }
         }
@@ -202,7 +209,32 @@ impl MultiIndexSet {
 
     /// Index of the multi-index with exponents `e`, if enumerated.
     pub fn index(&self, e: &[u16]) -> Option<usize> {
-        self.lookup.get(e).copied()
+        let order: usize = e.iter().map(|&x| x as usize).sum();
+        (e.len() == self.nvar && order <= self.max_order).then(|| self.rank(e))
+    }
+
+    /// The index of `e` (of `nvar` entries, order at most `max_order`) by
+    /// counting: graded, then descending in the first exponent, the second,
+    /// ...; the multi-indices of order `r` in `v` variables whose first
+    /// exponent exceeds `x` number `C(r - x - 1 + v - 1, v - 1)` (the
+    /// compositions of `r - x - 1` into `v` parts, by the hockey-stick
+    /// identity).
+    fn rank(&self, e: &[u16]) -> usize {
+        let nvar = self.nvar;
+        let Some(last) = nvar.checked_sub(1) else {
+            return 0;
+        };
+        let mut r: usize = e.iter().map(|&x| x as usize).sum();
+        let mut idx = self.order_start[r];
+        for (pos, &x) in e[..last].iter().enumerate() {
+            let x = x as usize;
+            let parts = nvar - pos;
+            if x < r {
+                idx += self.choose[(r - x - 1 + parts - 1) * (nvar + 1) + parts - 1];
+            }
+            r -= x;
+        }
+        idx
     }
 
     /// Index of the conjugate multi-index (exponents of `p_i` and `conj p_i` swapped).
@@ -380,9 +412,14 @@ impl Composition {
     }
 
     /// Computes the coefficients of every non-leaf monomial at the multi-indices
-    /// of order `k`. The leaves must hold all orders `< k`.
+    /// of order `k`. The leaves must hold all orders `< k`. Work that is
+    /// cancelled ([`crate::cancel`]) stops between two monomials, leaving the
+    /// order incomplete: the caller asks [`crate::cancel::requested`] next.
     pub fn advance(&mut self, set: &MultiIndexSet, k: usize) {
         for node in 0..self.nodes.len() {
+            if crate::cancel::requested() {
+                return;
+            }
             let Node { parent, leaf, .. } = self.nodes[node];
             let Some(q) = parent else { continue };
             for idx in set.of_order(k) {
@@ -438,9 +475,17 @@ mod tests {
                 for idx in s.of_order(k) {
                     assert_eq!(s.order(idx), k);
                     assert_eq!(s.conj(s.conj(idx)), idx);
+                    // the counting rank is the enumeration's position
+                    assert_eq!(s.index(s.exponents(idx)), Some(idx));
                 }
             }
+            let mut beyond = vec![0u16; nvar];
+            beyond[nvar - 1] = order as u16 + 1;
+            assert_eq!(s.index(&beyond), None);
+            assert_eq!(s.index(&beyond[1..]), None);
         }
+        let empty = MultiIndexSet::new(0, 3);
+        assert_eq!(empty.index(&[]), Some(0));
     }
 
     #[test]

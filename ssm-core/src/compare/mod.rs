@@ -391,18 +391,23 @@ pub fn steady_state_reference(
     opts: &SteadyOptions,
     starts: Option<&[Option<Vec<f64>>]>,
 ) -> Result<Vec<SteadyState>, ValidateError> {
+    // each steady state is a long integration: the caller's cancellation
+    // flag goes along to the threads that run them
+    let flag = ssm_kernel::cancel::current();
     omegas
         .par_iter()
         .enumerate()
         .map(|(i, &omega)| {
-            let problem = DaeProblem::new(sys, epsilon, omega);
-            let z0 = starts
-                .and_then(|s| s.get(i).cloned().flatten())
-                .unwrap_or_else(|| vec![0.0; sys.n_states()]);
-            let start = consistent_initial(&problem, 0.0, &z0)
-                .map_err(|source| ValidateError::SteadyPoint { omega, source })?;
-            steady_state(&problem, &start.z, outputs, opts)
-                .map_err(|source| ValidateError::SteadyPoint { omega, source })
+            ssm_kernel::cancel::within(flag.as_ref(), || {
+                let problem = DaeProblem::new(sys, epsilon, omega);
+                let z0 = starts
+                    .and_then(|s| s.get(i).cloned().flatten())
+                    .unwrap_or_else(|| vec![0.0; sys.n_states()]);
+                let start = consistent_initial(&problem, 0.0, &z0)
+                    .map_err(|source| ValidateError::SteadyPoint { omega, source })?;
+                steady_state(&problem, &start.z, outputs, opts)
+                    .map_err(|source| ValidateError::SteadyPoint { omega, source })
+            })
         })
         .collect()
 }

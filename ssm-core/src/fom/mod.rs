@@ -123,6 +123,12 @@ pub enum SimError {
         /// What failed.
         detail: String,
     },
+    /// The work was asked to stop ([`ssm_kernel::cancel`]).
+    #[error("full-system integration interrupted at t = {}", short(.t))]
+    Interrupted {
+        /// Time reached.
+        t: f64,
+    },
     /// The steady state was not reached.
     #[error("steady state at Omega = {}: not periodic after {periods} forcing periods (t = {}); last relative change over one period {change:.3e} > delta = {delta:.1e} (criterion (47), periods up to {max_multiple} T tried); raise max_periods, or max_period_multiple if the response may be subharmonic", short(.omega), short(.t))]
     NotPeriodic {

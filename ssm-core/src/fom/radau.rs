@@ -400,6 +400,9 @@ impl<'p, 'a> Radau<'p, 'a> {
 
     /// Takes one accepted step, never beyond `t_end`.
     pub fn step(&mut self, t_end: f64) -> Result<(), SimError> {
+        if ssm_kernel::cancel::requested() {
+            return Err(SimError::Interrupted { t: self.t });
+        }
         let h_min = 1e-13 * self.t.abs().max(1.0);
         loop {
             if self.stats.accepted + self.stats.rejected >= self.opts.max_steps {

@@ -129,6 +129,12 @@ pub enum SsmError {
     /// The master modes are unusable.
     #[error("master modes: {0}")]
     Masters(String),
+    /// The work was asked to stop ([`ssm_kernel::cancel`]) before this order.
+    #[error("interrupted before order {order}")]
+    Interrupted {
+        /// The first order not computed.
+        order: usize,
+    },
 }
 
 /// One term `coeff * p^k` of the reduced dynamics of coordinate `coord`.
@@ -289,6 +295,9 @@ pub fn compute(
             let cidx = set.conj(idx);
             if cidx < idx {
                 continue;
+            }
+            if ssm_kernel::cancel::requested() {
+                return Err(SsmError::Interrupted { order: k });
             }
             let tc = Instant::now();
             let e = set.exponents(idx).to_vec();

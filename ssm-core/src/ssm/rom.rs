@@ -38,6 +38,12 @@ pub enum RomError {
         /// Time reached.
         t: f64,
     },
+    /// The work was asked to stop ([`ssm_kernel::cancel`]).
+    #[error("reduced dynamics: interrupted at t = {t:.6}")]
+    Interrupted {
+        /// Time reached.
+        t: f64,
+    },
 }
 
 /// A reduced trajectory sampled at `times`.
@@ -189,6 +195,7 @@ fn dopri(
     .map_err(|e| match e {
         DopriError::NonFinite { t } => RomError::NonFinite { t },
         DopriError::StepCollapse { t, step, norm } => RomError::StepCollapse { t, step, norm },
+        DopriError::Interrupted { t } => RomError::Interrupted { t },
     })?;
     Ok(Trajectory {
         times,

@@ -232,7 +232,8 @@ pub enum Stop {
         /// The corrector's last failure.
         cause: String,
     },
-    /// The observer asked to stop.
+    /// The observer asked to stop, or the work was cancelled
+    /// ([`crate::cancel`]).
     Interrupted,
 }
 
@@ -581,6 +582,9 @@ where
     let stop = loop {
         if steps >= s.max_steps {
             break Stop::MaxSteps;
+        }
+        if crate::cancel::requested() {
+            break Stop::Interrupted;
         }
         steps += 1;
         let last = points.last().expect("a branch has its start");

@@ -154,6 +154,9 @@ impl<'p, 'a> Hht<'p, 'a> {
         } = self;
         let (n, big_n) = (l.n, p.n());
         let (mut t, mut h, mut h_factored, mut good) = (*t_now, *h_next, *hf, *good_n);
+        if ssm_kernel::cancel::requested() {
+            return Err(SimError::Interrupted { t });
+        }
         loop {
             if stats.steps >= MAX_STEPS {
                 return Err(SimError::TooManySteps {

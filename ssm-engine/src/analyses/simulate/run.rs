@@ -52,9 +52,15 @@ pub(super) fn simulate(
     // the runs are independent: integrated in parallel (the first failed run
     // is reported, as in sequence), the noise drawn afterwards in run order
     // so that a seed gives the same files anyway
+    // (the caller's cancellation flag goes along to the threads that run them)
+    let flag = ssm_kernel::cancel::current();
     let results: Vec<_> = starts
         .par_iter()
-        .map(|(z0, keep)| sample_run(sys, z0, keep, period, samples, &outputs, integrator))
+        .map(|(z0, keep)| {
+            ssm_kernel::cancel::within(flag.as_ref(), || {
+                sample_run(sys, z0, keep, period, samples, &outputs, integrator)
+            })
+        })
         .collect();
     let mut runs = Vec::with_capacity(results.len());
     for (k, r) in results.into_iter().enumerate() {
