@@ -15,6 +15,7 @@ mod model;
 mod plan;
 mod plugin;
 mod reduced;
+mod work;
 
 use pyo3::prelude::*;
 
@@ -25,6 +26,7 @@ fn _ssm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<reduced::Ssm>()?;
     m.add_function(wrap_pyfunction!(plan::run_plan, m)?)?;
     m.add_function(wrap_pyfunction!(plugin::model_from_plugin, m)?)?;
+    m.add_function(wrap_pyfunction!(plugin::model_from_signals, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

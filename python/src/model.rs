@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use numpy::{Complex64, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::errors::{raise, Failure, Family};
 use ssm_api::{PolyVector, SparseMatrix};
@@ -32,6 +33,8 @@ type Tensor<'py> = (PyReadonlyArray2<'py, i64>, PyReadonlyArray1<'py, f64>);
 #[pyclass(module = "ssm._ssm", frozen)]
 pub struct Model {
     pub(crate) system: Arc<System>,
+    /// What the reducer that made the model reported (name, numbers, text).
+    pub(crate) diagnostics: Vec<(String, Vec<f64>, String)>,
 }
 
 /// The slice of a read-only array, or the error naming `arg`.
@@ -275,11 +278,12 @@ impl Model {
             outputs,
         };
         let name = name.to_owned();
-        let system = py
-            .detach(move || build(files, &name, rayleigh))
-            .map_err(|f| f.raise(py))?;
+        let system =
+            crate::work::interruptible(py, None, move |_progress| build(files, &name, rayleigh))?
+                .map_err(|f| f.raise(py))?;
         Ok(Model {
             system: Arc::new(system),
+            diagnostics: Vec::new(),
         })
     }
 
@@ -288,15 +292,15 @@ impl Model {
     #[staticmethod]
     #[pyo3(signature = (dir, rayleigh=None))]
     fn from_files(py: Python<'_>, dir: PathBuf, rayleigh: Option<(f64, f64)>) -> PyResult<Model> {
-        let system = py
-            .detach(move || {
-                let files = ModelFiles::read(&dir, &mut |_| {})
-                    .map_err(|e| Failure::of(Family::Input, e))?;
-                build(files, "model-files", rayleigh)
-            })
-            .map_err(|f| f.raise(py))?;
+        let system = crate::work::interruptible(py, None, move |_progress| {
+            let files =
+                ModelFiles::read(&dir, &mut |_| {}).map_err(|e| Failure::of(Family::Input, e))?;
+            build(files, "model-files", rayleigh)
+        })?
+        .map_err(|f| f.raise(py))?;
         Ok(Model {
             system: Arc::new(system),
+            diagnostics: Vec::new(),
         })
     }
 
@@ -310,6 +314,22 @@ impl Model {
     #[getter]
     fn n_states(&self) -> usize {
         self.system.n_states()
+    }
+
+    /// What the reducer that identified the model reported (name ->
+    /// numbers, or text where it reported no numbers); empty for other
+    /// models.
+    #[getter]
+    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (name, values, text) in &self.diagnostics {
+            if values.is_empty() {
+                d.set_item(name, text)?;
+            } else {
+                d.set_item(name, PyArray1::from_slice(py, values))?;
+            }
+        }
+        Ok(d)
     }
 
     /// The names of the model's outputs.
@@ -327,19 +347,18 @@ impl Model {
         modes: Option<usize>,
     ) -> PyResult<Bound<'py, PyArray1<Complex64>>> {
         let system = Arc::clone(&self.system);
-        let eigenvalues = py
-            .detach(move || {
-                let options = SpectrumOptions {
-                    method: None,
-                    modes: modes.unwrap_or(12),
-                    shift: 0.0,
-                    normalization: Default::default(),
-                };
-                spectrum::compute(system.a.as_ref(), system.b.as_ref(), &options)
-                    .map(|s| s.eigenvalues)
-                    .map_err(|e| Failure::of(Family::Spectrum, e))
-            })
-            .map_err(|f| f.raise(py))?;
+        let eigenvalues = crate::work::interruptible(py, None, move |_progress| {
+            let options = SpectrumOptions {
+                method: None,
+                modes: modes.unwrap_or(12),
+                shift: 0.0,
+                normalization: Default::default(),
+            };
+            spectrum::compute(system.a.as_ref(), system.b.as_ref(), &options)
+                .map(|s| s.eigenvalues)
+                .map_err(|e| Failure::of(Family::Spectrum, e))
+        })?
+        .map_err(|f| f.raise(py))?;
         Ok(PyArray1::from_vec(py, eigenvalues))
     }
 

@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 
 use crate::errors::{raise, Failure, Family};
 use crate::model::Model;
-use ssm_engine::pipeline::{self, JobError, Quiet};
+use ssm_engine::pipeline::{self, JobError};
 use ssm_engine::plan::budget::Limits;
 use ssm_engine::plan::Plan;
 
@@ -31,10 +31,12 @@ fn family(e: &JobError) -> Family {
 /// engine's one cost gate); returns the files a scene's run writes, as
 /// `(name, contents)`, `summary.json` among them.
 #[pyfunction]
+#[pyo3(signature = (model, plan, progress=None))]
 pub(crate) fn run_plan(
     py: Python<'_>,
     model: &Model,
     plan: &str,
+    progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<Vec<(String, Vec<u8>)>> {
     let plan: Plan =
         serde_json::from_str(plan).map_err(|e| raise(py, Family::Input, format!("plan: {e}")))?;
@@ -46,18 +48,23 @@ pub(crate) fn run_plan(
         ));
     }
     let system = (*model.system).clone();
-    let outputs = py
-        .detach(move || {
-            let model = pipeline::Model {
-                system,
-                reduction: None,
-                full: None,
-                plugins: Vec::new(),
-            };
-            pipeline::execute(&plan, model, &Limits::of_machine(), &Quiet, Instant::now())
-                .map(|job| job.outputs.files)
-                .map_err(|e| Failure(family(&e), e.to_string()))
-        })
-        .map_err(|f| f.raise(py))?;
+    let outputs = crate::work::interruptible(py, progress.as_ref(), move |progress| {
+        let model = pipeline::Model {
+            system,
+            reduction: None,
+            full: None,
+            plugins: Vec::new(),
+        };
+        pipeline::execute(
+            &plan,
+            model,
+            &Limits::of_machine(),
+            progress,
+            Instant::now(),
+        )
+        .map(|job| job.outputs.files)
+        .map_err(|e| Failure(family(&e), e.to_string()))
+    })?
+    .map_err(|f| f.raise(py))?;
     Ok(outputs)
 }

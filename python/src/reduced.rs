@@ -117,7 +117,8 @@ impl Ssm {
     /// slowest first) to `order`, after the spectral stage (spectrum,
     /// master modes, non-resonance checks up to `order`).
     #[staticmethod]
-    #[pyo3(signature = (model, master_pairs, order, resonance_tol=0.02, normalization="unit"))]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (model, master_pairs, order, resonance_tol=0.02, normalization="unit", progress=None))]
     fn compute(
         py: Python<'_>,
         model: &Model,
@@ -125,6 +126,7 @@ impl Ssm {
         order: usize,
         resonance_tol: f64,
         normalization: &str,
+        progress: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Ssm> {
         let spec = SsmSpec {
             master_pairs,
@@ -135,8 +137,8 @@ impl Ssm {
         };
         let system = Arc::clone(&model.system);
         let sys = Arc::clone(&system);
-        let (masters, expansion, warnings) = py
-            .detach(move || {
+        let (masters, expansion, warnings) =
+            crate::work::interruptible(py, progress.as_ref(), move |progress| {
                 // the engine's one gate, as for a scene: the spec's values,
                 // the spectrum's and the order's cost within the machine's
                 // limits, before anything is allocated
@@ -150,6 +152,7 @@ impl Ssm {
                 let ceiling = budget::check_spectrum(&plan, &sys, &limits)
                     .map_err(|e| Failure::of(Family::Input, e))?;
                 let spec = plan.ssm;
+                progress.begin("spectrum");
                 let sp = spectral(&spec, &SpectrumSpec::default(), &sys, ceiling)
                     .map_err(|e| Failure::of(Family::Spectrum, e))?;
                 let others = ssm_core::ssm::non_master(&sp.spectrum.eigenvalues, &sp.masters);
@@ -163,10 +166,11 @@ impl Ssm {
                     order: ceiling,
                     resonance_tol: plan.ssm.resonance_tol,
                 };
+                progress.begin("SSM");
                 let expansion = compute_ssm(&sys, &sp.masters, &others, &options)
                     .map_err(|e| Failure::of(Family::Expansion, e))?;
                 Ok::<_, Failure>((sp.masters, expansion, sp.warnings))
-            })
+            })?
             .map_err(|f| f.raise(py))?;
         Ok(Ssm {
             system,
@@ -215,7 +219,8 @@ impl Ssm {
     /// `rho_max` at `points` amplitudes, one per order of `orders` (default
     /// the SSM's), with the amplitudes of `outputs` and their error
     /// estimates held to the relative `tolerance`: a list of dictionaries.
-    #[pyo3(signature = (rho_max, points=101, orders=None, outputs=Vec::new(), tolerance=0.01))]
+    #[pyo3(signature = (rho_max, points=101, orders=None, outputs=Vec::new(), tolerance=0.01, progress=None))]
+    #[allow(clippy::too_many_arguments)]
     fn backbone<'py>(
         &self,
         py: Python<'py>,
@@ -224,6 +229,7 @@ impl Ssm {
         orders: Option<Vec<usize>>,
         outputs: Vec<String>,
         tolerance: f64,
+        progress: Option<Bound<'py, PyAny>>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
         let spec = BackboneSpec {
             rho_max,
@@ -242,13 +248,13 @@ impl Ssm {
         )?;
         let (system, expansion) = (Arc::clone(&self.system), Arc::clone(&self.expansion));
         let master = self.masters[0].clone();
-        let curves = py
-            .detach(move || {
-                let refs: Vec<_> = maps.iter().collect();
-                backbone(&expansion, &system, &master, &spec, &refs, tolerance)
-                    .map_err(|e| Failure::of(Family::Analysis, e))
-            })
-            .map_err(|f| f.raise(py))?;
+        let curves = crate::work::interruptible(py, progress.as_ref(), move |progress| {
+            progress.begin("backbone");
+            let refs: Vec<_> = maps.iter().collect();
+            backbone(&expansion, &system, &master, &spec, &refs, tolerance)
+                .map_err(|e| Failure::of(Family::Analysis, e))
+        })?
+        .map_err(|f| f.raise(py))?;
         let width = outputs.len();
         curves
             .iter()
@@ -282,7 +288,7 @@ impl Ssm {
     /// `omega_range` (`points` per curve, one curve per order of `orders`),
     /// with the amplitudes of `outputs`: a dictionary of the table's columns
     /// and the curves (estimate, untrusted flag, bifurcations).
-    #[pyo3(signature = (epsilon, omega_range, points=200, orders=None, outputs=Vec::new(), tolerance=0.01))]
+    #[pyo3(signature = (epsilon, omega_range, points=200, orders=None, outputs=Vec::new(), tolerance=0.01, progress=None))]
     #[allow(clippy::too_many_arguments)]
     fn forced_response<'py>(
         &self,
@@ -293,6 +299,7 @@ impl Ssm {
         orders: Option<Vec<usize>>,
         outputs: Vec<String>,
         tolerance: f64,
+        progress: Option<Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let spec = FrcSpec {
             points,
@@ -318,13 +325,13 @@ impl Ssm {
         )?;
         let (system, expansion) = (Arc::clone(&self.system), Arc::clone(&self.expansion));
         let masters = self.masters.clone();
-        let frc = py
-            .detach(move || {
-                let refs: Vec<_> = maps.iter().collect();
-                forced_response(&expansion, &system, &masters, &spec, &refs, tolerance)
-                    .map_err(|e| Failure::of(Family::Analysis, e))
-            })
-            .map_err(|f| f.raise(py))?;
+        let frc = crate::work::interruptible(py, progress.as_ref(), move |progress| {
+            progress.begin("forced response");
+            let refs: Vec<_> = maps.iter().collect();
+            forced_response(&expansion, &system, &masters, &spec, &refs, tolerance)
+                .map_err(|e| Failure::of(Family::Analysis, e))
+        })?
+        .map_err(|f| f.raise(py))?;
         let d = PyDict::new(py);
         let rows = &frc.rows;
         d.set_item(

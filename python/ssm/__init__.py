@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import errors
-from ._ssm import Model, __version__, model_from_plugin, run_plan
+from ._ssm import Model, __version__, model_from_plugin, model_from_signals, run_plan
 from ._ssm import Ssm as _Ssm
 from .errors import InputError, SsmWarning, UntrustedAnswerWarning
 
@@ -46,6 +46,7 @@ __all__ = [
     "from_arrays",
     "from_files",
     "from_plugin",
+    "identify",
     "run",
 ]
 
@@ -226,6 +227,154 @@ def from_plugin(plugin: str, model: str = "", **params: Any) -> Model:
     return model_from_plugin(str(plugin), model, params)
 
 
+class _Tqdm:
+    """A progress callback drawing a ``tqdm`` bar (made at the first call,
+    shown after half a second so that short calls draw nothing)."""
+
+    def __init__(self) -> None:
+        self._bar: Any = None
+
+    def __call__(self, stage: str, detail: str) -> None:
+        if self._bar is None:
+            from tqdm.auto import tqdm
+
+            self._bar = tqdm(
+                total=None,
+                bar_format="{desc}{postfix} [{elapsed}]",
+                delay=0.5,
+                leave=False,
+            )
+        self._bar.set_description_str(stage, refresh=False)
+        self._bar.set_postfix_str(detail, refresh=False)
+        self._bar.update(0)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+
+
+class _Progress:
+    """The progress callback of a call: ``progress`` when it is callable
+    (it takes the stage and the detail, two strings, at most ten times a
+    second), a ``tqdm`` bar when ``progress`` is true or ``None`` and tqdm is
+    installed, nothing otherwise."""
+
+    def __init__(self, progress: Any) -> None:
+        self.callback: Any = None
+        self._bar: _Tqdm | None = None
+        if callable(progress):
+            self.callback = progress
+        elif progress is None or progress is True:
+            try:
+                import tqdm  # noqa: F401
+            except ImportError:
+                if progress is True:
+                    raise InputError("progress: tqdm is not installed") from None
+            else:
+                self._bar = _Tqdm()
+                self.callback = self._bar
+        elif progress is not False:
+            raise InputError(
+                f"progress: give a callable, True, False or None, not {progress!r}"
+            )
+
+    def __enter__(self) -> Any:
+        return self.callback
+
+    def __exit__(self, *exc: object) -> None:
+        if self._bar is not None:
+            self._bar.close()
+
+
+def identify(
+    signals: Any,
+    period: float,
+    names: Sequence[str] | None = None,
+    reducer: str = "nar",
+    plugin: str | None = None,
+    **params: Any,
+) -> Model:
+    """The model a reducer identifies from sampled signals: by default the
+    nonlinear autoregressive map of Szalai, Ehrhardt & Haller (2017), fitted
+    by the NAR identifier built into the package (its parameters, e.g.
+    ``nu``, ``order``, ``weighting``, as keyword arguments; ``ssm-engine
+    plugins`` lists them); ``plugin`` (a name or a ``.so`` path) takes the
+    reducer of a plugin instead.
+
+    Parameters
+    ----------
+    signals : array or list of arrays
+        One array per trajectory: ``(samples,)`` for one observable or
+        ``(samples, observables)``, floating-point, finite, uniformly
+        sampled from ``t = 0``.
+    period : float
+        The sampling period ``T``.
+    names : list of str, optional
+        The observables' names (the identified model's outputs); default
+        ``y1, y2, ...``.
+
+    Returns
+    -------
+    Model
+        The identified model (a map with period ``T``); its ``diagnostics``
+        hold what the reducer reported (e.g. ``frequencies`` and
+        ``damping_ratios`` of the identified linear part).
+
+    Raises
+    ------
+    ssm.errors.InputError
+        No signals, a wrong shape or dtype, a non-finite sample or period, an
+        unknown reducer (the message names the argument).
+    ssm.errors.ModelError
+        The reducer could not identify a model (its message).
+    """
+    if isinstance(signals, np.ndarray) or not isinstance(signals, Sequence):
+        signals = [signals]
+    if len(signals) == 0:
+        raise InputError("signals: no trajectory given")
+    arrays = []
+    for k, a in enumerate(signals):
+        arg = f"signals[{k}]"
+        a = _float_array(arg, a)
+        if a.ndim == 1:
+            a = a[:, None]
+        if a.ndim != 2:
+            raise InputError(
+                f"{arg}: shape {a.shape}; give (samples,) or (samples, observables)"
+            )
+        if a.shape[0] < 2 or a.shape[1] == 0:
+            raise InputError(
+                f"{arg}: shape {a.shape}; at least two samples of one observable"
+            )
+        if not np.isfinite(a).all():
+            bad = np.argwhere(~np.isfinite(a))[0]
+            raise InputError(
+                f"{arg}: a non-finite sample at {tuple(int(i) for i in bad)}"
+            )
+        if arrays and a.shape[1] != arrays[0].shape[1]:
+            raise InputError(
+                f"{arg}: {a.shape[1]} observable(s), signals[0] has {arrays[0].shape[1]}"
+            )
+        arrays.append(np.ascontiguousarray(a))
+    width = arrays[0].shape[1]
+    if names is None:
+        names = [f"y{j + 1}" for j in range(width)]
+    names = [str(n) for n in names]
+    if len(names) != width:
+        raise InputError(f"names: {len(names)} name(s) for {width} observable(s)")
+    period = float(period)
+    if not (np.isfinite(period) and period > 0):
+        raise InputError(f"period: {period} is not a positive finite sampling period")
+    return model_from_signals(
+        None if plugin is None else str(plugin),
+        str(reducer),
+        arrays,
+        period,
+        names,
+        params,
+    )
+
+
 def _warn(messages: Sequence[str], category: type = SsmWarning) -> None:
     for m in messages:
         warnings.warn(m, category, stacklevel=3)
@@ -303,18 +452,22 @@ class Ssm:
         orders: Sequence[int] | None = None,
         outputs: Sequence[str] = (),
         tolerance: float = 0.01,
+        progress: Any = None,
     ) -> list[Backbone]:
         """Backbone curves of one master pair up to the polar amplitude
         ``rho_max``, one per order of ``orders`` (default: the SSM's); an
         untrusted curve (estimate above ``tolerance``) warns with
-        :class:`ssm.errors.UntrustedAnswerWarning`."""
-        raw = self._inner.backbone(
-            float(rho_max),
-            int(points),
-            None if orders is None else [int(o) for o in orders],
-            [str(o) for o in outputs],
-            float(tolerance),
-        )
+        :class:`ssm.errors.UntrustedAnswerWarning`. ``progress``: see
+        :func:`compute_ssm`."""
+        with _Progress(progress) as callback:
+            raw = self._inner.backbone(
+                float(rho_max),
+                int(points),
+                None if orders is None else [int(o) for o in orders],
+                [str(o) for o in outputs],
+                float(tolerance),
+                callback,
+            )
         curves = []
         for c in raw:
             amps = {name: c["amplitudes"][:, k] for k, name in enumerate(c["outputs"])}
@@ -352,19 +505,23 @@ class Ssm:
         orders: Sequence[int] | None = None,
         outputs: Sequence[str] = (),
         tolerance: float = 0.01,
+        progress: Any = None,
     ) -> ForcedResponse:
         """Forced response curves of the reduced model to
         ``eps fext cos(Omega t)``, one per amplitude of ``epsilon`` (and
-        order of ``orders``) over ``omega_range``."""
+        order of ``orders``) over ``omega_range``. ``progress``: see
+        :func:`compute_ssm`."""
         eps = [float(e) for e in np.atleast_1d(epsilon)]
-        raw = self._inner.forced_response(
-            eps,
-            (float(omega_range[0]), float(omega_range[1])),
-            int(points),
-            None if orders is None else [int(o) for o in orders],
-            [str(o) for o in outputs],
-            float(tolerance),
-        )
+        with _Progress(progress) as callback:
+            raw = self._inner.forced_response(
+                eps,
+                (float(omega_range[0]), float(omega_range[1])),
+                int(points),
+                None if orders is None else [int(o) for o in orders],
+                [str(o) for o in outputs],
+                float(tolerance),
+                callback,
+            )
         _warn(raw["warnings"], UntrustedAnswerWarning)
         columns = {
             k: raw[k] for k in ("order", "epsilon", "omega", "branch", "stable", "rho")
@@ -400,17 +557,19 @@ class Run:
         return pd.read_csv(io.BytesIO(self.files[name]))
 
 
-def run(model: Model, plan: Mapping[str, Any]) -> Run:
+def run(model: Model, plan: Mapping[str, Any], progress: Any = None) -> Run:
     """Runs a whole plan on ``model``: the engine's pipeline, as a scene's run
     does, within the machine's limits (the engine's cost gate refuses what
     would not fit). ``plan`` holds the sections of a scene as a dictionary
     (the engine's ``Plan`` in JSON: ``ssm``, ``coordinates``, ``backbone``,
     ``invariance``, ``transient``, ``frc``, ``validation``, ``reference``,
     ``report``, ``simulate``, ``analyses``; see ``docs/python.md``). The
-    run's warnings are issued as :class:`ssm.errors.SsmWarning`."""
+    run's warnings are issued as :class:`ssm.errors.SsmWarning`.
+    ``progress``: see :func:`compute_ssm`."""
     import json
 
-    files = dict(run_plan(model, json.dumps(plan)))
+    with _Progress(progress) as callback:
+        files = dict(run_plan(model, json.dumps(plan), callback))
     summary = json.loads(files["summary.json"])
     _warn(summary.get("warnings", []))
     return Run(summary=summary, files=files)
@@ -422,17 +581,28 @@ def compute_ssm(
     order: int = 5,
     resonance_tol: float = 0.02,
     normalization: str = "unit",
+    progress: Any = None,
 ) -> Ssm:
     """The SSM of ``model`` over ``master_pairs`` (1-based underdamped pairs,
     slowest first) to ``order``: the spectrum, the master modes and the
     non-resonance checks first (their findings warn with
-    :class:`ssm.errors.SsmWarning`)."""
-    inner = _Ssm.compute(
-        model,
-        [int(p) for p in master_pairs],
-        int(order),
-        float(resonance_tol),
-        str(normalization),
-    )
+    :class:`ssm.errors.SsmWarning`).
+
+    Every computing call runs without the GIL (other Python threads run
+    meanwhile) and stops within about a second at Ctrl-C, raising
+    ``KeyboardInterrupt`` and returning nothing. ``progress`` is a callable
+    taking the stage and where it is (two strings; called at most ten and
+    at least four times a second while the work runs), ``True`` for a
+    ``tqdm`` bar, ``False`` for none; ``None`` (the default) draws a
+    ``tqdm`` bar when tqdm is installed."""
+    with _Progress(progress) as callback:
+        inner = _Ssm.compute(
+            model,
+            [int(p) for p in master_pairs],
+            int(order),
+            float(resonance_tol),
+            str(normalization),
+            callback,
+        )
     _warn(inner.warnings)
     return Ssm(inner)

@@ -111,7 +111,8 @@ fn build(name: &str, _params: &str) -> Result<Model, PluginError> {
     ssm_api::select_model(name, &[]).map(|_| unreachable!("no models are offered"))
 }
 
-fn reducers() -> Vec<ReducerInfo> {
+/// The reducer this library offers (`nar`), with its parameters.
+pub fn reducers() -> Vec<ReducerInfo> {
     vec![ssm_plugin_kit::reducer_info(
         REDUCER,
         "polynomial sampling map of order r on 2nu-dimensional delay vectors of one observable, fitted by QR/SVD least squares (Szalai, Ehrhardt & Haller 2017, eqs. 3.1, 7.1-7.2)",
@@ -124,7 +125,14 @@ fn param_err(name: &str, msg: &str) -> PluginError {
     PluginError::new(ErrorKind::InvalidParameter, name, msg)
 }
 
-fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, PluginError> {
+/// The map the reducer `name` (`nar`) identifies from `input`'s signals
+/// with the parameters `params` (a TOML table): the plugin's entry point,
+/// also called directly by the Python package, which links this library.
+///
+/// # Errors
+/// An unknown reducer or parameter, signals the identification cannot use
+/// (too short, too few delay vectors, a rank-deficient fit).
+pub fn reduce(name: &str, params: &str, input: &ReducerInput) -> Result<Reduced, PluginError> {
     if name != REDUCER {
         return Err(PluginError::new(
             ErrorKind::UnknownModel,
