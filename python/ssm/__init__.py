@@ -236,7 +236,11 @@ class _Tqdm:
 
     def __call__(self, stage: str, detail: str) -> None:
         if self._bar is None:
-            from tqdm.auto import tqdm
+            try:  # a widget in a notebook, where ipywidgets is installed
+                import ipywidgets  # noqa: F401
+                from tqdm.auto import tqdm
+            except ImportError:
+                from tqdm import tqdm
 
             self._bar = tqdm(
                 total=None,

@@ -1,0 +1,366 @@
+"""Figures of the answers, for a paper (matplotlib, an optional dependency).
+
+Every function draws on ``ax`` (a new figure's axes when ``None``) and
+returns the axes (or the figure, for several panels). Conventions: the
+untrusted part of an answer (its error estimate above the tolerance) is drawn
+dashed and paler, not only named in the legend; unstable branches are dashed,
+stable ones solid; the full system is drawn in black with markers or thick
+lines, the reduced model in colour; axes are labelled with the outputs'
+names; the legend is placed where it covers the fewest points.
+
+Example
+-------
+>>> import ssm, ssm.plot
+>>> s = ssm.compute_ssm(model, [1], 7)                      # doctest: +SKIP
+>>> ssm.plot.backbone(s.backbone(0.3, outputs=["x"]), "x")  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+# the largest relative error estimate drawn as a band
+BAND_MAX = 0.25
+
+# markers of the bifurcations a continuation locates
+_MARKERS = {"SN": "o", "BP": "s", "PD": "D", "NS": "^", "HB": "v"}
+_NAMES = {
+    "SN": "fold",
+    "BP": "branch point",
+    "PD": "period doubling",
+    "NS": "Neimark-Sacker",
+    "HB": "Hopf",
+}
+
+
+def _axes(ax: Any) -> Any:
+    if ax is not None:
+        return ax
+    import matplotlib.pyplot as plt
+
+    _, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
+    return ax
+
+
+def _finish(ax: Any, xlabel: str, ylabel: str) -> Any:
+    """Labels, plain tick labels (no offset, no ``-5.6e-17`` for zero) and
+    the legend where it covers the fewest points."""
+    from matplotlib.ticker import ScalarFormatter
+
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    for axis in (ax.xaxis, ax.yaxis):
+        if axis.get_scale() == "linear":
+            fmt = ScalarFormatter(useOffset=False)
+            fmt.set_powerlimits((-3, 4))
+            axis.set_major_formatter(fmt)
+    handles, _ = ax.get_legend_handles_labels()
+    if handles:
+        ax.legend(loc="best", frameon=True, framealpha=0.9)
+    return ax
+
+
+def _colors(n: int) -> list[Any]:
+    import matplotlib.pyplot as plt
+
+    cycle = plt.rcParams["axes.prop_cycle"].by_key().get("color", ["C0"])
+    return [cycle[k % len(cycle)] for k in range(n)]
+
+
+def backbone(
+    curves: Sequence[Any],
+    output: str | None = None,
+    ax: Any = None,
+    tolerance: float | None = None,
+    label: str = "",
+    colors: Sequence[Any] | None = None,
+) -> Any:
+    """Backbone curves (:meth:`ssm.Ssm.backbone`): the frequency against the
+    amplitude of ``output`` (the polar amplitude ``rho`` when ``None``), one
+    colour per order (or per entry of ``colors``), with the band
+    ``omega (1 +- e)`` of the error estimate ``e``. The part beyond the
+    curve's trusted range (``trusted_up_to``, or where ``e`` exceeds
+    ``tolerance``) is dashed and paler. ``label`` prefixes the legend's
+    entries (e.g. ``"from data"`` beside ``"model"`` on the same axes)."""
+    ax = _axes(ax)
+    colors = list(colors) if colors is not None else _colors(len(curves))
+    for curve, color in zip(curves, colors):
+        x = curve.rho if output is None else curve.amplitudes[output]
+        omega, e = curve.omega, np.asarray(curve.error_estimate, dtype=float)
+        bad = np.zeros(len(x), dtype=bool)
+        if curve.trusted_up_to is not None:
+            bad |= curve.rho > curve.trusted_up_to
+        elif curve.untrusted:
+            bad |= True
+        if tolerance is not None:
+            bad |= np.nan_to_num(e, nan=0.0) > tolerance
+        good = ~bad
+        # the two parts share their boundary point, so the curve is unbroken
+        cut = int(np.argmax(bad)) if bad.any() else len(x)
+        label_k = f"{label} O({curve.order})".strip()
+        ax.plot(
+            x[: cut + 1][good[: cut + 1]],
+            omega[: cut + 1][good[: cut + 1]],
+            color=color,
+            lw=1.8,
+            label=label_k,
+        )
+        if bad.any():
+            lo = max(cut - 1, 0)
+            ax.plot(
+                x[lo:],
+                omega[lo:],
+                color=color,
+                lw=1.4,
+                ls="--",
+                alpha=0.6,
+                label=f"{label_k}, estimate above tolerance",
+            )
+        # the band where the estimate is still a small error (beyond, the
+        # curve is dashed and a band would only hide the axes' range)
+        shown = np.isfinite(e) & (e <= BAND_MAX)
+        if shown.any():
+            ax.fill_between(
+                x[shown],
+                (omega * (1 - e))[shown],
+                (omega * (1 + e))[shown],
+                color=color,
+                alpha=0.15,
+                lw=0,
+            )
+    xlabel = "polar amplitude rho" if output is None else f"amplitude of {output}"
+    return _finish(ax, xlabel, "frequency omega (rad/s)")
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """The ``[start, stop)`` runs of equal values of ``mask``."""
+    if len(mask) == 0:
+        return []
+    edges = np.flatnonzero(np.diff(mask.astype(int))) + 1
+    starts = np.concatenate([[0], edges])
+    stops = np.concatenate([edges, [len(mask)]])
+    return list(zip(starts.tolist(), stops.tolist()))
+
+
+def forced_response(
+    frc: Any,
+    output: str,
+    ax: Any = None,
+    reference: Any = None,
+    steady_states: Any = None,
+) -> Any:
+    """Forced response curves (:meth:`ssm.Ssm.forced_response`): the
+    amplitude of ``output`` against the forcing frequency, one colour per
+    curve (order and forcing amplitude), stable parts solid, unstable parts
+    dashed, bifurcations marked. ``reference``: the full system's periodic
+    orbits (``reference_frc.csv`` of :func:`ssm.run` as a DataFrame: black,
+    filled where stable, open where unstable); ``steady_states``: a
+    DataFrame with ``omega`` and the output's amplitude (black crosses)."""
+    ax = _axes(ax)
+    cols = frc.columns
+    amp = frc.amplitudes[output]
+    keys = sorted({(int(o), float(e)) for o, e in zip(cols["order"], cols["epsilon"])})
+    seen_kind: set[str] = set()
+    for (order, eps), color in zip(keys, _colors(len(keys))):
+        on = (cols["order"] == order) & (cols["epsilon"] == eps)
+        curve = next(
+            (c for c in frc.curves if c["order"] == order and c["epsilon"] == eps), {}
+        )
+        label = f"O({order}), eps = {eps:g}"
+        if curve.get("untrusted"):
+            label += " (estimate above tolerance)"
+        labelled = False
+        for b in np.unique(cols["branch"][on]):
+            rows = np.flatnonzero(on & (cols["branch"] == b))
+            stable = np.asarray(cols["stable"][rows], dtype=bool)
+            for start, stop in _runs(stable):
+                # overlap by one point so that the branch is unbroken
+                seg = rows[max(start - 1, 0) : stop]
+                ax.plot(
+                    cols["omega"][seg],
+                    amp[seg],
+                    color=color,
+                    ls="-" if stable[start] else "--",
+                    lw=1.8 if stable[start] else 1.3,
+                    alpha=0.6 if curve.get("untrusted") else 1.0,
+                    zorder=3,
+                    label=None if labelled else label,
+                )
+                labelled = True
+        for kind, omega, branch in curve.get("bifurcations", []):
+            rows = np.flatnonzero(on & (cols["branch"] == branch))
+            if len(rows) == 0:
+                continue
+            at = rows[np.argmin(np.abs(cols["omega"][rows] - omega))]
+            ax.plot(
+                [omega],
+                [amp[at]],
+                ls="none",
+                marker=_MARKERS.get(kind, "*"),
+                mfc="white",
+                mec="black",
+                ms=7,
+                zorder=5,
+                label=None if kind in seen_kind else _NAMES.get(kind, kind),
+            )
+            seen_kind.add(kind)
+    if reference is not None:
+        column = f"{output}_linf" if f"{output}_linf" in reference else output
+        stable = reference["stable"].to_numpy().astype(bool)
+        om, a = reference["omega"].to_numpy(), reference[column].to_numpy()
+        # larger markers beneath the reduced curves, which stay visible
+        ax.plot(
+            om[stable],
+            a[stable],
+            ls="none",
+            marker="o",
+            ms=6,
+            mfc="0.7",
+            mec="black",
+            mew=0.6,
+            zorder=2,
+            label="full system, stable",
+        )
+        if (~stable).any():
+            ax.plot(
+                om[~stable],
+                a[~stable],
+                ls="none",
+                marker="o",
+                ms=6,
+                mfc="white",
+                mec="black",
+                mew=0.6,
+                zorder=2,
+                label="full system, unstable",
+            )
+    if steady_states is not None:
+        column = f"{output}_linf" if f"{output}_linf" in steady_states else output
+        ax.plot(
+            steady_states["omega"],
+            steady_states[column],
+            ls="none",
+            marker="x",
+            ms=7,
+            color="black",
+            zorder=4,
+            label="full system, steady states",
+        )
+    return _finish(ax, "forcing frequency Omega (rad/s)", f"amplitude of {output}")
+
+
+def validation(table: Any, outputs: Sequence[str] | None = None) -> Any:
+    """The full system against the reduced model (``validation.csv`` of
+    :func:`ssm.run` as a DataFrame): one panel per output (the full system
+    thick and black, the reduced model thin, dashed and coloured, so both
+    show where they coincide) and a panel of the relative error (log
+    scale). Returns the figure."""
+    import matplotlib.pyplot as plt
+
+    if outputs is None:
+        outputs = [
+            c[: -len("_full")]
+            for c in table.columns
+            if c.endswith("_full") and f"{c[:-5]}_rom" in table
+        ]
+    n = len(outputs)
+    fig, axes = plt.subplots(
+        n + 1, 1, sharex=True, figsize=(6.4, 2.0 * (n + 1) + 0.6), layout="constrained"
+    )
+    t = table["t"].to_numpy()
+    for ax, name, color in zip(axes, outputs, _colors(n)):
+        ax.plot(t, table[f"{name}_full"], color="black", lw=2.6, label="full system")
+        ax.plot(
+            t, table[f"{name}_rom"], color=color, lw=1.2, ls="--", label="reduced model"
+        )
+        _finish(ax, "", name)
+    err = axes[-1]
+    err.semilogy(t, table["rel_error"], color="black", lw=1.2, label="relative error")
+    if "manifold_distance" in table:
+        err.semilogy(
+            t,
+            table["manifold_distance"],
+            color="C3",
+            lw=1.0,
+            ls=":",
+            label="distance to the SSM",
+        )
+    _finish(err, "time t (s)", "error")
+    return fig
+
+
+def damping(table: Any, output: str | None = None, ax: Any = None) -> Any:
+    """The damping curve (``damping.csv`` of :func:`ssm.run` as a
+    DataFrame): the damping ratio ``zeta`` against the amplitude of
+    ``output`` (``rho`` when ``None``), one colour per order, with the band
+    ``zeta (1 +- e)`` of the error estimate where one is given."""
+    ax = _axes(ax)
+    orders = sorted(set(table["order"]))
+    for order, color in zip(orders, _colors(len(orders))):
+        rows = table[table["order"] == order]
+        x = rows["rho" if output is None else output].to_numpy()
+        zeta = rows["zeta"].to_numpy()
+        ax.plot(x, zeta, color=color, lw=1.8, label=f"O({order})")
+        if "error_estimate" in rows:
+            e = rows["error_estimate"].to_numpy(dtype=float)
+            finite = np.isfinite(e)
+            if finite.any():
+                ax.fill_between(
+                    x[finite],
+                    (zeta * (1 - e))[finite],
+                    (zeta * (1 + e))[finite],
+                    color=color,
+                    alpha=0.15,
+                    lw=0,
+                )
+    xlabel = "polar amplitude rho" if output is None else f"amplitude of {output}"
+    return _finish(ax, xlabel, "damping ratio zeta")
+
+
+def speed_against_error(table: Any, ax: Any = None) -> Any:
+    """The speed-against-error report (``report.csv`` as a DataFrame): for
+    each answer measured against the full system (the transient, the forced
+    response), the reduced models' time (the SSM and the answer) against
+    their measured error, log-log, one point per order; the full system's
+    time of the same answer as a horizontal black line."""
+    ax = _axes(ax)
+    kind = table["kind"].astype(str).to_numpy()
+    rom = kind == "rom"
+    ssm_s = table["ssm_s"].fillna(0.0).to_numpy()
+    answers = [a for a in ("transient", "frc") if f"{a}_error" in table]
+    for answer, marker, color in zip(answers, "os", _colors(len(answers))):
+        err = table[f"{answer}_error"].to_numpy(dtype=float)
+        time = ssm_s + table[f"{answer}_s"].to_numpy(dtype=float)
+        ok = rom & np.isfinite(err) & (err > 0) & np.isfinite(time)
+        if not ok.any():
+            continue
+        name = "forced response" if answer == "frc" else answer
+        ax.loglog(
+            err[ok],
+            time[ok],
+            ls="-",
+            marker=marker,
+            color=color,
+            label=f"reduced, {name}",
+        )
+        for o, x, y in zip(table["order"].to_numpy()[ok], err[ok], time[ok]):
+            ax.annotate(
+                f"O({int(o)})",
+                (x, y),
+                textcoords="offset points",
+                xytext=(4, 4),
+                fontsize=8,
+            )
+        full = table[kind == f"full_{answer}"][f"{answer}_s"].to_numpy(dtype=float)
+        for t in full[np.isfinite(full)]:
+            ax.axhline(
+                t,
+                color="black",
+                lw=1.2,
+                ls="-" if answer == "transient" else "-.",
+                label=f"full system, {name}",
+            )
+    return _finish(ax, "measured relative error", "time (s)")
