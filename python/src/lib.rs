@@ -25,6 +25,8 @@ fn _ssm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Model>()?;
     m.add_class::<reduced::Ssm>()?;
     m.add_function(wrap_pyfunction!(plan::run_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(plan::run_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(plan::model_from_scene, m)?)?;
     m.add_function(wrap_pyfunction!(plugin::model_from_plugin, m)?)?;
     m.add_function(wrap_pyfunction!(plugin::model_from_signals, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

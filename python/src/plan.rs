@@ -5,16 +5,23 @@
 //! error, the reduced transient, the full-system reference, validation,
 //! the report, the sampled runs, the damping curve, ...); the results come
 //! back as `summary.json` and the files a scene's run writes, in memory.
+//! A scene file is a door too: its model (a plugin's, a folder's, or the one
+//! its `[reduce]` makes) and its whole run, as the command line runs it.
 
+use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 use pyo3::prelude::*;
 
 use crate::errors::{raise, Failure, Family};
 use crate::model::Model;
+use ssm_core::model::plugin::Registry;
+use ssm_engine::job;
 use ssm_engine::pipeline::{self, JobError};
 use ssm_engine::plan::budget::Limits;
 use ssm_engine::plan::Plan;
+use ssm_engine::scene::SceneFile;
 
 /// The family of an engine error.
 fn family(e: &JobError) -> Family {
@@ -67,4 +74,64 @@ pub(crate) fn run_plan(
     })?
     .map_err(|f| f.raise(py))?;
     Ok(outputs)
+}
+
+/// The scene at `path`, read, and the plugin registry of `plugins` (paths)
+/// and `SSM_PLUGIN_PATH`.
+fn scene_and_registry(
+    path: &std::path::Path,
+    plugins: &[PathBuf],
+) -> Result<(SceneFile, Registry), Failure> {
+    let scene = SceneFile::load(path).map_err(|e| Failure::of(Family::Input, e))?;
+    let registry = Registry::discover(plugins).map_err(|e| Failure::of(Family::Model, e))?;
+    Ok((scene, registry))
+}
+
+/// The model of the scene at `path`: its `[model]` (a plugin's, a folder's)
+/// or the model its `[reduce]` makes, with the reducer's diagnostics;
+/// `plugins` are plugin paths beside those of `SSM_PLUGIN_PATH`.
+#[pyfunction]
+#[pyo3(signature = (path, plugins=Vec::new()))]
+pub(crate) fn model_from_scene(
+    py: Python<'_>,
+    path: PathBuf,
+    plugins: Vec<PathBuf>,
+) -> PyResult<Model> {
+    let (system, diagnostics) = crate::work::interruptible(py, None, move |_progress| {
+        let (scene, mut registry) = scene_and_registry(&path, &plugins)?;
+        let model = job::scene_model(&scene, &mut registry)
+            .map_err(|e| Failure(family(&e), e.to_string()))?;
+        let diagnostics = model
+            .reduction
+            .iter()
+            .flat_map(|r| &r.diagnostics)
+            .map(|d| (d.name.to_string(), d.values.to_vec(), d.text.to_string()))
+            .collect::<Vec<_>>();
+        Ok::<_, Failure>((model.system, diagnostics))
+    })?
+    .map_err(|f| f.raise(py))?;
+    Ok(Model {
+        system: Arc::new(system),
+        diagnostics,
+    })
+}
+
+/// Runs the scene at `path` as `ssm-engine SCENE.toml` does (its model, its
+/// plan resolved against it, the engine's cost gate, the POD study
+/// included); returns the files the run writes, in memory.
+#[pyfunction]
+#[pyo3(signature = (path, plugins=Vec::new(), progress=None))]
+pub(crate) fn run_scene(
+    py: Python<'_>,
+    path: PathBuf,
+    plugins: Vec<PathBuf>,
+    progress: Option<Bound<'_, PyAny>>,
+) -> PyResult<Vec<(String, Vec<u8>)>> {
+    crate::work::interruptible(py, progress.as_ref(), move |progress| {
+        let (scene, mut registry) = scene_and_registry(&path, &plugins)?;
+        job::run(&scene, &mut registry, progress)
+            .map(|job| job.outputs.files)
+            .map_err(|e| Failure(family(&e), e.to_string()))
+    })?
+    .map_err(|f| f.raise(py))
 }

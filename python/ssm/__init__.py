@@ -30,8 +30,16 @@ from typing import Any
 import numpy as np
 
 from . import errors
-from ._ssm import Model, __version__, model_from_plugin, model_from_signals, run_plan
+from ._ssm import (
+    Model,
+    __version__,
+    model_from_plugin,
+    model_from_scene,
+    model_from_signals,
+    run_plan,
+)
 from ._ssm import Ssm as _Ssm
+from ._ssm import run_scene as _run_scene
 from .errors import InputError, SsmWarning, UntrustedAnswerWarning
 
 __all__ = [
@@ -46,8 +54,10 @@ __all__ = [
     "from_arrays",
     "from_files",
     "from_plugin",
+    "from_scene",
     "identify",
     "run",
+    "run_scene",
 ]
 
 
@@ -288,6 +298,14 @@ class _Progress:
     def __exit__(self, *exc: object) -> None:
         if self._bar is not None:
             self._bar.close()
+
+
+def from_scene(path: str, plugins: Sequence[str] = ()) -> Model:
+    """The model of the scene file ``path``: its ``[model]`` (a plugin's or a
+    folder's) or the model its ``[reduce]`` makes (with the reducer's
+    ``diagnostics``). Plugins are found as by ``ssm-engine``: ``plugins``
+    (paths), ``SSM_PLUGIN_PATH``."""
+    return model_from_scene(str(path), [str(p) for p in plugins])
 
 
 def identify(
@@ -574,6 +592,20 @@ def run(model: Model, plan: Mapping[str, Any], progress: Any = None) -> Run:
 
     with _Progress(progress) as callback:
         files = dict(run_plan(model, json.dumps(plan), callback))
+    summary = json.loads(files["summary.json"])
+    _warn(summary.get("warnings", []))
+    return Run(summary=summary, files=files)
+
+
+def run_scene(path: str, plugins: Sequence[str] = (), progress: Any = None) -> Run:
+    """Runs the scene file ``path`` as ``ssm-engine SCENE.toml`` does (its
+    model, its plan, the engine's cost gate; the POD study included) and
+    returns what the run writes, in memory: nothing is written to disk.
+    ``progress``: see :func:`compute_ssm`."""
+    import json
+
+    with _Progress(progress) as callback:
+        files = dict(_run_scene(str(path), [str(p) for p in plugins], callback))
     summary = json.loads(files["summary.json"])
     _warn(summary.get("warnings", []))
     return Run(summary=summary, files=files)

@@ -32,20 +32,31 @@ pub fn run(
     // reported before any model is built
     plan::of_scene(scene)?;
     progress.stage("building model");
-    registry.take_used();
-    let (system, reduction, full) = obtain_model(scene, registry)?;
-    let plugins = registry.take_used();
+    let model = scene_model(scene, registry)?;
     let limits = Limits::of_machine();
-    let plan: Plan = plan::resolve(scene, &system, &limits)?;
-    let model = Model {
-        system,
-        reduction,
-        full,
-        plugins,
-    };
+    let plan: Plan = plan::resolve(scene, &model.system, &limits)?;
     pipeline::execute(&plan, model, &limits, progress, started).map_err(|e| match e {
         JobError::Plan(e) => JobError::Scene(e.in_scene(scene)),
         other => other,
+    })
+}
+
+/// The model a scene's analyses run on (its `[model]`, or the model its
+/// `[reduce]` makes), with the plugins that made it: what a scene's run
+/// builds before it resolves its plan, for a binding that takes the model
+/// of a scene file.
+///
+/// # Errors
+/// The scene's model or reducer failed (a scene error at its key, a plugin's
+/// or the model's error).
+pub fn scene_model(scene: &SceneFile, registry: &mut Registry) -> Result<Model, JobError> {
+    registry.take_used();
+    let (system, reduction, full) = obtain_model(scene, registry)?;
+    Ok(Model {
+        system,
+        reduction,
+        full,
+        plugins: registry.take_used(),
     })
 }
 
