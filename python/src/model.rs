@@ -363,11 +363,24 @@ impl Model {
     }
 
     fn __repr__(&self) -> String {
+        let outputs = self.outputs();
+        // a model from arrays names every coordinate: the first few and
+        // the count
+        let shown = if outputs.len() > 6 {
+            let head: Vec<&str> = outputs[..3].iter().map(String::as_str).collect();
+            let tail = &outputs[outputs.len() - 1];
+            format!(
+                "[{}, ..., {tail}] ({} outputs)",
+                head.join(", "),
+                outputs.len()
+            )
+        } else {
+            format!("{outputs:?}")
+        };
         format!(
-            "Model('{}', {} states, outputs {:?})",
+            "Model('{}', {} states, outputs {shown})",
             self.system.name,
             self.system.n_states(),
-            self.outputs()
         )
     }
 }

@@ -254,12 +254,12 @@ class _Tqdm:
 
             self._bar = tqdm(
                 total=None,
-                bar_format="{desc}{postfix} [{elapsed}]",
+                bar_format="{desc} [{elapsed}]",
                 delay=0.5,
                 leave=False,
             )
-        self._bar.set_description_str(stage, refresh=False)
-        self._bar.set_postfix_str(detail, refresh=False)
+        # the engine's details name their stage
+        self._bar.set_description_str(detail or stage, refresh=False)
         self._bar.update(0)
 
     def close(self) -> None:
@@ -577,6 +577,43 @@ class Run:
                 f"name: the run wrote no '{name}'; it wrote {sorted(self.files)}"
             )
         return pd.read_csv(io.BytesIO(self.files[name]))
+
+    def forced_response(self) -> ForcedResponse:
+        """The run's forced response curves (``frc.csv`` and the curves and
+        bifurcations of ``summary.json``) as a :class:`ForcedResponse`, as
+        :meth:`Ssm.forced_response` returns them (for :mod:`ssm.plot`)."""
+        table = self.table("frc.csv")
+        frc = self.summary.get("frc") or {}
+        columns = {
+            "order": table["order"].to_numpy(),
+            "epsilon": table["epsilon"].to_numpy(),
+            "omega": table["omega"].to_numpy(),
+            "branch": table["branch"].to_numpy(),
+            "stable": table["stable"].to_numpy().astype(bool),
+            "rho": table["rho_1"].to_numpy() if "rho_1" in table else None,
+        }
+        amplitudes = {
+            c[: -len("_linf")]: table[c].to_numpy()
+            for c in table.columns
+            if c.endswith("_linf")
+        }
+        curves = []
+        for c in frc.get("curves", []):
+            bifurcations = [
+                (b["kind"], b["omega"], b["branch"])
+                for b in frc.get("bifurcations", [])
+                if b["order"] == c["order"] and b["epsilon"] == c["epsilon"]
+            ]
+            curves.append(
+                {
+                    "order": c["order"],
+                    "epsilon": c["epsilon"],
+                    "error_estimate": c.get("error_estimate"),
+                    "untrusted": c.get("untrusted", False),
+                    "bifurcations": bifurcations,
+                }
+            )
+        return ForcedResponse(columns=columns, amplitudes=amplitudes, curves=curves)
 
 
 def run(model: Model, plan: Mapping[str, Any], progress: Any = None) -> Run:

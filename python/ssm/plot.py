@@ -6,7 +6,7 @@ untrusted part of an answer (its error estimate above the tolerance) is drawn
 dashed and paler, not only named in the legend; unstable branches are dashed,
 stable ones solid; the full system is drawn in black with markers or thick
 lines, the reduced model in colour; axes are labelled with the outputs'
-names; the legend is placed where it covers the fewest points.
+names; the legend stands beside the axes, never over the data.
 
 Example
 -------
@@ -41,13 +41,13 @@ def _axes(ax: Any) -> Any:
         return ax
     import matplotlib.pyplot as plt
 
-    _, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
+    _, ax = plt.subplots(figsize=(7.6, 4.4), layout="constrained")
     return ax
 
 
 def _finish(ax: Any, xlabel: str, ylabel: str) -> Any:
     """Labels, plain tick labels (no offset, no ``-5.6e-17`` for zero) and
-    the legend where it covers the fewest points."""
+    the legend beside the axes, never over the data."""
     from matplotlib.ticker import ScalarFormatter
 
     ax.set_xlabel(xlabel)
@@ -59,7 +59,14 @@ def _finish(ax: Any, xlabel: str, ylabel: str) -> Any:
             axis.set_major_formatter(fmt)
     handles, _ = ax.get_legend_handles_labels()
     if handles:
-        ax.legend(loc="best", frameon=True, framealpha=0.9)
+        # beside the axes, never over the data (the figure's constrained
+        # layout makes room for it)
+        ax.legend(
+            loc="upper left",
+            bbox_to_anchor=(1.02, 1.0),
+            borderaxespad=0.0,
+            frameon=False,
+        )
     return ax
 
 
@@ -209,34 +216,30 @@ def forced_response(
             seen_kind.add(kind)
     if reference is not None:
         column = f"{output}_linf" if f"{output}_linf" in reference else output
-        stable = reference["stable"].to_numpy().astype(bool)
         om, a = reference["omega"].to_numpy(), reference[column].to_numpy()
-        # larger markers beneath the reduced curves, which stay visible
-        ax.plot(
-            om[stable],
-            a[stable],
-            ls="none",
-            marker="o",
-            ms=6,
-            mfc="0.7",
-            mec="black",
-            mew=0.6,
-            zorder=2,
-            label="full system, stable",
-        )
-        if (~stable).any():
-            ax.plot(
-                om[~stable],
-                a[~stable],
-                ls="none",
-                marker="o",
-                ms=6,
-                mfc="white",
-                mec="black",
-                mew=0.6,
-                zorder=2,
-                label="full system, unstable",
-            )
+        flag = reference["stable"].to_numpy(dtype=float)
+        # larger markers beneath the reduced curves, which stay visible;
+        # orbits whose stability was not computed are drawn as stable ones
+        # under a label of their own
+        groups = [
+            (flag == 1, "0.7", "full system, stable"),
+            (flag == 0, "white", "full system, unstable"),
+            (np.isnan(flag), "0.7", "full system"),
+        ]
+        for rows, face, name in groups:
+            if rows.any():
+                ax.plot(
+                    om[rows],
+                    a[rows],
+                    ls="none",
+                    marker="o",
+                    ms=4.5,
+                    mfc=face,
+                    mec="black",
+                    mew=0.5,
+                    zorder=2,
+                    label=name,
+                )
     if steady_states is not None:
         column = f"{output}_linf" if f"{output}_linf" in steady_states else output
         ax.plot(
