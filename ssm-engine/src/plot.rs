@@ -27,6 +27,9 @@ pub struct Curve {
     pub markers: Vec<(f64, f64)>,
     /// Colour index shared by related curves (`None`: the curve's position).
     pub color: Option<usize>,
+    /// A full-system reference: drawn first, thick and pale, beneath the
+    /// reduced model's curves, which stay visible where the two coincide.
+    pub full: bool,
 }
 
 /// Axis scaling.
@@ -62,16 +65,60 @@ fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
 }
 
 /// A tick label: short decimals for moderate values, scientific otherwise
-/// (log axes produce ticks such as 0.30000000000000004).
-fn tick(v: f64) -> String {
+/// (log axes produce ticks such as 0.30000000000000004); a value within
+/// round-off of zero on an axis spanning `span` is `0` (not `-5.6e-17`).
+fn tick(v: f64, span: f64) -> String {
     let a = v.abs();
-    if v == 0.0 {
+    if v == 0.0 || a <= 1e-9 * span {
         "0".into()
     } else if (1e-3..1e5).contains(&a) {
         let s = format!("{v:.6}");
         s.trim_end_matches('0').trim_end_matches('.').to_owned()
     } else {
         format!("{v:.1e}")
+    }
+}
+
+/// Width of the legend column beside each panel's axes (pixels).
+const LEGEND_WIDTH: u32 = 250;
+
+/// Characters of a legend line before it wraps.
+const LEGEND_CHARS: usize = 36;
+
+/// `label` wrapped at spaces into lines of at most [`LEGEND_CHARS`].
+fn wrap(label: &str) -> Vec<String> {
+    let mut lines = vec![String::new()];
+    for word in label.split_whitespace() {
+        let line = lines.last_mut().expect("one line at least");
+        if !line.is_empty() && line.len() + 1 + word.len() > LEGEND_CHARS {
+            lines.push(word.to_owned());
+        } else {
+            if !line.is_empty() {
+                line.push(' ');
+            }
+            line.push_str(word);
+        }
+    }
+    lines
+}
+
+/// The stroke of curve `i` (its position, the colour when it names none),
+/// the `rank`-th of the `n` reduced-model curves of a plot with or without
+/// full-system curves (`beside_full`): full-system curves thick and pale,
+/// the reduced ones over them 1 px wide; without them, the `n` reduced
+/// curves narrow by a pixel each from the first to the last (at most 6 px,
+/// at least 1 px; 2 px for a single curve), so that a curve drawn over an
+/// earlier one leaves the earlier one's edges visible.
+fn stroke(c: &Curve, i: usize, rank: usize, n: usize, beside_full: bool) -> ShapeStyle {
+    let color = Palette99::pick(c.color.unwrap_or(i));
+    if c.full {
+        color.mix(0.4).stroke_width(5)
+    } else if beside_full {
+        color.stroke_width(1)
+    } else if n == 1 {
+        color.stroke_width(2)
+    } else {
+        color.stroke_width(n.saturating_sub(rank).clamp(1, 6) as u32)
     }
 }
 
@@ -121,7 +168,10 @@ pub(crate) fn stacked_plot(panels: &[Panel<'_>], height: u32) -> Result<String, 
         let root = SVGBackend::with_string(&mut svg, (800, height * n)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| fail(&e))?;
         for (area, panel) in root.split_evenly((panels.len(), 1)).iter().zip(panels) {
-            draw_panel(area, panel)?;
+            // the legend beside the axes, never over the curves
+            let (plot, legend) = area.split_horizontally(800 - LEGEND_WIDTH);
+            draw_panel(&plot, panel)?;
+            draw_legend(&legend, panel.curves).map_err(|e| fail(&e))?;
         }
         root.present().map_err(|e| fail(&e))?;
     }
@@ -173,39 +223,43 @@ fn draw_panel(
                     .configure_mesh()
                     .x_desc(x_label)
                     .y_desc(y_label)
-                    .x_label_formatter(&|v| tick(*v))
-                    .y_label_formatter(&|v| tick(*v))
+                    .x_label_formatter(&|v| tick(*v, xs.1 - xs.0))
+                    .y_label_formatter(&|v| tick(*v, ys.1 - ys.0))
                     .draw()
                     .map_err(|e| fail(&e))?;
-                for (i, c) in curves.iter().enumerate() {
-                    let color = Palette99::pick(c.color.unwrap_or(i)).to_rgba();
+                let beside_full = curves.iter().any(|c| c.full);
+                let n = curves
+                    .iter()
+                    .filter(|c| !c.full && !c.points.is_empty())
+                    .count();
+                // the full system first, beneath the reduced model
+                let order = curves
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| c.full)
+                    .chain(curves.iter().enumerate().filter(|(_, c)| !c.full));
+                let mut rank = 0;
+                for (i, c) in order {
+                    let style = stroke(c, i, rank, n, beside_full);
+                    if !c.full && !c.points.is_empty() {
+                        rank += 1;
+                    }
                     let pts = c.points.iter().filter(keep).copied();
-                    let series = if c.dashed {
-                        chart.draw_series(DashedLineSeries::new(pts, 6, 4, color.stroke_width(2)))
+                    if c.dashed {
+                        chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))
                     } else {
-                        chart.draw_series(LineSeries::new(pts, color.stroke_width(2)))
+                        chart.draw_series(LineSeries::new(pts, style))
                     }
                     .map_err(|e| fail(&e))?;
-                    if !c.label.is_empty() {
-                        series.label(c.label.clone()).legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                        });
-                    }
                     chart
                         .draw_series(
                             c.markers
                                 .iter()
                                 .filter(keep)
-                                .map(|&p| Circle::new(p, 5, color.stroke_width(3))),
+                                .map(|&p| Circle::new(p, 5, style.color.stroke_width(3))),
                         )
                         .map_err(|e| fail(&e))?;
                 }
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .draw()
-                    .map_err(|e| fail(&e))?;
             }};
         }
         if log {
@@ -217,6 +271,41 @@ fn draw_panel(
                 .build_cartesian_2d(xs.0..xs.1, ys.0..ys.1)
                 .map_err(|e| fail(&e))?);
         }
+    }
+    Ok(())
+}
+
+/// The legend of `curves` in the column `area` beside the axes: a sample
+/// of each labelled curve's line (or marker) and its label, wrapped.
+fn draw_legend(
+    area: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+    curves: &[Curve],
+) -> Result<(), DrawingAreaErrorKind<std::io::Error>> {
+    let font = ("sans-serif", 13).into_font();
+    let mut y = 60;
+    for (i, c) in curves
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| !c.label.is_empty())
+    {
+        let style = if c.full {
+            stroke(c, i, 0, 1, true)
+        } else {
+            Palette99::pick(c.color.unwrap_or(i)).stroke_width(3)
+        };
+        if c.points.is_empty() {
+            area.draw(&Circle::new((18, y + 7), 5, style.color.stroke_width(3)))?;
+        } else if c.dashed {
+            area.draw(&PathElement::new(vec![(4, y + 7), (14, y + 7)], style))?;
+            area.draw(&PathElement::new(vec![(20, y + 7), (30, y + 7)], style))?;
+        } else {
+            area.draw(&PathElement::new(vec![(4, y + 7), (30, y + 7)], style))?;
+        }
+        for line in wrap(&c.label) {
+            area.draw(&Text::new(line, (38, y), font.clone()))?;
+            y += 16;
+        }
+        y += 6;
     }
     Ok(())
 }

@@ -658,3 +658,17 @@ pub fn pod_coordinate_error(
     }
     err / peak
 }
+
+/// The text of an SVG document: its text elements in order, joined by
+/// single spaces (so that a legend label wrapped over several lines reads
+/// as one).
+pub fn svg_text(svg: &str) -> String {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| t.split_once('>').map(|(_, rest)| rest))
+        .filter_map(|rest| rest.split("</text>").next())
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ")
+}

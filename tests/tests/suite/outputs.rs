@@ -195,6 +195,7 @@ fn svg_plots_have_axes_legend_and_curves() {
             dashed: true,
             markers: vec![(3.0, 4.0)],
             color: Some(0),
+            full: false,
         },
     ];
     let svg = ssm_engine::plot::line_plot(
@@ -226,4 +227,105 @@ fn svg_plots_have_axes_legend_and_curves() {
     .unwrap();
     assert!(log.contains("polyline"));
     assert!(svg.contains("<circle"), "bifurcation marker");
+}
+
+/// The text elements of an SVG document: `(x, text)`.
+fn svg_texts(svg: &str) -> Vec<(f64, String)> {
+    svg.split("<text ")
+        .skip(1)
+        .filter_map(|t| {
+            let x = t.split("x=\"").nth(1)?.split('"').next()?.parse().ok()?;
+            let text = t.split('>').nth(1)?.split('<').next()?.trim().to_owned();
+            Some((x, text))
+        })
+        .collect()
+}
+
+/// The defects a paper's reader sees, gone from the engine's plots: the
+/// legend stands in its own column right of the axes (every legend text
+/// starts beyond the plotting area, x >= 550 of 800), never over a curve;
+/// a full-system curve is drawn first, pale (opacity 0.4) and thick (5 px),
+/// with the reduced curve 1 px wide over it, so the two stay apart where
+/// they coincide; reduced curves alone narrow by a pixel each, so a curve
+/// over an earlier one leaves its edges visible; an axis through zero
+/// labels its tick `0` where round-off puts it at `-5.6e-17` (a cosine
+/// sampled over whole periods has such a mean).
+#[test]
+fn svg_plots_keep_legend_full_system_and_zero_apart() {
+    use ssm_engine::plot::{line_plot, Curve, Scale};
+    let t: Vec<f64> = (0..=400).map(|k| k as f64 * 0.05).collect();
+    let wave = |a: f64| {
+        t.iter()
+            .map(|&t| (t, a * (t * 3.0).cos()))
+            .collect::<Vec<_>>()
+    };
+    let curves = vec![
+        Curve {
+            label: "x1 full system".into(),
+            points: wave(1.0),
+            full: true,
+            color: Some(0),
+            ..Curve::default()
+        },
+        Curve {
+            label: "x1 SSM O(5), a label long enough to be wrapped in the legend column".into(),
+            points: wave(0.999),
+            color: Some(0),
+            ..Curve::default()
+        },
+    ];
+    let svg = line_plot("validation", "t", "output", &curves, Scale::Linear).unwrap();
+    let texts = svg_texts(&svg);
+    for label in ["x1 full system", "x1 SSM O(5), a label long enough to"] {
+        let (x, _) = texts
+            .iter()
+            .find(|(_, t)| t == label)
+            .unwrap_or_else(|| panic!("no legend text {label:?} in {texts:?}"));
+        assert!(*x >= 550.0, "{label} at x = {x}");
+    }
+    assert!(texts
+        .iter()
+        .any(|(_, t)| t == "be wrapped in the legend column"));
+    assert!(
+        !texts.iter().any(|(_, t)| t.contains("e-1")),
+        "a round-off tick label: {texts:?}"
+    );
+    assert!(texts.iter().any(|(_, t)| t == "0"));
+    // the full system's polyline first, pale and thick; the reduced one over it
+    // the data's polylines (401 points; the mesh and the legend's samples
+    // are polylines of two points)
+    let curves_of = |svg: &str| -> Vec<String> {
+        svg.split("<polyline")
+            .skip(1)
+            .filter(|l| l.split("/>").next().unwrap_or("").matches(',').count() > 100)
+            .map(|l| l.chars().take(200).collect())
+            .collect()
+    };
+    let lines = curves_of(&svg);
+    assert!(lines[0].contains("opacity=\"0.4\"") && lines[0].contains("stroke-width=\"5\""));
+    assert!(
+        lines[1].contains("stroke-width=\"1\""),
+        "{}",
+        &lines[1][..200]
+    );
+    // reduced curves alone: 3, 2 and 1 px
+    let alone: Vec<Curve> = (0..3)
+        .map(|k| Curve {
+            label: format!("O({})", 2 * k + 3),
+            points: wave(1.0),
+            ..Curve::default()
+        })
+        .collect();
+    let svg = line_plot("backbone", "rho", "omega", &alone, Scale::Linear).unwrap();
+    let widths: Vec<String> = curves_of(&svg)
+        .iter()
+        .filter_map(|l| {
+            l.split("stroke-width=\"")
+                .nth(1)?
+                .split('"')
+                .next()
+                .map(str::to_owned)
+        })
+        .collect();
+    assert_eq!(widths, ["3", "2", "1"]);
 }

@@ -654,7 +654,7 @@ fn the_forced_response_runs_as_an_analysis_and_keeps_its_key() {
     let csv = std::str::from_utf8(job.outputs.get("frc.csv").expect("csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + direct.rows.len());
     let svg = std::str::from_utf8(job.outputs.get("frc.svg").expect("svg")).unwrap();
-    assert!(svg.contains("full system, eps = 0.01 (steady state)"));
+    assert!(ssm_tests::svg_text(svg).contains("full system, eps = 0.01 (steady state)"));
 }
 
 /// Stages seen by a progress display.

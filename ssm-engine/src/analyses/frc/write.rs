@@ -85,6 +85,7 @@ fn curves(f: &ForcedResponse) -> Vec<Curve> {
                 dashed: !st,
                 markers: Vec::new(),
                 color: Some(ci),
+                full: false,
             });
             labelled = true;
         }
@@ -98,6 +99,7 @@ fn curves(f: &ForcedResponse) -> Vec<Curve> {
                 .filter_map(|b| b.plotted.map(|y| (b.omega, y)))
                 .collect(),
             color: Some(ci),
+            full: false,
         });
     }
     drawn
@@ -113,7 +115,12 @@ pub(super) fn frc_svg(
 ) -> Result<String, PlotError> {
     let mut drawn = curves(f);
     if let Some(r) = full {
-        drawn.extend(reference_curves(r));
+        // the full system beneath the reduced curves
+        drawn.extend(
+            reference_curves(r)
+                .into_iter()
+                .map(|c| Curve { full: true, ..c }),
+        );
     }
     if let Some(r) = reference {
         drawn.push(Curve {

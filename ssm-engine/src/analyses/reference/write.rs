@@ -117,6 +117,7 @@ fn curves(
                 dashed: st == Some(false),
                 markers: Vec::new(),
                 color: None,
+                full: false,
             });
             labelled = true;
         }

@@ -135,12 +135,13 @@ pub fn svg(report: &Report) -> Result<String, PlotError> {
                 label: f.what.clone(),
                 points: vec![(lo / 2.0, f.wall_s), (hi * 2.0, f.wall_s)],
                 dashed: true,
+                full: true,
                 ..Curve::default()
             });
         }
     }
     line_plot(
-        "time to answer against error (one point per order; dashed: full system)",
+        "time to answer against error (one point per order; dashed, pale: full system)",
         "error against the full system",
         "seconds",
         &curves,

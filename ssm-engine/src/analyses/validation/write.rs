@@ -33,7 +33,8 @@ pub(crate) fn transient_csv(c: &TransientComparison) -> String {
     csv
 }
 
-/// `validation.svg`: the compared outputs, full (dashed) and reduced.
+/// `validation.svg`: the compared outputs, full (thick and pale, beneath)
+/// and reduced.
 pub(crate) fn transient_svg(c: &TransientComparison) -> Result<String, PlotError> {
     let tv = &c.result;
     let mut curves = Vec::new();
@@ -42,7 +43,7 @@ pub(crate) fn transient_svg(c: &TransientComparison) -> Result<String, PlotError
         curves.push(Curve {
             label: format!("{o} full system"),
             points: pts(&tv.full[k]),
-            dashed: true,
+            full: true,
             color: Some(k),
             ..Curve::default()
         });
@@ -54,7 +55,7 @@ pub(crate) fn transient_svg(c: &TransientComparison) -> Result<String, PlotError
         });
     }
     line_plot(
-        "full system (dashed) against the reduced model from W(p0)",
+        "full system (thick, pale) against the reduced model from W(p0)",
         "t",
         "output",
         &curves,
