@@ -126,20 +126,25 @@ def backbone(
                 alpha=0.6,
                 label=f"{label_k}, estimate above tolerance",
             )
-        # the band where the estimate is still a small error (beyond, the
-        # curve is dashed and a band would only hide the axes' range)
-        shown = np.isfinite(e) & (e <= BAND_MAX)
-        if shown.any():
-            ax.fill_between(
-                x[shown],
-                (omega * (1 - e))[shown],
-                (omega * (1 + e))[shown],
-                color=color,
-                alpha=0.15,
-                lw=0,
-            )
+        _band(ax, x, omega, e, color)
     xlabel = "polar amplitude rho" if output is None else f"amplitude of {output}"
     return _finish(ax, xlabel, "frequency omega (rad/s)")
+
+
+def _band(ax: Any, x: np.ndarray, y: np.ndarray, e: np.ndarray, color: Any) -> None:
+    """The band ``y (1 +- e)`` of a relative error estimate ``e``, where it
+    is still a small error (beyond :data:`BAND_MAX` the curve is dashed, and
+    a band would only stretch the axes)."""
+    shown = np.isfinite(e) & (e <= BAND_MAX)
+    if shown.any():
+        ax.fill_between(
+            x[shown],
+            (y * (1 - e))[shown],
+            (y * (1 + e))[shown],
+            color=color,
+            alpha=0.15,
+            lw=0,
+        )
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -299,7 +304,7 @@ def damping(table: Any, output: str | None = None, ax: Any = None) -> Any:
     """The damping curve (``damping.csv`` of :func:`ssm.run` as a
     DataFrame): the damping ratio ``zeta`` against the amplitude of
     ``output`` (``rho`` when ``None``), one colour per order, with the band
-    ``zeta (1 +- e)`` of the error estimate where one is given."""
+    ``zeta (1 +- e)`` of the error estimate where one is given (up to 25 %)."""
     ax = _axes(ax)
     orders = sorted(set(table["order"]))
     for order, color in zip(orders, _colors(len(orders))):
@@ -308,17 +313,7 @@ def damping(table: Any, output: str | None = None, ax: Any = None) -> Any:
         zeta = rows["zeta"].to_numpy()
         ax.plot(x, zeta, color=color, lw=1.8, label=f"O({order})")
         if "error_estimate" in rows:
-            e = rows["error_estimate"].to_numpy(dtype=float)
-            finite = np.isfinite(e)
-            if finite.any():
-                ax.fill_between(
-                    x[finite],
-                    (zeta * (1 - e))[finite],
-                    (zeta * (1 + e))[finite],
-                    color=color,
-                    alpha=0.15,
-                    lw=0,
-                )
+            _band(ax, x, zeta, rows["error_estimate"].to_numpy(dtype=float), color)
     xlabel = "polar amplitude rho" if output is None else f"amplitude of {output}"
     return _finish(ax, xlabel, "damping ratio zeta")
 
