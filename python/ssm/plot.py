@@ -176,14 +176,16 @@ def forced_response(
     amp = frc.amplitudes[output]
     keys = sorted({(int(o), float(e)) for o, e in zip(cols["order"], cols["epsilon"])})
     seen_kind: set[str] = set()
-    for (order, eps), color in zip(keys, _colors(len(keys))):
+    for k, ((order, eps), color) in enumerate(zip(keys, _colors(len(keys)))):
+        # earlier curves wider, so that coinciding ones all stay visible
+        width = 1.2 + 0.9 * (len(keys) - 1 - k)
         on = (cols["order"] == order) & (cols["epsilon"] == eps)
         curve = next(
             (c for c in frc.curves if c["order"] == order and c["epsilon"] == eps), {}
         )
         label = f"O({order}), eps = {eps:g}"
         if curve.get("untrusted"):
-            label += " (estimate above tolerance)"
+            label += ", untrusted"
         labelled = False
         for b in np.unique(cols["branch"][on]):
             rows = np.flatnonzero(on & (cols["branch"] == b))
@@ -196,7 +198,7 @@ def forced_response(
                     amp[seg],
                     color=color,
                     ls="-" if stable[start] else "--",
-                    lw=1.8 if stable[start] else 1.3,
+                    lw=width if stable[start] else 0.75 * width,
                     alpha=0.6 if curve.get("untrusted") else 1.0,
                     zorder=3,
                     label=None if labelled else label,
