@@ -5,6 +5,9 @@
 //!   resolve one feature set for every crate both build, so the test step
 //!   reuses the build's faer, serde and engine (a feature that only a
 //!   dev-dependency turns on gives a second copy of everything above it).
+//! - The Python wheel's build (maturin builds `ssm-python` alone) resolves the
+//!   workspace build's features for every crate it shares with it, so
+//!   `pip install ./python` reuses that build.
 //! - A crate or binary that declares `test = false` has no unit tests to lose.
 
 use std::collections::BTreeMap;
@@ -13,14 +16,17 @@ use std::process::Command;
 
 use ssm_tests::repo_root;
 
-/// `package version -> features` as `cargo tree` resolves them for the edges
-/// given (`normal,build` is what `cargo build` compiles; adding `dev` is what
+/// `package version -> features` as `cargo tree` resolves them for the
+/// packages `selected` (`--workspace`, or `-p NAME`) and the edges given
+/// (`normal,build` is what `cargo build` compiles; adding `dev` is what
 /// `cargo test` compiles).
-fn resolved_features(edges: &str) -> BTreeMap<String, String> {
+fn resolved_features(selected: &[&str], edges: &str) -> BTreeMap<String, String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let out = Command::new(cargo)
         .current_dir(repo_root())
-        .args(["tree", "--workspace", "--offline", "--prefix", "none"])
+        .arg("tree")
+        .args(selected)
+        .args(["--offline", "--prefix", "none"])
         .args(["-e", edges, "-f", "{p}|{f}"])
         .output()
         .expect("cargo runs");
@@ -54,8 +60,8 @@ fn resolved_features(edges: &str) -> BTreeMap<String, String> {
 
 #[test]
 fn build_and_test_resolve_one_feature_set() {
-    let build = resolved_features("normal,build");
-    let test = resolved_features("normal,build,dev");
+    let build = resolved_features(&["--workspace"], "normal,build");
+    let test = resolved_features(&["--workspace"], "normal,build,dev");
     assert!(
         build.len() > 50,
         "cargo tree listed {} packages",
@@ -74,6 +80,32 @@ fn build_and_test_resolve_one_feature_set() {
         "dev-dependencies turn on features the build lacks, so `cargo test` \
          compiles these (and everything above them) a second time; ask for the \
          features in tests/Cargo.toml [dependencies]:\n{}",
+        drift.join("\n")
+    );
+}
+
+#[test]
+fn the_wheel_resolves_the_build_feature_set() {
+    let build = resolved_features(&["--workspace"], "normal,build");
+    let wheel = resolved_features(&["-p", "ssm-python"], "normal,build");
+    assert!(
+        wheel.len() > 50,
+        "cargo tree listed {} packages",
+        wheel.len()
+    );
+    let drift: Vec<String> = wheel
+        .iter()
+        .filter_map(|(package, features)| {
+            let built = build.get(package)?;
+            (built != features).then(|| format!("{package}: build [{built}], wheel [{features}]"))
+        })
+        .collect();
+    assert!(
+        drift.is_empty(),
+        "the wheel's build (ssm-python alone) resolves other features than the \
+         workspace's build, so `pip install ./python` compiles these (and \
+         everything above them) a second time; ask for the features in \
+         python/Cargo.toml [dependencies]:\n{}",
         drift.join("\n")
     );
 }
