@@ -7,9 +7,11 @@
 //!
 //! Every computation runs on the typed API of `ssm-core` (models through the
 //! model-files path of `ssm-model-files` and `ssm-plugin-kit`, the spectral
-//! stage, the SSM, the backbone and the forced response with their specs);
-//! no TOML is written.
+//! stage, the SSM, the backbone and the forced response with their specs,
+//! and every other analysis of the engine's registry on an SSM); no TOML is
+//! written.
 
+mod analysis;
 mod errors;
 mod model;
 mod plan;
@@ -24,6 +26,8 @@ use pyo3::prelude::*;
 fn _ssm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Model>()?;
     m.add_class::<reduced::Ssm>()?;
+    m.add_function(wrap_pyfunction!(analysis::analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(analysis::state_on_ssm, m)?)?;
     m.add_function(wrap_pyfunction!(plan::run_plan, m)?)?;
     m.add_function(wrap_pyfunction!(plan::run_scene, m)?)?;
     m.add_function(wrap_pyfunction!(plan::model_from_scene, m)?)?;

@@ -25,9 +25,11 @@ use ssm_engine::plan::Plan;
 /// its spectral stage (resonances, fallbacks).
 #[pyclass(module = "ssm._ssm", frozen)]
 pub struct Ssm {
-    system: Arc<System>,
-    masters: Vec<MasterMode>,
-    expansion: Arc<SsmExpansion>,
+    pub(crate) system: Arc<System>,
+    pub(crate) masters: Vec<MasterMode>,
+    /// The eigenvalues of the spectrum that are not masters.
+    pub(crate) others: Vec<Complex64>,
+    pub(crate) expansion: Arc<SsmExpansion>,
     warnings: Vec<String>,
 }
 
@@ -45,7 +47,7 @@ fn normalization(py: Python<'_>, name: &str) -> PyResult<Normalization> {
 }
 
 /// The model's outputs of `names`.
-fn outputs<'a>(
+pub(crate) fn outputs<'a>(
     py: Python<'_>,
     system: &'a System,
     names: &[String],
@@ -72,7 +74,11 @@ fn outputs<'a>(
 }
 
 /// `values` as a 2-D array of `rows` rows.
-fn table<'py>(py: Python<'py>, rows: &[Vec<f64>], width: usize) -> Bound<'py, PyArray2<f64>> {
+pub(crate) fn table<'py>(
+    py: Python<'py>,
+    rows: &[Vec<f64>],
+    width: usize,
+) -> Bound<'py, PyArray2<f64>> {
     let flat: Vec<f64> = rows.iter().flatten().copied().collect();
     let n = rows.len();
     // rows of equal width `width` by construction: the reshape cannot fail
@@ -137,7 +143,7 @@ impl Ssm {
         };
         let system = Arc::clone(&model.system);
         let sys = Arc::clone(&system);
-        let (masters, expansion, warnings) =
+        let (masters, others, expansion, warnings) =
             crate::work::interruptible(py, progress.as_ref(), move |progress| {
                 // the engine's one gate, as for a scene: the spec's values,
                 // the spectrum's and the order's cost within the machine's
@@ -169,12 +175,13 @@ impl Ssm {
                 progress.begin("SSM");
                 let expansion = compute_ssm(&sys, &sp.masters, &others, &options)
                     .map_err(|e| Failure::of(Family::Expansion, e))?;
-                Ok::<_, Failure>((sp.masters, expansion, sp.warnings))
+                Ok::<_, Failure>((sp.masters, others, expansion, sp.warnings))
             })?
             .map_err(|f| f.raise(py))?;
         Ok(Ssm {
             system,
             masters,
+            others,
             expansion: Arc::new(expansion),
             warnings,
         })

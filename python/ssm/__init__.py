@@ -22,32 +22,32 @@ Example
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from . import errors
-from ._ssm import (
-    Model,
-    __version__,
-    model_from_plugin,
-    model_from_scene,
-    model_from_signals,
-    run_plan,
-)
+from . import _analyses, errors
+from ._analyses import Analysis, Reference, Transient
+from ._models import from_arrays, from_files, from_plugin, from_scene, identify
+from ._progress import Progress as _Progress
+from ._progress import warn as _warn
+from ._ssm import Model, __version__, run_plan
 from ._ssm import Ssm as _Ssm
 from ._ssm import run_scene as _run_scene
-from .errors import InputError, SsmWarning, UntrustedAnswerWarning
+from ._ssm import state_on_ssm as _state_on_ssm
+from .errors import InputError, UntrustedAnswerWarning
 
 __all__ = [
+    "Analysis",
     "Backbone",
     "ForcedResponse",
     "Model",
+    "Reference",
     "Run",
     "Ssm",
+    "Transient",
     "__version__",
     "compute_ssm",
     "errors",
@@ -59,347 +59,6 @@ __all__ = [
     "run",
     "run_scene",
 ]
-
-
-def _float_array(arg: str, a: Any) -> np.ndarray:
-    """``a`` as float64 values, refusing integer, boolean and complex dtypes."""
-    a = np.asarray(a)
-    if a.dtype.kind == "c":
-        raise InputError(f"{arg}: complex values ({a.dtype}); the model is real")
-    if a.dtype.kind != "f":
-        raise InputError(f"{arg}: dtype {a.dtype}; give floating-point values")
-    return np.ascontiguousarray(a, dtype=np.float64)
-
-
-def _index_array(arg: str, a: Any) -> np.ndarray:
-    """``a`` as int64 indices, refusing non-integer dtypes."""
-    a = np.asarray(a)
-    if a.dtype.kind not in "iu":
-        raise InputError(f"{arg}: indices of dtype {a.dtype}; give integers")
-    return np.ascontiguousarray(a, dtype=np.int64)
-
-
-def _coo(arg: str, a: Any, shape: tuple[int, int]) -> tuple[np.ndarray, ...]:
-    """The coordinates ``(rows, cols, values)`` of the dense or
-    ``scipy.sparse`` matrix ``a`` of shape ``shape``."""
-    if hasattr(a, "tocoo"):
-        if a.dtype.kind != "f":
-            _float_array(arg, np.zeros(0, dtype=a.dtype))
-        coo = a.tocoo()
-        got = coo.shape
-        rows, cols, vals = coo.row, coo.col, coo.data
-    else:
-        dense = np.asarray(a)
-        got = dense.shape
-        if dense.ndim != 2:
-            raise InputError(
-                f"{arg}: a matrix is needed, found {dense.ndim} dimension(s)"
-            )
-        dense = _float_array(arg, dense)
-        rows, cols = np.nonzero(dense)
-        vals = dense[rows, cols]
-    if tuple(got) != tuple(shape):
-        raise InputError(f"{arg}: shape {tuple(got)}, expected {tuple(shape)}")
-    return (
-        _index_array(arg, rows),
-        _index_array(arg, cols),
-        _float_array(arg, vals),
-    )
-
-
-def _tensor(arg: str, t: Any, degree: int) -> tuple[np.ndarray, np.ndarray] | None:
-    """A force tensor ``(indices, values)``: indices of shape
-    ``(k, degree + 1)``, 0-based."""
-    if t is None:
-        return None
-    try:
-        idx, vals = t
-    except (TypeError, ValueError):
-        raise InputError(f"{arg}: give (indices, values)") from None
-    idx = _index_array(arg, idx)
-    if idx.ndim != 2 or idx.shape[1] != degree + 1:
-        raise InputError(
-            f"{arg}: indices of shape {idx.shape}; expected (k, {degree + 1})"
-        )
-    return idx, _float_array(arg, vals)
-
-
-def _outputs(
-    outputs: Mapping[str, Any] | None,
-) -> list[tuple[str, list[tuple[int, float]]]]:
-    """Named outputs: a displacement index, or weights ``{index: weight}``."""
-    named = []
-    for name, spec in (outputs or {}).items():
-        if isinstance(spec, (int, np.integer)):
-            weights = [(int(spec), 1.0)]
-        elif isinstance(spec, Mapping):
-            weights = [(int(i), float(w)) for i, w in spec.items()]
-        else:
-            weights = [(int(i), float(w)) for i, w in spec]
-        if any(i < 0 for i, _ in weights):
-            raise InputError(f"outputs: '{name}' weighs a negative index")
-        named.append((str(name), weights))
-    return named
-
-
-def from_arrays(
-    M: Any,
-    K: Any,
-    C: Any = None,
-    *,
-    rayleigh: tuple[float, float] | None = None,
-    f2: Any = None,
-    f3: Any = None,
-    G: Any = None,
-    g2: Any = None,
-    g3: Any = None,
-    fext: Any = None,
-    outputs: Mapping[str, Any] | None = None,
-    name: str = "model",
-) -> Model:
-    """The model ``M x'' + C x' + K x + f2(x) + f3(x) = eps fext cos(Omega t)``
-    with constraints ``G x + g2(x) + g3(x) = 0``.
-
-    Parameters
-    ----------
-    M, K, C : (n, n) arrays, dense or ``scipy.sparse``
-        Mass (symmetric, every degree of freedom with mass unless a
-        constraint fixes it), stiffness and damping; floating-point.
-    rayleigh : (alpha, beta), optional
-        ``C = alpha M + beta K`` (instead of ``C``).
-    f2, f3 : (indices, values), optional
-        Quadratic and cubic internal forces: row ``(i, j, k)`` of the
-        ``(m, 3)`` indices adds ``value x_j x_k`` to ``f_i``; ``(i, j, k, l)``
-        adds ``value x_j x_k x_l``. Indices are 0-based.
-    G : (n_c, n) array, optional
-        Linear constraint Jacobian; ``g2``, ``g3`` its nonlinear terms as
-        ``f2``, ``f3`` (rows index constraints).
-    fext : (n,) array, optional
-        Load shape of the harmonic forcing.
-    outputs : mapping, optional
-        Named outputs: a displacement index, or ``{index: weight}``.
-    name : str
-        The model's name.
-
-    Raises
-    ------
-    ssm.errors.InputError
-        A wrong shape, dtype, value or index (the message names the argument).
-    ssm.errors.ModelError
-        An inconsistent model (e.g. a massless degree of freedom).
-    """
-    m = np.asarray(M) if not hasattr(M, "tocoo") else M
-    if m.ndim != 2 or m.shape[0] != m.shape[1]:
-        raise InputError(f"M: a square matrix is needed, found shape {m.shape}")
-    n = int(m.shape[0])
-    if n == 0:
-        raise InputError("M: the model has no degree of freedom (shape (0, 0))")
-    constraints = None
-    if G is not None:
-        g = np.asarray(G) if not hasattr(G, "tocoo") else G
-        if g.ndim != 2:
-            raise InputError(f"G: a matrix is needed, found {g.ndim} dimension(s)")
-        constraints = (int(g.shape[0]), _coo("G", G, (g.shape[0], n)))
-    load = None
-    if fext is not None:
-        load = _float_array("fext", fext)
-        if load.shape != (n,):
-            raise InputError(f"fext: shape {load.shape}, expected ({n},)")
-    return Model.from_coo(
-        name,
-        n,
-        _coo("M", M, (n, n)),
-        _coo("K", K, (n, n)),
-        damping=None if C is None else _coo("C", C, (n, n)),
-        rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
-        f2=_tensor("f2", f2, 2),
-        f3=_tensor("f3", f3, 3),
-        constraints=constraints,
-        g2=_tensor("g2", g2, 2),
-        g3=_tensor("g3", g3, 3),
-        fext=load,
-        outputs=_outputs(outputs),
-    )
-
-
-def from_files(folder: str, rayleigh: tuple[float, float] | None = None) -> Model:
-    """The model of a folder of files (``M.mtx``, ``K.mtx``, ``f3.coo``, ...;
-    see ``docs/models.md``; the files' indices are 1-based)."""
-    return Model.from_files(str(folder), rayleigh)
-
-
-def from_plugin(plugin: str, model: str = "", **params: Any) -> Model:
-    """The model ``model`` (default: the plugin's first) of the plugin
-    library ``plugin``: a name found on ``SSM_PLUGIN_PATH`` or a path to its
-    ``.so``; ``params`` are its parameters (``ssm-engine plugins`` lists
-    them, with their defaults). A plugin that fails or panics raises
-    :class:`ssm.errors.ModelError` with its message."""
-    return model_from_plugin(str(plugin), model, params)
-
-
-class _Tqdm:
-    """A progress callback drawing a ``tqdm`` bar (made at the first call,
-    shown after half a second so that short calls draw nothing)."""
-
-    def __init__(self) -> None:
-        self._bar: Any = None
-
-    def __call__(self, stage: str, detail: str) -> None:
-        if self._bar is None:
-            try:  # a widget in a notebook, where ipywidgets is installed
-                import ipywidgets  # noqa: F401
-                from tqdm.auto import tqdm
-            except ImportError:
-                from tqdm import tqdm
-
-            self._bar = tqdm(
-                total=None,
-                bar_format="{desc} [{elapsed}]",
-                delay=0.5,
-                leave=False,
-            )
-        # the engine's details name their stage
-        self._bar.set_description_str(detail or stage, refresh=False)
-        self._bar.update(0)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
-
-
-class _Progress:
-    """The progress callback of a call: ``progress`` when it is callable
-    (it takes the stage and the detail, two strings, at most ten times a
-    second), a ``tqdm`` bar when ``progress`` is true or ``None`` and tqdm is
-    installed, nothing otherwise."""
-
-    def __init__(self, progress: Any) -> None:
-        self.callback: Any = None
-        self._bar: _Tqdm | None = None
-        if callable(progress):
-            self.callback = progress
-        elif progress is None or progress is True:
-            try:
-                import tqdm  # noqa: F401
-            except ImportError:
-                if progress is True:
-                    raise InputError("progress: tqdm is not installed") from None
-            else:
-                self._bar = _Tqdm()
-                self.callback = self._bar
-        elif progress is not False:
-            raise InputError(
-                f"progress: give a callable, True, False or None, not {progress!r}"
-            )
-
-    def __enter__(self) -> Any:
-        return self.callback
-
-    def __exit__(self, *exc: object) -> None:
-        if self._bar is not None:
-            self._bar.close()
-
-
-def from_scene(path: str, plugins: Sequence[str] = ()) -> Model:
-    """The model of the scene file ``path``: its ``[model]`` (a plugin's or a
-    folder's) or the model its ``[reduce]`` makes (with the reducer's
-    ``diagnostics``). Plugins are found as by ``ssm-engine``: ``plugins``
-    (paths), ``SSM_PLUGIN_PATH``."""
-    return model_from_scene(str(path), [str(p) for p in plugins])
-
-
-def identify(
-    signals: Any,
-    period: float,
-    names: Sequence[str] | None = None,
-    reducer: str = "nar",
-    plugin: str | None = None,
-    **params: Any,
-) -> Model:
-    """The model a reducer identifies from sampled signals: by default the
-    nonlinear autoregressive map of Szalai, Ehrhardt & Haller (2017), fitted
-    by the NAR identifier built into the package (its parameters, e.g.
-    ``nu``, ``order``, ``weighting``, as keyword arguments; ``ssm-engine
-    plugins`` lists them); ``plugin`` (a name or a ``.so`` path) takes the
-    reducer of a plugin instead.
-
-    Parameters
-    ----------
-    signals : array or list of arrays
-        One array per trajectory: ``(samples,)`` for one observable or
-        ``(samples, observables)``, floating-point, finite, uniformly
-        sampled from ``t = 0``.
-    period : float
-        The sampling period ``T``.
-    names : list of str, optional
-        The observables' names (the identified model's outputs); default
-        ``y1, y2, ...``.
-
-    Returns
-    -------
-    Model
-        The identified model (a map with period ``T``); its ``diagnostics``
-        hold what the reducer reported (e.g. ``frequencies`` and
-        ``damping_ratios`` of the identified linear part).
-
-    Raises
-    ------
-    ssm.errors.InputError
-        No signals, a wrong shape or dtype, a non-finite sample or period, an
-        unknown reducer (the message names the argument).
-    ssm.errors.ModelError
-        The reducer could not identify a model (its message).
-    """
-    if isinstance(signals, np.ndarray) or not isinstance(signals, Sequence):
-        signals = [signals]
-    if len(signals) == 0:
-        raise InputError("signals: no trajectory given")
-    arrays = []
-    for k, a in enumerate(signals):
-        arg = f"signals[{k}]"
-        a = _float_array(arg, a)
-        if a.ndim == 1:
-            a = a[:, None]
-        if a.ndim != 2:
-            raise InputError(
-                f"{arg}: shape {a.shape}; give (samples,) or (samples, observables)"
-            )
-        if a.shape[0] < 2 or a.shape[1] == 0:
-            raise InputError(
-                f"{arg}: shape {a.shape}; at least two samples of one observable"
-            )
-        if not np.isfinite(a).all():
-            bad = np.argwhere(~np.isfinite(a))[0]
-            raise InputError(
-                f"{arg}: a non-finite sample at {tuple(int(i) for i in bad)}"
-            )
-        if arrays and a.shape[1] != arrays[0].shape[1]:
-            raise InputError(
-                f"{arg}: {a.shape[1]} observable(s), signals[0] has {arrays[0].shape[1]}"
-            )
-        arrays.append(np.ascontiguousarray(a))
-    width = arrays[0].shape[1]
-    if names is None:
-        names = [f"y{j + 1}" for j in range(width)]
-    names = [str(n) for n in names]
-    if len(names) != width:
-        raise InputError(f"names: {len(names)} name(s) for {width} observable(s)")
-    period = float(period)
-    if not (np.isfinite(period) and period > 0):
-        raise InputError(f"period: {period} is not a positive finite sampling period")
-    return model_from_signals(
-        None if plugin is None else str(plugin),
-        str(reducer),
-        arrays,
-        period,
-        names,
-        params,
-    )
-
-
-def _warn(messages: Sequence[str], category: type = SsmWarning) -> None:
-    for m in messages:
-        warnings.warn(m, category, stacklevel=3)
 
 
 @dataclass
@@ -449,8 +108,9 @@ class ForcedResponse:
 class Ssm:
     """The SSM of a model over its master pairs (see :func:`compute_ssm`)."""
 
-    def __init__(self, inner: _Ssm) -> None:
+    def __init__(self, inner: _Ssm, resonance_tol: float) -> None:
         self._inner = inner
+        self._resonance_tol = resonance_tol
 
     @property
     def order(self) -> int:
@@ -551,6 +211,191 @@ class Ssm:
         amps = {name: raw["amplitudes"][:, k] for k, name in enumerate(raw["outputs"])}
         return ForcedResponse(
             columns=columns, amplitudes=amps, curves=list(raw["curves"])
+        )
+
+    def state(
+        self,
+        rho: Sequence[float],
+        theta: Sequence[float] | None = None,
+        order: int | None = None,
+    ) -> np.ndarray:
+        """The model's state ``z = W(p)`` on the SSM at the reduced point of
+        polar amplitudes ``rho`` and phases ``theta`` (one each per master
+        pair; default phases 0), the expansion truncated at ``order``
+        (default the SSM's): for a mechanical model ``(x, x')``, then the
+        multipliers of its constraints. A full-system run started there
+        stays on the SSM (up to the expansion's error)."""
+        return _state_on_ssm(
+            self._inner,
+            [float(r) for r in np.atleast_1d(rho)],
+            None if theta is None else [float(t) for t in np.atleast_1d(theta)],
+            None if order is None else int(order),
+        )
+
+    def analyze(
+        self,
+        name: str,
+        outputs: Sequence[str] = (),
+        tolerance: float = 0.01,
+        progress: Any = None,
+        **spec: Any,
+    ) -> Analysis:
+        """Runs the engine's analysis ``name`` on this SSM, as a scene's run
+        does: ``spec`` holds the keys of its scene table (``docs/scene.md``;
+        the same defaults and checks), ``outputs`` the outputs its answers
+        are read at, ``tolerance`` the accuracy target its estimates are held
+        to. The engine's cost gate refuses what would not fit before anything
+        runs. Names: ``invariance``, ``transient``, ``reference``,
+        ``validation``, ``report``, ``simulate``, ``damping`` (and
+        ``backbone``, ``frc``; see :meth:`backbone` and
+        :meth:`forced_response` for their typed results).
+
+        Returns
+        -------
+        Analysis
+            Its ``summary`` (what ``summary.json`` holds of it), ``files``
+            (CSV and SVG by name; ``.table()`` reads a CSV), ``warnings``,
+            ``estimates`` and ``measured`` errors; a :class:`Transient` or
+            :class:`Reference` with numpy arrays for those two.
+
+        Raises
+        ------
+        ssm.errors.InputError
+            An unknown name or key, a value the spec's check refuses, an
+            order above the SSM's, an unknown output, a request over the
+            machine's limits.
+        ssm.errors.AnalysisError
+            The analysis failed (its message).
+        """
+        return _analyses.analyze(self._inner, name, spec, outputs, tolerance, progress)
+
+    def invariance(
+        self,
+        radii: Sequence[float],
+        orders: Sequence[int] | None = None,
+        n_alpha: int = 10,
+        n_theta: int = 30,
+        progress: Any = None,
+    ) -> Analysis:
+        """The invariance error of the SSM on tori of the polar radii
+        ``radii``, at each order of ``orders`` (default the SSM's): the
+        residual of the invariance equation relative to the vector field,
+        sampled at ``n_alpha`` x ``n_theta`` points a torus. ``summary``
+        holds a row per order and radius."""
+        orders = [self.order] if orders is None else [int(o) for o in orders]
+        spec = {"radii": list(radii), "orders": orders}
+        spec.update(n_alpha=int(n_alpha), n_theta=int(n_theta))
+        return _analyses.analyze(self._inner, "invariance", spec, (), 0.01, progress)
+
+    def transient(
+        self,
+        rho0: Sequence[float],
+        t_end: float,
+        theta0: Sequence[float] | None = None,
+        samples: int = 1001,
+        order: int | None = None,
+        rtol: float = 1e-9,
+        outputs: Sequence[str] = (),
+        tolerance: float = 0.01,
+        progress: Any = None,
+    ) -> Transient:
+        """The free decay of the reduced model from the polar amplitudes
+        ``rho0`` (phases ``theta0``, default 0) to ``t_end``, lifted to the
+        ``outputs`` at ``samples`` times, with its error estimate (an
+        untrusted one warns with
+        :class:`ssm.errors.UntrustedAnswerWarning`)."""
+        spec = {
+            "rho0": [float(r) for r in np.atleast_1d(rho0)],
+            "theta0": None if theta0 is None else list(np.atleast_1d(theta0)),
+            "t_end": float(t_end),
+            "samples": int(samples),
+            "order": order,
+            "rtol": float(rtol),
+        }
+        return _analyses.analyze(
+            self._inner, "transient", spec, outputs, tolerance, progress
+        )
+
+    def reference(
+        self,
+        epsilon: Sequence[float],
+        omega_range: tuple[float, float],
+        harmonics: int = 9,
+        outputs: Sequence[str] = (),
+        progress: Any = None,
+        **options: Any,
+    ) -> Reference:
+        """The full system's periodic orbits under ``eps fext cos(Omega
+        t)`` for each amplitude of ``epsilon`` over ``omega_range``, by
+        harmonic balance with ``harmonics`` harmonics and pseudo-arclength
+        continuation, with their Floquet multipliers and the bifurcations on
+        the branches: the reference the reduced forced response is judged
+        against. ``options``: the other keys of ``[reference]`` (``step``,
+        ``tol``, ``max_steps``, ``stability``, ``period_doubling``,
+        ``amplitude_at``, ``amplitude_range``, ``start``)."""
+        spec = {
+            "epsilon": [float(e) for e in np.atleast_1d(epsilon)],
+            "omega_range": [float(omega_range[0]), float(omega_range[1])],
+            "harmonics": int(harmonics),
+        }
+        spec.update(options)
+        return _analyses.analyze(
+            self._inner, "reference", spec, outputs, 0.01, progress
+        )
+
+    def validation(
+        self, outputs: Sequence[str] = (), progress: Any = None, **spec: Any
+    ) -> Analysis:
+        """The reduced answers against the full system (``[validate]``:
+        ``transient`` runs from points on the SSM, ``steady_state`` orbits at
+        given frequencies), the errors measured in ``measured``."""
+        return _analyses.analyze(
+            self._inner, "validation", spec, outputs, 0.01, progress
+        )
+
+    def report(
+        self,
+        orders: Sequence[int] | None = None,
+        forcing: Mapping[str, Any] | None = None,
+        rtol: float = 1e-8,
+        outputs: Sequence[str] = (),
+        progress: Any = None,
+    ) -> Analysis:
+        """The speed-against-error report (``[report]``): the reduced models
+        of ``orders`` (default the odd orders from 3 to the SSM's) against
+        the full system, run time and error each; ``forcing`` (the keys of
+        :meth:`forced_response`, e.g. ``{"epsilon": [0.01], "omega_range":
+        [0.9, 1.1]}``) adds the forced response at each order; ``rtol`` is
+        the integrators' relative tolerance. The SSMs of the lower orders
+        are computed with this SSM's ``resonance_tol``."""
+        spec = {
+            "orders": None if orders is None else [int(o) for o in orders],
+            "forcing": forcing,
+            "rtol": float(rtol),
+            "resonance_tol": self._resonance_tol,
+        }
+        return _analyses.analyze(self._inner, "report", spec, outputs, 0.01, progress)
+
+    def simulate(
+        self, outputs: Sequence[str] = (), progress: Any = None, **spec: Any
+    ) -> Analysis:
+        """Sampled runs of the full system (``[simulate]``: ``period``,
+        ``samples``, ``runs``, ``noise``, ...), its tables in ``files``."""
+        return _analyses.analyze(self._inner, "simulate", spec, outputs, 0.01, progress)
+
+    def damping(
+        self,
+        outputs: Sequence[str] = (),
+        tolerance: float = 0.01,
+        progress: Any = None,
+        **spec: Any,
+    ) -> Analysis:
+        """The amplitude-dependent damping and frequency of the SSM's free
+        oscillation (``[analysis.damping]``: ``rho_max``, ``points``,
+        ``orders``), a table per order, its error estimates held to
+        ``tolerance``."""
+        return _analyses.analyze(
+            self._inner, "damping", spec, outputs, tolerance, progress
         )
 
     def __repr__(self) -> str:
@@ -678,4 +523,4 @@ def compute_ssm(
             callback,
         )
     _warn(inner.warnings)
-    return Ssm(inner)
+    return Ssm(inner, float(resonance_tol))

@@ -48,8 +48,15 @@ def harmonic_balance(
         r = xdd + 2 * zeta * w * xd + w * w * x + kappa * x**3 - eps * np.cos(t)
         return np.concatenate([cos @ r, sin @ r]) * 2 / samples
 
+    # the start: the first harmonic of amplitude ``guess`` with the phase
+    # its one-harmonic balance gives, so that where several responses
+    # coexist the root finder takes the one of that amplitude
+    phase = np.arctan2(
+        2 * zeta * w * omega * guess,
+        (w * w - omega * omega + 0.75 * kappa * guess**2) * guess,
+    )
     c0 = np.zeros(2 * len(h))
-    c0[0] = guess
+    c0[0], c0[len(h)] = guess * np.cos(phase), guess * np.sin(phase)
     sol = scipy.optimize.root(residual, c0, tol=1e-13)
     assert np.abs(residual(sol.x)).max() < 1e-12 * eps, sol.message
     a, b = sol.x[: len(h)], sol.x[len(h) :]

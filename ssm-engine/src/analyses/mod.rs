@@ -469,6 +469,9 @@ pub trait Finished: Debug + Send {
         outputs: &[String],
         beside: &Beside<'_>,
     ) -> Result<Vec<(String, Vec<u8>)>, PlotError>;
+    /// Its results as JSON, in the shape `summary.json` keeps them (for a
+    /// binding that runs one analysis on its own).
+    fn to_json(&self) -> serde_json::Value;
     /// Itself, for [`output_of`].
     fn as_any(&self) -> &dyn Any;
 }
@@ -624,6 +627,12 @@ impl<A: Analysis + 'static> Finished for Done<A> {
         beside: &Beside<'_>,
     ) -> Result<Vec<(String, Vec<u8>)>, PlotError> {
         A::files(&self.0, outputs, beside)
+    }
+
+    fn to_json(&self) -> serde_json::Value {
+        // plain data of numbers and strings: serializing cannot fail (a
+        // non-finite float becomes null)
+        serde_json::to_value(&self.0).unwrap_or(serde_json::Value::Null)
     }
 
     fn as_any(&self) -> &dyn Any {
