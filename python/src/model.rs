@@ -16,12 +16,66 @@ use ssm_core::spectrum::{self, SpectrumOptions};
 use ssm_core::System;
 use ssm_model_files::{mass_defect, ModelFiles};
 
-/// A sparse matrix as coordinate arrays `(rows, cols, values)`, 0-based.
-type Coo<'py> = (
-    PyReadonlyArray1<'py, i64>,
-    PyReadonlyArray1<'py, i64>,
-    PyReadonlyArray1<'py, f64>,
-);
+/// Indices as Python hands them over: 32- or 64-bit (scipy's choice),
+/// borrowed.
+#[derive(FromPyObject)]
+enum Indices<'py> {
+    /// `int32` indices.
+    Narrow(PyReadonlyArray1<'py, i32>),
+    /// `int64` indices.
+    Wide(PyReadonlyArray1<'py, i64>),
+}
+
+impl Indices<'_> {
+    /// The `k`-th index (negative values stay negative, for the checks).
+    fn at(&self, view: &IndexView<'_>, k: usize) -> i64 {
+        match (self, view) {
+            (Indices::Narrow(_), IndexView::Narrow(v)) => i64::from(v[k]),
+            (Indices::Wide(_), IndexView::Wide(v)) => v[k],
+            _ => -1,
+        }
+    }
+
+    /// A view of the indices (any strides; no copy).
+    fn view(&self) -> IndexView<'_> {
+        match self {
+            Indices::Narrow(a) => IndexView::Narrow(a.as_array()),
+            Indices::Wide(a) => IndexView::Wide(a.as_array()),
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Indices::Narrow(a) => a.as_array().len(),
+            Indices::Wide(a) => a.as_array().len(),
+        }
+    }
+}
+
+/// A borrowed view of [`Indices`].
+enum IndexView<'a> {
+    Narrow(numpy::ndarray::ArrayView1<'a, i32>),
+    Wide(numpy::ndarray::ArrayView1<'a, i64>),
+}
+
+/// A matrix as Python hands it over, its buffers borrowed, not copied: a
+/// dense `float64` array (any strides), scipy's compressed rows or columns
+/// `("csr" | "csc", indptr, indices, data)`, or coordinates `(rows, cols,
+/// values)`, 0-based.
+#[derive(FromPyObject)]
+enum MatrixIn<'py> {
+    /// A dense array.
+    Dense(PyReadonlyArray2<'py, f64>),
+    /// Compressed sparse rows or columns.
+    Compressed(
+        String,
+        Indices<'py>,
+        Indices<'py>,
+        PyReadonlyArray1<'py, f64>,
+    ),
+    /// Coordinates.
+    Coordinates(Indices<'py>, Indices<'py>, PyReadonlyArray1<'py, f64>),
+}
 
 /// A force tensor as `(indices, values)`: row `r` of `indices` is
 /// `(i, j, k)` (`f_i += v x_j x_k`) or `(i, j, k, l)`, 0-based.
@@ -35,6 +89,9 @@ pub struct Model {
     pub(crate) system: Arc<System>,
     /// What the reducer that made the model reported (name, numbers, text).
     pub(crate) diagnostics: Vec<(String, Vec<f64>, String)>,
+    /// The model as its source gave it, before validation (the POD study
+    /// projects it); `None` for a model a reducer identified from data.
+    pub(crate) full: Option<Arc<ssm_api::Model>>,
 }
 
 /// The slice of a read-only array, or the error naming `arg`.
@@ -52,48 +109,101 @@ fn slice<'a, T: numpy::Element>(
     })
 }
 
-/// The `nrows x ncols` matrix `arg` from its coordinates: indices in range,
-/// values finite.
+/// The `nrows x ncols` matrix `arg` read straight from the buffers of
+/// `given` (the engine's matrix is the one copy): indices in range, values
+/// finite, zeros left out.
 fn matrix(
     py: Python<'_>,
     arg: &str,
-    (rows, cols, vals): &Coo<'_>,
+    given: &MatrixIn<'_>,
     (nrows, ncols): (usize, usize),
 ) -> PyResult<SparseMatrix> {
-    let (r, c, v) = (
-        slice(py, rows, arg)?,
-        slice(py, cols, arg)?,
-        slice(py, vals, arg)?,
-    );
-    if r.len() != v.len() || c.len() != v.len() {
-        return Err(raise(
-            py,
-            Family::Input,
-            format!(
-                "{arg}: {} row indices, {} column indices and {} values",
-                r.len(),
-                c.len(),
-                v.len()
-            ),
-        ));
-    }
+    let fail = |message: String| raise(py, Family::Input, format!("{arg}: {message}"));
     let mut m = SparseMatrix::zeros(nrows, ncols);
-    for ((&i, &j), &x) in r.iter().zip(c).zip(v) {
-        let (Some(i), Some(j)) = (index(i, nrows), index(j, ncols)) else {
-            return Err(raise(
-                py,
-                Family::Input,
-                format!("{arg}: entry ({i}, {j}) lies outside the {nrows} x {ncols} matrix"),
-            ));
+    let mut put = |i: i64, j: i64, x: f64| -> PyResult<()> {
+        let (Some(r), Some(c)) = (index(i, nrows), index(j, ncols)) else {
+            return Err(fail(format!(
+                "entry ({i}, {j}) lies outside the {nrows} x {ncols} matrix"
+            )));
         };
         if !x.is_finite() {
-            return Err(raise(
-                py,
-                Family::Input,
-                format!("{arg}: entry ({i}, {j}) is {x}; every value must be finite"),
-            ));
+            return Err(fail(format!(
+                "entry ({i}, {j}) is {x}; every value must be finite"
+            )));
         }
-        m.push(i, j, x);
+        m.push(r, c, x);
+        Ok(())
+    };
+    match given {
+        MatrixIn::Dense(a) => {
+            let a = a.as_array();
+            if a.dim() != (nrows, ncols) {
+                return Err(fail(format!(
+                    "shape {:?}, expected ({nrows}, {ncols})",
+                    a.dim()
+                )));
+            }
+            for ((i, j), &x) in a.indexed_iter() {
+                if x != 0.0 {
+                    put(i as i64, j as i64, x)?;
+                }
+            }
+        }
+        MatrixIn::Compressed(format, indptr, indices, data) => {
+            let by_rows = match format.as_str() {
+                "csr" => true,
+                "csc" => false,
+                other => return Err(fail(format!("format '{other}' is not csr or csc"))),
+            };
+            let major = if by_rows { nrows } else { ncols };
+            let (ptr, idx, data) = (indptr.view(), indices.view(), data.as_array());
+            if indptr.len() != major + 1 || indices.len() != data.len() {
+                return Err(fail(format!(
+                    "indptr of {} entries, {} indices and {} values for {major} {}",
+                    indptr.len(),
+                    indices.len(),
+                    data.len(),
+                    if by_rows { "rows" } else { "columns" }
+                )));
+            }
+            for outer in 0..major {
+                let (start, end) = (indptr.at(&ptr, outer), indptr.at(&ptr, outer + 1));
+                let (Some(start), Some(end)) =
+                    (index(start, data.len() + 1), index(end, data.len() + 1))
+                else {
+                    return Err(fail(format!(
+                        "indptr[{outer}..] = {start}, {end} outside 0..={}",
+                        data.len()
+                    )));
+                };
+                if end < start {
+                    return Err(fail(format!("indptr decreases at {outer}")));
+                }
+                for k in start..end {
+                    let inner = indices.at(&idx, k);
+                    let (i, j) = if by_rows {
+                        (outer as i64, inner)
+                    } else {
+                        (inner, outer as i64)
+                    };
+                    put(i, j, data[k])?;
+                }
+            }
+        }
+        MatrixIn::Coordinates(rows, cols, vals) => {
+            let (r, c, v) = (rows.view(), cols.view(), vals.as_array());
+            if rows.len() != v.len() || cols.len() != v.len() {
+                return Err(fail(format!(
+                    "{} row indices, {} column indices and {} values",
+                    rows.len(),
+                    cols.len(),
+                    v.len()
+                )));
+            }
+            for (k, &x) in v.iter().enumerate() {
+                put(rows.at(&r, k), cols.at(&c, k), x)?;
+            }
+        }
     }
     Ok(m)
 }
@@ -161,8 +271,13 @@ fn tensor(
     Ok(())
 }
 
-/// The engine's model of the folder contents `files`, named `name`.
-fn build(files: ModelFiles, name: &str, rayleigh: Option<(f64, f64)>) -> Result<System, Failure> {
+/// The engine's model of the folder contents `files`, named `name`, and
+/// the model as given (for the POD study).
+fn build(
+    files: ModelFiles,
+    name: &str,
+    rayleigh: Option<(f64, f64)>,
+) -> Result<(System, ssm_api::Model), Failure> {
     if let Some(problem) = mass_defect(&files.mass, files.constraint_jacobian.is_some()) {
         return Err(Failure(Family::Model, format!("M: {problem}")));
     }
@@ -172,15 +287,18 @@ fn build(files: ModelFiles, name: &str, rayleigh: Option<(f64, f64)>) -> Result<
     let model = mechanical
         .into_model()
         .map_err(|e| Failure::of(Family::Model, e))?;
-    System::from_model(name, model).map_err(|e| Failure::of(Family::Model, e))
+    let system =
+        System::from_model(name, model.clone()).map_err(|e| Failure::of(Family::Model, e))?;
+    Ok((system, model))
 }
 
 #[pymethods]
 impl Model {
     /// The model `M x'' + C x' + K x + f2(x) + f3(x) = eps fext cos(Omega t)`
     /// with constraints `G x + g2(x) + g3(x) = 0`, from 0-based coordinate
-    /// arrays (see `ssm.from_arrays`, which makes them from dense or sparse
-    /// matrices).
+    /// arrays: each matrix dense, compressed (`("csr" | "csc", indptr,
+    /// indices, data)`) or coordinates, its buffers read in place (see
+    /// `ssm.from_arrays`, which hands scipy's buffers over).
     #[staticmethod]
     #[pyo3(signature = (name, n, mass, stiffness, damping=None, rayleigh=None, f2=None, f3=None, constraints=None, g2=None, g3=None, fext=None, outputs=Vec::new()))]
     #[allow(clippy::too_many_arguments)]
@@ -188,13 +306,13 @@ impl Model {
         py: Python<'_>,
         name: &str,
         n: usize,
-        mass: Coo<'_>,
-        stiffness: Coo<'_>,
-        damping: Option<Coo<'_>>,
+        mass: MatrixIn<'_>,
+        stiffness: MatrixIn<'_>,
+        damping: Option<MatrixIn<'_>>,
         rayleigh: Option<(f64, f64)>,
         f2: Option<Tensor<'_>>,
         f3: Option<Tensor<'_>>,
-        constraints: Option<(usize, Coo<'_>)>,
+        constraints: Option<(usize, MatrixIn<'_>)>,
         g2: Option<Tensor<'_>>,
         g3: Option<Tensor<'_>>,
         fext: Option<PyReadonlyArray1<'_, f64>>,
@@ -205,6 +323,16 @@ impl Model {
                 py,
                 Family::Input,
                 "M: the model has no degree of freedom",
+            ));
+        }
+        if u32::try_from(n).is_err() {
+            return Err(raise(
+                py,
+                Family::Input,
+                format!(
+                    "M: {n} degrees of freedom; the engine takes at most {}",
+                    u32::MAX
+                ),
             ));
         }
         let mass = matrix(py, "M", &mass, (n, n))?;
@@ -278,12 +406,13 @@ impl Model {
             outputs,
         };
         let name = name.to_owned();
-        let system =
+        let (system, full) =
             crate::work::interruptible(py, None, move |_progress| build(files, &name, rayleigh))?
                 .map_err(|f| f.raise(py))?;
         Ok(Model {
             system: Arc::new(system),
             diagnostics: Vec::new(),
+            full: Some(Arc::new(full)),
         })
     }
 
@@ -292,7 +421,7 @@ impl Model {
     #[staticmethod]
     #[pyo3(signature = (dir, rayleigh=None))]
     fn from_files(py: Python<'_>, dir: PathBuf, rayleigh: Option<(f64, f64)>) -> PyResult<Model> {
-        let system = crate::work::interruptible(py, None, move |_progress| {
+        let (system, full) = crate::work::interruptible(py, None, move |_progress| {
             let files =
                 ModelFiles::read(&dir, &mut |_| {}).map_err(|e| Failure::of(Family::Input, e))?;
             build(files, "model-files", rayleigh)
@@ -301,6 +430,7 @@ impl Model {
         Ok(Model {
             system: Arc::new(system),
             diagnostics: Vec::new(),
+            full: Some(Arc::new(full)),
         })
     }
 

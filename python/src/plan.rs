@@ -47,19 +47,20 @@ pub(crate) fn run_plan(
 ) -> PyResult<Vec<(String, Vec<u8>)>> {
     let plan: Plan =
         serde_json::from_str(plan).map_err(|e| raise(py, Family::Input, format!("plan: {e}")))?;
-    if plan.pod.is_some() {
+    if plan.pod.is_some() && model.full.is_none() {
         return Err(raise(
             py,
             Family::Input,
-            "plan: pod: the POD study projects a plugin's model; a model from arrays cannot run it yet",
+            "plan: pod: the POD study projects a model's matrices and forces; a model identified from data has none",
         ));
     }
     let system = (*model.system).clone();
+    let full = model.full.as_deref().cloned();
     let outputs = crate::work::interruptible(py, progress.as_ref(), move |progress| {
         let model = pipeline::Model {
             system,
             reduction: None,
-            full: None,
+            full,
             plugins: Vec::new(),
         };
         pipeline::execute(
@@ -97,7 +98,7 @@ pub(crate) fn model_from_scene(
     path: PathBuf,
     plugins: Vec<PathBuf>,
 ) -> PyResult<Model> {
-    let (system, diagnostics) = crate::work::interruptible(py, None, move |_progress| {
+    let (system, diagnostics, full) = crate::work::interruptible(py, None, move |_progress| {
         let (scene, mut registry) = scene_and_registry(&path, &plugins)?;
         let model = job::scene_model(&scene, &mut registry)
             .map_err(|e| Failure(family(&e), e.to_string()))?;
@@ -107,12 +108,13 @@ pub(crate) fn model_from_scene(
             .flat_map(|r| &r.diagnostics)
             .map(|d| (d.name.to_string(), d.values.to_vec(), d.text.to_string()))
             .collect::<Vec<_>>();
-        Ok::<_, Failure>((model.system, diagnostics))
+        Ok::<_, Failure>((model.system, diagnostics, model.full))
     })?
     .map_err(|f| f.raise(py))?;
     Ok(Model {
         system: Arc::new(system),
         diagnostics,
+        full: full.map(Arc::new),
     })
 }
 

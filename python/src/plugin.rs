@@ -92,17 +92,20 @@ pub(crate) fn model_from_plugin(
         None => String::new(),
     };
     let (plugin, model) = (plugin.to_owned(), model.to_owned());
-    let system = crate::work::interruptible(py, None, move |_progress| {
+    let (system, full) = crate::work::interruptible(py, None, move |_progress| {
         let loaded = load(&plugin)?;
         let m = loaded
             .build_model(&model, &params)
             .map_err(|e| Failure::of(Family::Model, e))?;
-        System::from_model(loaded.name(), m).map_err(|e| Failure::of(Family::Model, e))
+        let system = System::from_model(loaded.name(), m.clone())
+            .map_err(|e| Failure::of(Family::Model, e))?;
+        Ok::<_, Failure>((system, m))
     })?
     .map_err(|f| f.raise(py))?;
     Ok(Model {
         system: Arc::new(system),
         diagnostics: Vec::new(),
+        full: Some(Arc::new(full)),
     })
 }
 
@@ -220,5 +223,6 @@ pub(crate) fn model_from_signals(
     Ok(Model {
         system: Arc::new(system),
         diagnostics,
+        full: None,
     })
 }

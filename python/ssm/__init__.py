@@ -56,6 +56,7 @@ __all__ = [
     "from_plugin",
     "from_scene",
     "identify",
+    "pod",
     "run",
     "run_scene",
 ]
@@ -477,6 +478,54 @@ def run(model: Model, plan: Mapping[str, Any], progress: Any = None) -> Run:
     summary = json.loads(files["summary.json"])
     _warn(summary.get("warnings", []))
     return Run(summary=summary, files=files)
+
+
+def pod(
+    model: Model,
+    train: Mapping[str, Any],
+    step: float,
+    tests: Sequence[Mapping[str, Any]] = (),
+    truncations: Mapping[str, Any] | None = None,
+    outputs: Sequence[str] = (),
+    progress: Any = None,
+    **options: Any,
+) -> Run:
+    """The POD study of ``model`` (Stadlmayr, Witteveen & Steiner 2017): a
+    training run of the full model (HHT-alpha with the fixed ``step``), its
+    proper orthogonal decomposition, a Galerkin model per truncation with
+    the generalized constraint reduction, and every model run on the
+    training load and on ``tests``, each with its seconds and its error
+    against the full run at ``outputs``.
+
+    Parameters
+    ----------
+    train, tests : mapping
+        Loads ``eps fext cos(Omega t)``: ``t_end``, ``epsilon`` and
+        ``omega`` (default 0: a free run), ``start`` (``[(state name,
+        value)]``, default rest).
+    step : float
+        The fixed time step of every run.
+    truncations : mapping, optional
+        ``{"energy": [1e-6, ...]}`` (energy fractions left out) or
+        ``{"drop": [6, ...]}`` (drops of the normalized POVs, in decades); one
+        model at a drop of 6 decades by default.
+    options
+        The other keys of ``[pod]`` (``rank_tol``, ``jacobian_samples``,
+        ``hht_alpha``, ``ssm_pairs``, ``ssm_order``).
+
+    Returns
+    -------
+    Run
+        ``summary["pod"]`` (the POVs, the models, their errors and
+        seconds) and the files ``pod_comparison.csv``, ``pod_povs.csv``,
+        ``pod_report.md``, ...
+    """
+    spec: dict[str, Any] = {"train": dict(train), "step": float(step)}
+    spec["tests"] = [dict(t) for t in tests]
+    if truncations is not None:
+        spec["truncations"] = dict(truncations)
+    spec.update(options)
+    return run(model, {"coordinates": [str(o) for o in outputs], "pod": spec}, progress)
 
 
 def run_scene(path: str, plugins: Sequence[str] = (), progress: Any = None) -> Run:

@@ -35,32 +35,50 @@ def _index_array(arg: str, a: Any) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.int64)
 
 
-def _coo(arg: str, a: Any, shape: tuple[int, int]) -> tuple[np.ndarray, ...]:
-    """The coordinates ``(rows, cols, values)`` of the dense or
-    ``scipy.sparse`` matrix ``a`` of shape ``shape``."""
+def _indices(arg: str, a: Any) -> np.ndarray:
+    """Indices as they are when ``int32`` or ``int64`` (borrowed), else
+    converted to ``int64``; a non-integer dtype is refused."""
+    a = np.asarray(a)
+    if a.dtype.kind not in "iu":
+        raise InputError(f"{arg}: indices of dtype {a.dtype}; give integers")
+    if a.dtype in (np.int32, np.int64):
+        return a
+    return a.astype(np.int64)
+
+
+def _values(arg: str, a: Any) -> np.ndarray:
+    """Values as they are when ``float64`` (borrowed, any strides), else
+    converted from another floating-point dtype; integer, boolean and
+    complex dtypes are refused."""
+    a = np.asarray(a)
+    if a.dtype.kind == "c":
+        raise InputError(f"{arg}: complex values ({a.dtype}); the model is real")
+    if a.dtype.kind != "f":
+        raise InputError(f"{arg}: dtype {a.dtype}; give floating-point values")
+    return a if a.dtype == np.float64 else a.astype(np.float64)
+
+
+def _matrix(arg: str, a: Any, shape: tuple[int, int]) -> Any:
+    """The dense or ``scipy.sparse`` matrix ``a`` of shape ``shape`` as the
+    engine reads it: a dense array, ``(format, indptr, indices, data)`` of
+    CSR and CSC, or ``(rows, cols, values)`` of COO, the arrays' buffers
+    handed over as they are (no copy for ``float64`` values and ``int32``
+    or ``int64`` indices; other sparse formats pass through CSR)."""
     if hasattr(a, "tocoo"):
-        if a.dtype.kind != "f":
-            _float_array(arg, np.zeros(0, dtype=a.dtype))
-        coo = a.tocoo()
-        got = coo.shape
-        rows, cols, vals = coo.row, coo.col, coo.data
-    else:
-        dense = np.asarray(a)
-        got = dense.shape
-        if dense.ndim != 2:
-            raise InputError(
-                f"{arg}: a matrix is needed, found {dense.ndim} dimension(s)"
-            )
-        dense = _float_array(arg, dense)
-        rows, cols = np.nonzero(dense)
-        vals = dense[rows, cols]
-    if tuple(got) != tuple(shape):
-        raise InputError(f"{arg}: shape {tuple(got)}, expected {tuple(shape)}")
-    return (
-        _index_array(arg, rows),
-        _index_array(arg, cols),
-        _float_array(arg, vals),
-    )
+        if tuple(a.shape) != tuple(shape):
+            raise InputError(f"{arg}: shape {tuple(a.shape)}, expected {tuple(shape)}")
+        if a.format not in ("csr", "csc", "coo"):
+            a = a.tocsr()
+        data = _values(arg, a.data)
+        if a.format == "coo":
+            return (_indices(arg, a.row), _indices(arg, a.col), data)
+        return (a.format, _indices(arg, a.indptr), _indices(arg, a.indices), data)
+    dense = np.asarray(a)
+    if dense.ndim != 2:
+        raise InputError(f"{arg}: a matrix is needed, found {dense.ndim} dimension(s)")
+    if tuple(dense.shape) != tuple(shape):
+        raise InputError(f"{arg}: shape {tuple(dense.shape)}, expected {tuple(shape)}")
+    return _values(arg, dense)
 
 
 def _tensor(arg: str, t: Any, degree: int) -> tuple[np.ndarray, np.ndarray] | None:
@@ -155,7 +173,7 @@ def from_arrays(
         g = np.asarray(G) if not hasattr(G, "tocoo") else G
         if g.ndim != 2:
             raise InputError(f"G: a matrix is needed, found {g.ndim} dimension(s)")
-        constraints = (int(g.shape[0]), _coo("G", G, (g.shape[0], n)))
+        constraints = (int(g.shape[0]), _matrix("G", G, (g.shape[0], n)))
     load = None
     if fext is not None:
         load = _float_array("fext", fext)
@@ -164,9 +182,9 @@ def from_arrays(
     return Model.from_coo(
         name,
         n,
-        _coo("M", M, (n, n)),
-        _coo("K", K, (n, n)),
-        damping=None if C is None else _coo("C", C, (n, n)),
+        _matrix("M", M, (n, n)),
+        _matrix("K", K, (n, n)),
+        damping=None if C is None else _matrix("C", C, (n, n)),
         rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
         f2=_tensor("f2", f2, 2),
         f3=_tensor("f3", f3, 3),
