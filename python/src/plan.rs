@@ -23,6 +23,10 @@ use ssm_engine::plan::budget::Limits;
 use ssm_engine::plan::Plan;
 use ssm_engine::scene::SceneFile;
 
+/// What a run returns to Python: the files it wrote `(name, contents)` and
+/// the seconds the engine's own call took.
+type RunFiles = (Vec<(String, Vec<u8>)>, f64);
+
 /// The family of an engine error.
 fn family(e: &JobError) -> Family {
     match e {
@@ -36,7 +40,9 @@ fn family(e: &JobError) -> Family {
 
 /// Runs the plan `plan` (JSON) on `model` within the machine's limits (the
 /// engine's one cost gate); returns the files a scene's run writes, as
-/// `(name, contents)`, `summary.json` among them.
+/// `(name, contents)`, `summary.json` among them, and the seconds the
+/// engine took (the wall time of the Rust call alone, for the layer's
+/// overhead).
 #[pyfunction]
 #[pyo3(signature = (model, plan, progress=None))]
 pub(crate) fn run_plan(
@@ -44,7 +50,7 @@ pub(crate) fn run_plan(
     model: &Model,
     plan: &str,
     progress: Option<Bound<'_, PyAny>>,
-) -> PyResult<Vec<(String, Vec<u8>)>> {
+) -> PyResult<RunFiles> {
     let plan: Plan =
         serde_json::from_str(plan).map_err(|e| raise(py, Family::Input, format!("plan: {e}")))?;
     if plan.pod.is_some() && model.full.is_none() {
@@ -57,21 +63,16 @@ pub(crate) fn run_plan(
     let system = (*model.system).clone();
     let full = model.full.as_deref().cloned();
     let outputs = crate::work::interruptible(py, progress.as_ref(), move |progress| {
+        let started = Instant::now();
         let model = pipeline::Model {
             system,
             reduction: None,
             full,
             plugins: Vec::new(),
         };
-        pipeline::execute(
-            &plan,
-            model,
-            &Limits::of_machine(),
-            progress,
-            Instant::now(),
-        )
-        .map(|job| job.outputs.files)
-        .map_err(|e| Failure(family(&e), e.to_string()))
+        pipeline::execute(&plan, model, &Limits::of_machine(), progress, started)
+            .map(|job| (job.outputs.files, started.elapsed().as_secs_f64()))
+            .map_err(|e| Failure(family(&e), e.to_string()))
     })?
     .map_err(|f| f.raise(py))?;
     Ok(outputs)
@@ -120,7 +121,9 @@ pub(crate) fn model_from_scene(
 
 /// Runs the scene at `path` as `ssm-engine SCENE.toml` does (its model, its
 /// plan resolved against it, the engine's cost gate, the POD study
-/// included); returns the files the run writes, in memory.
+/// included); returns the files the run writes, in memory, and the seconds
+/// the engine took (scene, plugins and run: what `ssm-engine` does but
+/// write the files).
 #[pyfunction]
 #[pyo3(signature = (path, plugins=Vec::new(), progress=None))]
 pub(crate) fn run_scene(
@@ -128,11 +131,12 @@ pub(crate) fn run_scene(
     path: PathBuf,
     plugins: Vec<PathBuf>,
     progress: Option<Bound<'_, PyAny>>,
-) -> PyResult<Vec<(String, Vec<u8>)>> {
+) -> PyResult<RunFiles> {
     crate::work::interruptible(py, progress.as_ref(), move |progress| {
+        let started = Instant::now();
         let (scene, mut registry) = scene_and_registry(&path, &plugins)?;
         job::run(&scene, &mut registry, progress)
-            .map(|job| job.outputs.files)
+            .map(|job| (job.outputs.files, started.elapsed().as_secs_f64()))
             .map_err(|e| Failure(family(&e), e.to_string()))
     })?
     .map_err(|f| f.raise(py))

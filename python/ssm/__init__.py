@@ -33,6 +33,7 @@ from ._analyses import Analysis, Reference, Transient
 from ._models import from_arrays, from_files, from_plugin, from_scene, identify
 from ._progress import Progress as _Progress
 from ._progress import warn as _warn
+from ._progress import warn_engine as _warn_engine
 from ._ssm import Model, __version__, run_plan
 from ._ssm import Ssm as _Ssm
 from ._ssm import run_scene as _run_scene
@@ -406,10 +407,13 @@ class Ssm:
 @dataclass
 class Run:
     """What a plan's run wrote: ``summary.json`` as a dictionary and every
-    file (CSV tables, SVG plots) by name."""
+    file (CSV tables, SVG plots) by name; ``engine_seconds`` is the wall
+    time of the engine's own call (the rest of the call's time is this
+    layer's)."""
 
     summary: dict[str, Any]
     files: dict[str, bytes]
+    engine_seconds: float | None = None
 
     def table(self, name: str) -> Any:
         """The CSV file ``name`` (e.g. ``"reference_frc.csv"``) as a
@@ -474,10 +478,11 @@ def run(model: Model, plan: Mapping[str, Any], progress: Any = None) -> Run:
     import json
 
     with _Progress(progress) as callback:
-        files = dict(run_plan(model, json.dumps(plan), callback))
+        files, seconds = run_plan(model, json.dumps(plan), callback)
+    files = dict(files)
     summary = json.loads(files["summary.json"])
-    _warn(summary.get("warnings", []))
-    return Run(summary=summary, files=files)
+    _warn_engine(summary.get("warnings", []))
+    return Run(summary=summary, files=files, engine_seconds=seconds)
 
 
 def pod(
@@ -536,10 +541,11 @@ def run_scene(path: str, plugins: Sequence[str] = (), progress: Any = None) -> R
     import json
 
     with _Progress(progress) as callback:
-        files = dict(_run_scene(str(path), [str(p) for p in plugins], callback))
+        files, seconds = _run_scene(str(path), [str(p) for p in plugins], callback)
+    files = dict(files)
     summary = json.loads(files["summary.json"])
-    _warn(summary.get("warnings", []))
-    return Run(summary=summary, files=files)
+    _warn_engine(summary.get("warnings", []))
+    return Run(summary=summary, files=files, engine_seconds=seconds)
 
 
 def compute_ssm(

@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from ._progress import Progress, warn
+from ._progress import Progress, warn_engine
 from ._ssm import analyze as _analyze
-from .errors import InputError, UntrustedAnswerWarning
+from .errors import InputError
 
 
 @dataclass
@@ -105,9 +105,6 @@ class Reference(Analysis):
         return pd.DataFrame(data)
 
 
-_UNTRUSTED = "do not trust it"
-
-
 def _spec(spec: Mapping[str, Any]) -> str:
     """The spec as JSON: numpy scalars and arrays as plain numbers, ``None``
     values left out (the engine's default); a value JSON cannot hold (NaN,
@@ -162,11 +159,7 @@ def analyze(
         "estimates": list(raw["estimates"]),
         "measured": list(raw["measured"]),
     }
-    # the engine words an answer whose estimate exceeds the tolerance with
-    # this phrase (ssm_engine::analyses::untrusted_warning)
-    loud = [m for m in base["warnings"] if _UNTRUSTED in m]
-    warn([m for m in base["warnings"] if _UNTRUSTED not in m], depth=2)
-    warn(loud, UntrustedAnswerWarning, depth=2)
+    warn_engine(base["warnings"], depth=2)
     arrays = raw.get("arrays")
     names = [str(o) for o in outputs]
     if raw["name"] == "transient" and arrays is not None:

@@ -7,7 +7,12 @@ import warnings
 from collections.abc import Sequence
 from typing import Any
 
-from .errors import InputError, SsmWarning
+from .errors import InputError, SsmWarning, UntrustedAnswerWarning
+
+# the engine words an answer whose error estimate exceeds the accuracy target
+# with this phrase (ssm_engine::analyses::untrusted_warning and the forced
+# response's curve warnings)
+UNTRUSTED = "do not trust"
 
 
 def warn(messages: Sequence[str], category: type = SsmWarning, depth: int = 1) -> None:
@@ -15,6 +20,13 @@ def warn(messages: Sequence[str], category: type = SsmWarning, depth: int = 1) -
     the user's call: ``depth`` frames above the caller of ``warn``."""
     for m in messages:
         warnings.warn(m, category, stacklevel=2 + depth)
+
+
+def warn_engine(messages: Sequence[str], depth: int = 1) -> None:
+    """Issues the engine's warnings: an untrusted answer's as
+    :class:`UntrustedAnswerWarning`, the others as :class:`SsmWarning`."""
+    warn([m for m in messages if UNTRUSTED not in m], SsmWarning, depth + 1)
+    warn([m for m in messages if UNTRUSTED in m], UntrustedAnswerWarning, depth + 1)
 
 
 class Tqdm:
