@@ -364,3 +364,33 @@ def speed_against_error(table: Any, ax: Any = None) -> Any:
                 label=f"full system, {name}",
             )
     return _finish(ax, "measured relative error", "time (s)")
+
+
+def pod_values(table: Any, ax: Any = None) -> Any:
+    """The proper orthogonal values (``pod_povs.csv`` of :func:`ssm.pod` as
+    a DataFrame): each kind's values relative to its largest, log scale,
+    against their index; the values a reduced model keeps filled, the
+    others open (values at round-off are drawn at 1e-17)."""
+    ax = _axes(ax)
+    kinds = list(dict.fromkeys(table["kind"].astype(str)))
+    for kind, color in zip(kinds, _colors(len(kinds))):
+        rows = table[table["kind"].astype(str) == kind]
+        index = rows["index"].to_numpy()
+        value = np.maximum(rows["relative"].to_numpy(dtype=float), 1e-17)
+        kept = rows["kept_by"].notna().to_numpy()
+        ax.semilogy(index, value, color=color, lw=1.0, label=kind)
+        ax.semilogy(index[kept], value[kept], "o", color=color, label=f"{kind}, kept")
+        ax.semilogy(index[~kept], value[~kept], "o", mfc="none", color=color)
+    return _finish(ax, "index", "POV / largest of its kind")
+
+
+def pod_errors(table: Any, ax: Any = None) -> Any:
+    """The error of each reduced model over a POD run (``pod_case_<k>.csv``
+    as a DataFrame: its ``error@<model>`` columns), log scale against time;
+    exact zeros are drawn at 1e-17."""
+    ax = _axes(ax)
+    columns = [c for c in table.columns if c.startswith("error@")]
+    for column, color in zip(columns, _colors(len(columns))):
+        err = np.maximum(table[column].to_numpy(dtype=float), 1e-17)
+        ax.semilogy(table["t"], err, color=color, label=column.split("@", 1)[1])
+    return _finish(ax, "time t", "relative error of the outputs")

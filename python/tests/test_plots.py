@@ -149,3 +149,32 @@ def test_damping_and_speed_against_error_draw_the_run_tables():
     out = io.BytesIO()
     ax.figure.savefig(out, format="svg")
     assert out.getvalue().startswith(b"<?xml")
+
+
+def test_pod_values_and_errors_draw_the_study_tables():
+    """The POVs of a POD study on a log scale, the kept ones filled (two on
+    a chain forced on two modes, ``test_pod``), and the reduced model's
+    error over the training run; labels name the quantities, the legend is
+    beside the axes."""
+    from test_pod import chain
+
+    M, K, phi = chain()
+    model = ssm.from_arrays(
+        M, K, rayleigh=(0.0, 0.01), fext=M @ phi[:, :2].sum(axis=1), outputs={"end": 19}
+    )
+    study = ssm.pod(
+        model,
+        train={"t_end": 50.0, "epsilon": 0.01, "omega": 0.2},
+        step=0.05,
+        outputs=["end"],
+    )
+    ax = ssm.plot.pod_values(study.table("pod_povs.csv"))
+    assert ax.get_yscale() == "log"
+    filled = [
+        ln for ln in ax.get_lines() if ln.get_marker() == "o" and ln.get_mfc() != "none"
+    ]
+    assert sum(len(ln.get_xdata()) for ln in filled) == 2
+    check_paper_ready(ax, "index", "POV")
+    ax = ssm.plot.pod_errors(study.table("pod_case_1.csv"))
+    assert ax.get_yscale() == "log" and len(ax.get_lines()) == 1
+    check_paper_ready(ax, "time", "error")
