@@ -66,6 +66,13 @@ def test_a_scene_run_writes_what_the_command_line_writes(tmp_path):
     assert run.summary["spectrum"] == cli["spectrum"]
     for name in ("backbone.csv", "spectrum.csv", "invariance.csv"):
         assert run.files[name] == (tmp_path / name).read_bytes(), name
+    # the README's picture is the bundled scene's backbone.svg as the engine
+    # draws it now
+    picture = ROOT / "docs" / "images" / "backbone.svg"
+    assert run.files["backbone.svg"] == picture.read_bytes(), (
+        "docs/images/backbone.svg is not what the bundled scene draws: copy "
+        "out/spatial_oscillator_cubic/backbone.svg there"
+    )
 
 
 def test_bad_scenes_are_named(tmp_path):

@@ -329,3 +329,52 @@ fn svg_plots_keep_legend_full_system_and_zero_apart() {
         .collect();
     assert_eq!(widths, ["3", "2", "1"]);
 }
+
+/// `backbone.svg` draws the part of a backbone beyond its accuracy target
+/// differently, not just with a legend word: the Duffing oscillator's O(3)
+/// backbone to `rho = 1.2` leaves the 1 % target (its estimate passes it
+/// near `rho = 0.5`), so the curve is solid up to `trusted_up_to` and dashed
+/// (many two-point segments) beyond, in the same colour, with a legend
+/// entry of its own; to `rho = 0.2` it stays within the target and has no
+/// such entry.
+#[test]
+fn backbone_svg_draws_the_untrusted_part_dashed() {
+    let svg_of = |rho_max: f64| -> String {
+        let text = format!(
+            "[model]\nplugin = \"duffing\"\n[ssm]\norder = 3\n[outputs]\ncoordinates = [\"x\"]\n\
+             [outputs.backbone]\nrho_max = {rho_max}\npoints = 61\n"
+        );
+        let job = ssm_tests::run_scene_text(&text).expect("the Duffing scene runs");
+        String::from_utf8(
+            job.outputs
+                .get("backbone.svg")
+                .expect("backbone.svg")
+                .to_vec(),
+        )
+        .expect("utf-8")
+    };
+    let dashes = |svg: &str| {
+        svg.split("<polyline")
+            .skip(1)
+            .filter(|l| l.split("/>").next().unwrap_or("").matches(',').count() == 2)
+            .count()
+    };
+    let far = svg_of(1.2);
+    let text = ssm_tests::svg_text(&far);
+    assert!(
+        text.contains("O(3) beyond the accuracy target"),
+        "no legend entry for the untrusted part: {text}"
+    );
+    let near = svg_of(0.2);
+    assert!(
+        !ssm_tests::svg_text(&near).contains("beyond the accuracy"),
+        "a trusted backbone has no untrusted part"
+    );
+    // the dashes: many two-point segments beyond the legend samples
+    assert!(
+        dashes(&far) > dashes(&near) + 10,
+        "{} against {} two-point segments",
+        dashes(&far),
+        dashes(&near)
+    );
+}
