@@ -1,10 +1,18 @@
 """Nonlinear model reduction of mechanical systems on spectral submanifolds.
 
-A model comes from arrays (:func:`from_arrays`) or from a model folder
-(:func:`from_files`); :func:`compute_ssm` computes its spectral submanifold
-(SSM) over chosen master mode pairs, and the SSM answers with error
-estimates: :meth:`Ssm.backbone` and :meth:`Ssm.forced_response`. The
-computations run in the Rust engine with the GIL released.
+A model comes from arrays (:func:`from_arrays`), a model folder
+(:func:`from_files`), a plugin (:func:`from_plugin`), a scene file
+(:func:`from_scene`) or sampled signals (:func:`identify`);
+:func:`compute_ssm` computes its spectral submanifold (SSM) over chosen
+master mode pairs, and the SSM answers, each with its error estimate:
+:meth:`Ssm.backbone`, :meth:`Ssm.forced_response`, and every other analysis
+of the engine (:meth:`Ssm.analyze`: the invariance error, the reduced
+transient, the full system's periodic orbits with their Floquet multipliers,
+validation, the speed-against-error report, sampled runs, the damping
+curve). :func:`pod` runs the POD study, :func:`run` a whole plan and
+:func:`run_scene` a scene file; :mod:`ssm.plot` draws the results. The
+computations run in the Rust engine with the GIL released; Ctrl-C stops
+them.
 
 Example
 -------
@@ -401,6 +409,7 @@ class Ssm:
         )
 
     def __repr__(self) -> str:
+        """The order, the master pairs and the model's name."""
         return repr(self._inner)
 
 
