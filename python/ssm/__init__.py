@@ -487,7 +487,7 @@ def run(model: Model, plan: Mapping[str, Any], progress: Any = None) -> Run:
     import json
 
     with _Progress(progress) as callback:
-        files, seconds = run_plan(model, json.dumps(plan), callback)
+        files, seconds = run_plan(model, _analyses.spec_json(plan), callback)
     files = dict(files)
     summary = json.loads(files["summary.json"])
     _warn_engine(summary.get("warnings", []))

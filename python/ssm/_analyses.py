@@ -105,7 +105,7 @@ class Reference(Analysis):
         return pd.DataFrame(data)
 
 
-def _spec(spec: Mapping[str, Any]) -> str:
+def spec_json(spec: Mapping[str, Any]) -> str:
     """The spec as JSON: numpy scalars and arrays as plain numbers, ``None``
     values left out (the engine's default); a value JSON cannot hold (NaN,
     an infinity, an object) is an error naming its key."""
@@ -146,7 +146,7 @@ def analyze(
         raw = _analyze(
             inner,
             str(name),
-            _spec(spec),
+            spec_json(spec),
             [str(o) for o in outputs],
             float(tolerance),
             callback,
