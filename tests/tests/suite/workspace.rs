@@ -58,23 +58,32 @@ fn resolved_features(selected: &[&str], edges: &str) -> BTreeMap<String, String>
     map
 }
 
+/// The packages of `other` (named `name`) whose features differ from the
+/// workspace build's `build`, as `package: build [..], name [..]`.
+fn drift(
+    build: &BTreeMap<String, String>,
+    other: &BTreeMap<String, String>,
+    name: &str,
+) -> Vec<String> {
+    assert!(
+        other.len() > 50,
+        "cargo tree listed {} packages for the {name}",
+        other.len()
+    );
+    other
+        .iter()
+        .filter_map(|(package, features)| {
+            let built = build.get(package)?;
+            (built != features).then(|| format!("{package}: build [{built}], {name} [{features}]"))
+        })
+        .collect()
+}
+
 #[test]
 fn build_and_test_resolve_one_feature_set() {
     let build = resolved_features(&["--workspace"], "normal,build");
     let test = resolved_features(&["--workspace"], "normal,build,dev");
-    assert!(
-        build.len() > 50,
-        "cargo tree listed {} packages",
-        build.len()
-    );
-    let drift: Vec<String> = build
-        .iter()
-        .filter_map(|(package, features)| {
-            let with_dev = test.get(package)?;
-            (with_dev != features)
-                .then(|| format!("{package}: build [{features}], test [{with_dev}]"))
-        })
-        .collect();
+    let drift = drift(&build, &test, "test");
     assert!(
         drift.is_empty(),
         "dev-dependencies turn on features the build lacks, so `cargo test` \
@@ -88,18 +97,7 @@ fn build_and_test_resolve_one_feature_set() {
 fn the_wheel_resolves_the_build_feature_set() {
     let build = resolved_features(&["--workspace"], "normal,build");
     let wheel = resolved_features(&["-p", "ssm-python"], "normal,build");
-    assert!(
-        wheel.len() > 50,
-        "cargo tree listed {} packages",
-        wheel.len()
-    );
-    let drift: Vec<String> = wheel
-        .iter()
-        .filter_map(|(package, features)| {
-            let built = build.get(package)?;
-            (built != features).then(|| format!("{package}: build [{built}], wheel [{features}]"))
-        })
-        .collect();
+    let drift = drift(&build, &wheel, "wheel");
     assert!(
         drift.is_empty(),
         "the wheel's build (ssm-python alone) resolves other features than the \
