@@ -419,7 +419,7 @@ def run_point(study: Study, index: int, store: str) -> dict[str, Any]:
             record.update(answers(run, point))
             record["error"] = None
             record["error_type"] = None
-        except (SsmError, ValueError, ArithmeticError) as e:
+        except Exception as e:  # noqa: BLE001 - a failing point is a record, not a crash
             record["error"] = str(e)
             record["error_type"] = type(e).__name__
     record["seconds"] = time.perf_counter() - started
@@ -435,7 +435,7 @@ def _open_store(study: Study, store: Path) -> None:
     """Creates the store for ``study`` or checks that it holds ``study``."""
     meta = store / "study.json"
     fingerprint = study.fingerprint()
-    if meta.exists():
+    if meta.is_file():
         held = json.loads(meta.read_text())
         if (
             held.get("fingerprint") != fingerprint
@@ -446,6 +446,8 @@ def _open_store(study: Study, store: Path) -> None:
                 f"{held.get('fingerprint')}, this one {fingerprint}); give another store"
             )
         return
+    if store.exists() and not store.is_dir():
+        raise StudyError(f"store: {store} is not a directory")
     if store.exists() and any(store.iterdir()):
         raise StudyError(f"store: {store} is not empty and holds no study")
     (store / "points").mkdir(parents=True, exist_ok=True)
