@@ -475,6 +475,18 @@ class Run:
         return ForcedResponse(columns=columns, amplitudes=amplitudes, curves=curves)
 
 
+def _run_of(files: Sequence[tuple[str, bytes]], seconds: float) -> Run:
+    """The :class:`Run` of the files a run wrote and the engine's seconds,
+    its warnings issued (pointing at the caller of :func:`run` or
+    :func:`run_scene`)."""
+    import json
+
+    files = dict(files)
+    summary = json.loads(files["summary.json"])
+    _warn_engine(summary.get("warnings", []), depth=2)
+    return Run(summary=summary, files=files, engine_seconds=seconds)
+
+
 def run(model: Model, plan: Mapping[str, Any], progress: Any = None) -> Run:
     """Runs a whole plan on ``model``: the engine's pipeline, as a scene's run
     does, within the machine's limits (the engine's cost gate refuses what
@@ -482,16 +494,12 @@ def run(model: Model, plan: Mapping[str, Any], progress: Any = None) -> Run:
     (the engine's ``Plan`` in JSON: ``ssm``, ``coordinates``, ``backbone``,
     ``invariance``, ``transient``, ``frc``, ``validation``, ``reference``,
     ``report``, ``simulate``, ``analyses``; see ``docs/python.md``). The
-    run's warnings are issued as :class:`ssm.errors.SsmWarning`.
+    run's warnings are issued as :class:`ssm.errors.SsmWarning`, an
+    untrusted answer's as :class:`ssm.errors.UntrustedAnswerWarning`.
     ``progress``: see :func:`compute_ssm`."""
-    import json
-
     with _Progress(progress) as callback:
         files, seconds = run_plan(model, _analyses.spec_json(plan), callback)
-    files = dict(files)
-    summary = json.loads(files["summary.json"])
-    _warn_engine(summary.get("warnings", []))
-    return Run(summary=summary, files=files, engine_seconds=seconds)
+    return _run_of(files, seconds)
 
 
 def pod(
@@ -547,14 +555,9 @@ def run_scene(path: str, plugins: Sequence[str] = (), progress: Any = None) -> R
     model, its plan, the engine's cost gate; the POD study included) and
     returns what the run writes, in memory: nothing is written to disk.
     ``progress``: see :func:`compute_ssm`."""
-    import json
-
     with _Progress(progress) as callback:
         files, seconds = _run_scene(str(path), [str(p) for p in plugins], callback)
-    files = dict(files)
-    summary = json.loads(files["summary.json"])
-    _warn_engine(summary.get("warnings", []))
-    return Run(summary=summary, files=files, engine_seconds=seconds)
+    return _run_of(files, seconds)
 
 
 def compute_ssm(
