@@ -39,6 +39,7 @@ Dask.distributed (``Client``, ``LocalCluster``); on Slurm or PBS the same
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import itertools
 import json
@@ -289,14 +290,23 @@ class Study:
                 "model": self.model.describe(),
                 "plan": self.plan,
                 "points": list(self.points.values),
-                "answers": None
-                if self.answers is None
-                else f"{self.answers.__module__}.{self.answers.__qualname__}",
+                "answers": _describe(self.answers),
             },
             sort_keys=True,
             default=str,
         )
         return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _describe(answers: Any) -> Any:
+    """A function by its importable name (a ``functools.partial`` with its
+    arguments), for the study's fingerprint."""
+    if answers is None:
+        return None
+    if isinstance(answers, functools.partial):
+        return [_describe(answers.func), list(answers.args), dict(answers.keywords)]
+    name = getattr(answers, "__qualname__", type(answers).__qualname__)
+    return f"{getattr(answers, '__module__', '')}.{name}"
 
 
 def _plan_at(plan: Mapping[str, Any], point: Mapping[str, Any]) -> dict[str, Any]:
@@ -319,13 +329,31 @@ def _plan_at(plan: Mapping[str, Any], point: Mapping[str, Any]) -> dict[str, Any
     return out
 
 
-def figures(run: Any, point: Mapping[str, Any]) -> dict[str, Any]:
+def figures(
+    run: Any, point: Mapping[str, Any], backbone_at: Sequence[float] = ()
+) -> dict[str, Any]:
     """A point's figures from its run: per forced response curve of the
     first output the peak amplitude and its frequency, the frequencies of
-    its folds and branch points, its error estimate and ``untrusted``; the
-    largest backbone estimate; the run's wall time and warnings."""
+    its folds and branch points, its error estimate and ``untrusted``; per
+    backbone curve its relative frequency shift ``omega(rho) / omega(0) -
+    1`` at each polar amplitude of ``backbone_at`` (linear interpolation
+    between the curve's points; NaN beyond it), and the largest backbone
+    estimate; the order. (:func:`run_point` adds the wall time, the
+    warnings and any error.) Give other amplitudes with
+    ``functools.partial(figures, backbone_at=[...])`` as a study's
+    ``answers``."""
     summary = run.summary
     out: dict[str, Any] = {}
+    if backbone_at and "backbone.csv" in run.files:
+        table = run.table("backbone.csv")
+        orders = sorted(set(table["order"]))
+        for order in orders:
+            rows = table[table["order"] == order]
+            rho, omega = rows["rho"].to_numpy(), rows["omega"].to_numpy()
+            prefix = f"O{order}_" if len(orders) > 1 else ""
+            for a in backbone_at:
+                shifted = np.interp(a, rho, omega, left=np.nan, right=np.nan)
+                out[f"{prefix}backbone_shift@{a:g}"] = float(shifted / omega[0] - 1.0)
     frc = summary.get("frc") or {}
     if frc.get("curves"):
         table = run.table("frc.csv")
@@ -505,12 +533,48 @@ def read(study: Study, store: str | Path) -> Any:
     return dataset.rename({d: d.removeprefix("param:") for d in dims})
 
 
+class _TqdmPoints:
+    """A ``tqdm`` bar of a study's points: finished of all, failed ones and
+    the time left in its postfix."""
+
+    def __init__(self, total: int) -> None:
+        from tqdm.auto import tqdm
+
+        self._bar = tqdm(total=total, unit="point", leave=False)
+
+    def __call__(
+        self, finished: int, failed: int, remaining: int, left: float | None
+    ) -> None:
+        self._bar.n = finished
+        self._bar.set_postfix(failed=failed, refresh=False)
+        self._bar.refresh()
+
+    def close(self) -> None:
+        self._bar.close()
+
+
+def _bar(progress: Any, total: int) -> _TqdmPoints | None:
+    """The default progress display: a tqdm bar when ``progress`` is
+    ``None`` and tqdm is installed."""
+    if progress is not None and progress is not True:
+        if progress is not False and not callable(progress):
+            raise StudyError(
+                f"progress: give a callable, True, False or None, not {progress!r}"
+            )
+        return None
+    try:
+        import tqdm  # noqa: F401
+    except ImportError:
+        return None
+    return _TqdmPoints(total)
+
+
 def run(
     study: Study,
     store: str | Path,
     client: Any = None,
     retries: int = 2,
-    progress: Callable[[int, int, int, float | None], None] | None = None,
+    progress: Callable[[int, int, int, float | None], None] | bool | None = None,
 ) -> Any:
     """Runs the points of ``study`` that ``store`` does not hold yet, each as
     a task of the Dask ``client`` (default: a ``LocalCluster`` with one
@@ -519,7 +583,9 @@ def run(
 
     A task whose worker dies is rescheduled (Dask's ``retries``); a point
     that fails records its error; ``progress(finished, failed, remaining,
-    seconds_left)`` is called as points finish.
+    seconds_left)`` is called as points finish (``None``, the default, and
+    ``True`` draw a ``tqdm`` bar of the points when tqdm is installed;
+    ``False`` nothing).
 
     Raises
     ------
@@ -528,6 +594,10 @@ def run(
     """
     from dask.distributed import Client, LocalCluster, as_completed
 
+    if progress not in (None, True, False) and not callable(progress):
+        raise StudyError(
+            f"progress: give a callable, True, False or None, not {progress!r}"
+        )
     store = Path(store)
     _open_store(study, store)
     todo = [i for i in range(len(study.points.values)) if i not in done(store)]
@@ -557,11 +627,14 @@ def run(
             )
             failed = 0
             started = time.perf_counter()
+            bar = _bar(progress, len(todo))
+            if bar is not None:
+                progress = bar
             try:
                 for finished, future in enumerate(as_completed(futures), start=1):
                     record = future.result()
                     failed += record.get("error") is not None
-                    if progress is not None:
+                    if callable(progress):
                         left = len(todo) - finished
                         rate = (time.perf_counter() - started) / finished
                         progress(finished, failed, left, rate * left)
@@ -570,6 +643,9 @@ def run(
                 # yet is not started; the finished points stay in the store
                 client.cancel(futures)
                 raise
+            finally:
+                if bar is not None:
+                    bar.close()
     finally:
         if own:
             client.close()
