@@ -83,3 +83,44 @@ def test_oversized_requests_are_refused_by_the_cost_gate():
         s.backbone(0.1, points=10**12)
     with pytest.raises(InputError, match="forcing.points"):
         s.forced_response([0.01], (0.9, 1.1), points=10**12)
+
+
+def test_a_model_over_the_memory_limit_is_refused_before_it_is_built():
+    """Under ``ulimit -v`` of 3 GB (a child process), a model of 3 x 10^6
+    degrees of freedom from scipy (6 x 10^6 stored entries, about 3.6 GB to
+    build at the measured 430-460 bytes an entry) is an InputError naming
+    ``M`` and the address-space limit, not an abort of the process; the same
+    call with 10^4 degrees of freedom builds."""
+    import subprocess
+    import sys
+    import textwrap
+
+    script = textwrap.dedent(
+        """
+        import resource, sys
+        import scipy.sparse as sp, ssm
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+        n = int(sys.argv[1])
+        try:
+            ssm.from_arrays(sp.identity(n, format="csr"), sp.identity(n, format="csr"))
+            print("built")
+        except ssm.errors.InputError as e:
+            print("refused:", e)
+        """
+    )
+    out = {
+        n: subprocess.run(
+            [sys.executable, "-c", script, str(n)],
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        for n in (3_000_000, 10_000)
+    }
+    big, small = out[3_000_000], out[10_000]
+    assert big.returncode == 0, big.stderr
+    assert big.stdout.startswith("refused: M:") and "ulimit -v" in big.stdout, (
+        big.stdout
+    )
+    assert small.stdout.strip() == "built", small.stdout + small.stderr
