@@ -17,6 +17,7 @@ mod model;
 mod plan;
 mod plugin;
 mod reduced;
+mod study;
 mod work;
 
 use pyo3::prelude::*;
@@ -33,6 +34,11 @@ fn _ssm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(plan::model_from_scene, m)?)?;
     m.add_function(wrap_pyfunction!(plugin::model_from_plugin, m)?)?;
     m.add_function(wrap_pyfunction!(plugin::model_from_signals, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_figures, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_sample, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_plan_at, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_open_store, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_write_record, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

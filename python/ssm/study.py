@@ -70,8 +70,6 @@ __all__ = [
     "sample",
 ]
 
-STORE_VERSION = 1
-
 
 class StudyError(SsmError, ValueError):
     """A study that cannot run as given: an unknown parameter, an empty
@@ -243,18 +241,22 @@ def points(values: Sequence[Mapping[str, Any]]) -> Points:
 
 
 def sample(ranges: Mapping[str, tuple[float, float]], n: int, seed: int) -> Points:
-    """``n`` points drawn uniformly from the boxes ``ranges`` (parameter ->
-    ``(low, high)``) by numpy's PCG64 generator seeded with ``seed``."""
-    if n <= 0:
-        raise StudyError(f"points: a sample of {n} points")
+    """``n`` points drawn uniformly from the box ``ranges`` (parameter ->
+    ``(low, high)``) as ``ssm-engine study`` draws a ``[sample]``: ChaCha8
+    seeded with ``seed``, the parameters in the order of their names, ``n``
+    draws each."""
+    from ._ssm import study_sample
+
     _check_parameters(list(ranges))
-    rng = np.random.default_rng(seed)
-    columns = {}
-    for name, (low, high) in ranges.items():
-        if not (np.isfinite(low) and np.isfinite(high) and high > low):
-            raise StudyError(f"points: the range of '{name}' [{low}, {high}] is empty")
-        columns[name] = rng.uniform(low, high, n)
-    return Points(tuple({k: float(v[i]) for k, v in columns.items()} for i in range(n)))
+    try:
+        drawn = study_sample(
+            [(str(k), float(lo), float(hi)) for k, (lo, hi) in ranges.items()],
+            int(n),
+            int(seed),
+        )
+    except (SsmError, OverflowError) as e:
+        raise StudyError(str(e)) from None
+    return Points(tuple(dict(p) for p in drawn))
 
 
 def _plain(v: Any) -> Any:
@@ -310,85 +312,36 @@ def _describe(answers: Any) -> Any:
 
 
 def _plan_at(plan: Mapping[str, Any], point: Mapping[str, Any]) -> dict[str, Any]:
-    """The base plan with the point's plan values set (``section.key``);
-    a scalar given for a list-valued key (``frc.epsilon``) becomes a list
-    of one."""
-    out = json.loads(json.dumps(plan))
-    for name, value in point.items():
-        head, _, key = name.partition(".")
-        if head == "model":
-            continue
-        section = out.setdefault(head, {})
-        if (
-            key in ("epsilon", "orders")
-            and head == "frc"
-            and not isinstance(value, list)
-        ):
-            value = [value]
-        section[key] = value
-    return out
+    """The base plan (complete, with its defaults) with the point's plan
+    values set (``section.key``), as ``ssm-engine study`` sets them: a
+    number given for ``frc.epsilon`` or ``frc.orders`` becomes a list of
+    one."""
+    from ._analyses import spec_json
+    from ._ssm import study_plan_at
+
+    values = [[k, _plain(v)] for k, v in point.items()]
+    return json.loads(study_plan_at(spec_json(plan), json.dumps(values)))
 
 
 def figures(
     run: Any, point: Mapping[str, Any], backbone_at: Sequence[float] = ()
 ) -> dict[str, Any]:
-    """A point's figures from its run: per forced response curve of the
-    first output the peak amplitude and its frequency, the frequencies of
-    its folds and branch points, its error estimate and ``untrusted``; per
-    backbone curve its relative frequency shift ``omega(rho) / omega(0) -
-    1`` at each polar amplitude of ``backbone_at`` (linear interpolation
-    between the curve's points; NaN beyond it), and the largest backbone
-    estimate; the order. (:func:`run_point` adds the wall time, the
-    warnings and any error.) Give other amplitudes with
-    ``functools.partial(figures, backbone_at=[...])`` as a study's
-    ``answers``."""
-    summary = run.summary
-    out: dict[str, Any] = {}
-    if backbone_at and "backbone.csv" in run.files:
-        table = run.table("backbone.csv")
-        orders = sorted(set(table["order"]))
-        for order in orders:
-            rows = table[table["order"] == order]
-            rho, omega = rows["rho"].to_numpy(), rows["omega"].to_numpy()
-            prefix = f"O{order}_" if len(orders) > 1 else ""
-            for a in backbone_at:
-                shifted = np.interp(a, rho, omega, left=np.nan, right=np.nan)
-                out[f"{prefix}backbone_shift@{a:g}"] = float(shifted / omega[0] - 1.0)
-    frc = summary.get("frc") or {}
-    if frc.get("curves"):
-        table = run.table("frc.csv")
-        amp = [c for c in table.columns if c.endswith("_linf")]
-        for c in frc["curves"]:
-            key = (
-                f"O{c['order']}" if len({x["order"] for x in frc["curves"]}) > 1 else ""
-            )
-            rows = table[
-                (table["order"] == c["order"]) & (table["epsilon"] == c["epsilon"])
-            ]
-            prefix = f"{key}_" if key else ""
-            if amp and len(rows):
-                k = int(rows[amp[0]].to_numpy().argmax())
-                out[f"{prefix}peak_amplitude"] = float(rows[amp[0]].to_numpy()[k])
-                out[f"{prefix}peak_omega"] = float(rows["omega"].to_numpy()[k])
-            bif = [
-                b
-                for b in frc.get("bifurcations", [])
-                if b["order"] == c["order"] and b["epsilon"] == c["epsilon"]
-            ]
-            out[f"{prefix}fold_omegas"] = sorted(
-                b["omega"] for b in bif if b["kind"] == "SN"
-            )
-            out[f"{prefix}branch_point_omegas"] = sorted(
-                b["omega"] for b in bif if b["kind"] == "BP"
-            )
-            out[f"{prefix}frc_error_estimate"] = c.get("error_estimate")
-            out[f"{prefix}frc_untrusted"] = bool(c.get("untrusted", False))
-    answers = (summary.get("accuracy") or {}).get("answers", [])
-    backbone = [a["error_estimate"] for a in answers if a["answer"] == "backbone"]
-    if backbone:
-        out["backbone_error_estimate"] = max(e for e in backbone if e is not None)
-    out["order"] = (summary.get("accuracy") or {}).get("order")
-    return out
+    """A point's figures from its run, as ``ssm-engine study`` records
+    them (one implementation, in the engine): per forced response curve
+    (``O<k>_`` before the names when the curves have several orders) the
+    first output's peak amplitude and its frequency (``peak_amplitude``,
+    ``peak_omega``), the frequencies of its folds and branch points
+    (``fold_omegas``, ``branch_point_omegas``), its error estimate and
+    ``frc_untrusted``; per backbone curve its relative frequency shift
+    ``omega(rho) / omega(0) - 1`` at each polar amplitude of
+    ``backbone_at`` (``backbone_shift@<a>``, linear interpolation; NaN
+    beyond the curve); the largest backbone estimate and the order.
+    (:func:`run_point` adds the wall time, the warnings and any error.)
+    Give other amplitudes with ``functools.partial(figures,
+    backbone_at=[...])`` as a study's ``answers``."""
+    from ._ssm import study_figures
+
+    return dict(study_figures(list(run.files.items()), [float(a) for a in backbone_at]))
 
 
 # -- one point, on a worker -----------------------------------------------------
@@ -408,20 +361,23 @@ def _record_path(store: Path, index: int) -> Path:
     return store / "points" / f"{index:08d}.parquet"
 
 
-def _write_record(path: Path, record: Mapping[str, Any]) -> None:
-    """``record`` as a one-row Parquet file, written under a temporary name
-    and renamed: a reader sees the whole record or none (lists and
-    dictionaries as JSON text)."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
+def _cell(v: Any) -> Any:
+    """A record's value: lists and dictionaries as JSON text."""
+    v = _plain(v)
+    if isinstance(v, (list, dict)):
+        # as the engine writes its lists (UTF-8, not escaped)
+        return json.dumps(v, ensure_ascii=False)
+    return v
 
-    row = {
-        k: json.dumps(v) if isinstance(v, (list, dict)) else v
-        for k, v in record.items()
-    }
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-    pq.write_table(pa.Table.from_pylist([row]), tmp)
-    os.replace(tmp, path)
+
+def _write_record(store: Path, index: int, record: Mapping[str, Any]) -> None:
+    """``record`` as point ``index``'s one-row Parquet file of ``store``,
+    written under a temporary name and renamed by the engine's store (the
+    layout ``ssm-engine study`` writes): a reader sees the whole record or
+    none."""
+    from ._ssm import study_write_record
+
+    study_write_record(str(store), index, [(k, _cell(v)) for k, v in record.items()])
 
 
 def run_point(study: Study, index: int, store: str) -> dict[str, Any]:
@@ -452,7 +408,7 @@ def run_point(study: Study, index: int, store: str) -> dict[str, Any]:
             record["error_type"] = type(e).__name__
     record["seconds"] = time.perf_counter() - started
     record["warnings"] = [str(w.message) for w in caught]
-    _write_record(_record_path(Path(store), index), record)
+    _write_record(Path(store), index, record)
     return record
 
 
@@ -460,36 +416,18 @@ def run_point(study: Study, index: int, store: str) -> dict[str, Any]:
 
 
 def _open_store(study: Study, store: Path) -> None:
-    """Creates the store for ``study`` or checks that it holds ``study``."""
-    meta = store / "study.json"
-    fingerprint = study.fingerprint()
-    if meta.is_file():
-        held = json.loads(meta.read_text())
-        if (
-            held.get("fingerprint") != fingerprint
-            or held.get("version") != STORE_VERSION
-        ):
-            raise StudyError(
-                f"store: {store} holds another study (fingerprint "
-                f"{held.get('fingerprint')}, this one {fingerprint}); give another store"
-            )
-        return
-    if store.exists() and not store.is_dir():
-        raise StudyError(f"store: {store} is not a directory")
-    if store.exists() and any(store.iterdir()):
-        raise StudyError(f"store: {store} is not empty and holds no study")
-    (store / "points").mkdir(parents=True, exist_ok=True)
-    text = json.dumps(
-        {
-            "version": STORE_VERSION,
-            "fingerprint": fingerprint,
-            "points": len(study.points.values),
-            "dims": None if study.points.dims is None else list(study.points.dims),
-        }
-    )
-    tmp = store / f".study.json.{uuid.uuid4().hex}.tmp"
-    tmp.write_text(text)
-    os.replace(tmp, meta)
+    """Creates the store for ``study`` or checks that it holds ``study``
+    (the engine's store: ``study.json`` written once even when several
+    processes open the store at once)."""
+    from ._ssm import study_open_store
+
+    dims = None if study.points.dims is None else list(study.points.dims)
+    try:
+        study_open_store(
+            str(store), study.fingerprint(), len(study.points.values), dims
+        )
+    except SsmError as e:
+        raise StudyError(str(e)) from None
 
 
 def done(store: str | Path) -> set[int]:
@@ -500,18 +438,30 @@ def done(store: str | Path) -> set[int]:
     return {int(p.stem) for p in folder.glob("*.parquet") if p.stem.isdigit()}
 
 
-def read(study: Study, store: str | Path) -> Any:
-    """The store's records as a ``pandas.DataFrame`` (one row per point,
-    in the points' order), or, for a grid, an ``xarray.Dataset`` with one
-    dimension per grid parameter."""
+def read(store: str | Path) -> Any:
+    """The records of ``store`` (written by :func:`run` or by ``ssm-engine
+    study``) as a ``pandas.DataFrame`` (one row per point, in the points'
+    order), or, for a grid, an ``xarray.Dataset`` with one dimension per
+    grid parameter; lists (fold frequencies, warnings) come back as lists.
+    A column whose records disagree on its type (text in one, numbers in
+    another) holds Python objects."""
+    import pandas as pd
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    paths = sorted((Path(store) / "points").glob("*.parquet"))
+    store = Path(store)
+    meta = store / "study.json"
+    if not meta.is_file():
+        raise StudyError(f"store: {store} holds no study (no study.json)")
+    dims = json.loads(meta.read_text()).get("dims")
+    paths = sorted((store / "points").glob("*.parquet"))
     if not paths:
         raise StudyError(f"store: {store} holds no finished point")
     tables = [pq.read_table(p) for p in paths]
-    frame = pa.concat_tables(tables, promote_options="default").to_pandas()
+    try:
+        frame = pa.concat_tables(tables, promote_options="default").to_pandas()
+    except (pa.ArrowInvalid, pa.ArrowTypeError):
+        frame = pd.concat([t.to_pandas() for t in tables], ignore_index=True)
     frame = frame.sort_values("point").reset_index(drop=True)
     for column in frame.columns:
         values = frame[column]
@@ -520,9 +470,9 @@ def read(study: Study, store: str | Path) -> Any:
             and values.map(lambda v: isinstance(v, str) and v[:1] in "[{").all()
         ):
             frame[column] = values.map(json.loads)
-    if study.points.dims is None:
+    if dims is None:
         return frame
-    dims = [f"param:{d}" for d in study.points.dims]
+    dims = [f"param:{d}" for d in dims]
     table = frame.set_index(dims).drop(columns=["point"])
     list_columns = [
         c for c in table.columns if table[c].map(lambda v: isinstance(v, list)).any()
@@ -650,4 +600,4 @@ def run(
         if own:
             client.close()
             cluster.close()
-    return read(study, store)
+    return read(store)

@@ -6,6 +6,7 @@ recorded per point."""
 import functools
 import json
 import os
+import pathlib
 import signal
 
 import numpy as np
@@ -181,3 +182,55 @@ def test_backbone_shifts_of_a_study_are_the_closed_form(client, tmp_path):
     expected = 3 * kappa * 0.1**2 / (2 * wd * (1 + w * w)) / wd
     gap = np.abs(data["backbone_shift@0.1"].to_numpy() - expected)
     assert gap.max() < 1e-10, gap
+
+
+def test_the_command_line_s_sharded_store_reads_as_the_python_study(client, tmp_path):
+    """``ssm-engine study`` over the bundled base scene in two shards (as a
+    Slurm array runs it), read by :func:`ssm.study.read`, gives the grid
+    and every figure of the same study run by Dask from Python on the
+    plugin's model with the scene's plan written as a dictionary: two doors
+    (TOML scene and study file, Python plan and points) to one engine, so
+    the figures agree bit for bit (a determinism check)."""
+    import shutil
+    import subprocess
+
+    root = pathlib.Path(__file__).resolve().parents[2]
+    shutil.copy(root / "zoo/studies/spatial_oscillator_frc.toml", tmp_path)
+    (tmp_path / "s.study.toml").write_text(
+        'scene = "spatial_oscillator_frc.toml"\n'
+        "[[grid]]\n"
+        'parameter = "frc.epsilon"\n'
+        "values = [0.004, 0.02, 0.05]\n"
+        "[[grid]]\n"
+        'parameter = "model.zeta1"\n'
+        "values = [0.01, 0.025]\n"
+    )
+    store = tmp_path / "cli"
+    for shard in ("1/2", "2/2"):
+        subprocess.run(
+            [RELEASE / "ssm-engine", "study", tmp_path / "s.study.toml"]
+            + ["--store", store, "--shard", shard],
+            check=True,
+            capture_output=True,
+            env={**os.environ, "SSM_PLUGIN_PATH": str(RELEASE), "CI": "1"},
+        )
+    cli = S.read(store)
+    plan = {
+        "ssm": {"master_pairs": [1], "order": 5},
+        "coordinates": ["x1"],
+        "frc": {"epsilon": [0.01], "omega_range": [1.8, 2.2], "points": 120},
+    }
+    study = S.Study(
+        model=S.Plugin("spatial-oscillator"),
+        plan=plan,
+        points=S.grid(
+            {"frc.epsilon": [0.004, 0.02, 0.05], "model.zeta1": [0.01, 0.025]}
+        ),
+    )
+    python = S.run(study, tmp_path / "python", client, progress=False)
+    assert dict(cli.sizes) == {"frc.epsilon": 3, "model.zeta1": 2}
+    assert not np.any(cli["error"].notnull().to_numpy())
+    assert int(np.count_nonzero(cli["fold_omegas"].to_numpy() != "[]")) >= 1
+    for key in python.data_vars:
+        if key != "seconds":
+            assert cli[key].equals(python[key]), key

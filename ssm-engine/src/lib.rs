@@ -47,5 +47,6 @@ pub mod plan;
 pub mod plot;
 pub mod progress;
 pub mod scene;
+pub mod study;
 
 pub use ssm_core::C64;

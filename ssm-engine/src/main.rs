@@ -18,6 +18,7 @@ use ssm_engine::output::check_not_input;
 use ssm_engine::output::checkpoint::{create_first, Checkpoint};
 use ssm_engine::pipeline::Progress;
 use ssm_engine::scene::{ReportSection, SceneFile};
+use ssm_engine::study::{self, StudyFile};
 use ssm_kernel::continuation::Ledger;
 
 const SCENE_HELP: &str = concat!(
@@ -99,6 +100,27 @@ enum Command {
     },
     /// Print the JSON Schema of summary.json (docs/summary.schema.json).
     Schema,
+    /// Run a study (a base scene at many points: a grid, given points or a
+    /// seeded sample; docs/studies.md): every point, or one slice of them
+    /// for one task of a job array (--shard I/N), each finished point
+    /// written at once to the store; points the store holds are skipped.
+    /// --merge gathers the store into DIR/table.parquet.
+    Study {
+        /// Study file.
+        #[arg(value_name = "STUDY.toml")]
+        study: PathBuf,
+        /// Store directory (created; a store of another study is refused).
+        #[arg(long, value_name = "DIR")]
+        store: PathBuf,
+        /// Run the I-th of N slices of the points (1 <= I <= N; e.g.
+        /// $SLURM_ARRAY_TASK_ID/4 with sbatch --array=1-4).
+        #[arg(long, value_name = "I/N", conflicts_with = "merge")]
+        shard: Option<String>,
+        /// Gather the store's records into one table (every point must have
+        /// its record).
+        #[arg(long)]
+        merge: bool,
+    },
 }
 
 impl Command {
@@ -109,6 +131,7 @@ impl Command {
             Command::Report { .. } => "report",
             Command::Export { .. } => "export",
             Command::Schema => "schema",
+            Command::Study { .. } => "study",
         }
     }
 }
@@ -367,8 +390,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         );
     }
     // a resumed reference belongs to a run; these commands run none
-    if let Some(command @ (Command::Plugins | Command::Schema | Command::Export { .. })) =
-        &cli.command
+    if let Some(
+        command @ (Command::Plugins
+        | Command::Schema
+        | Command::Export { .. }
+        | Command::Study { .. }),
+    ) = &cli.command
     {
         if cli.resume || cli.resume_from.is_some() {
             anyhow::bail!(
@@ -391,6 +418,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         // printed before the plugins were looked for
         Some(Command::Schema) => return Ok(()),
         Some(Command::Report { scene, out }) => (scene, out, true),
+        Some(Command::Study {
+            study,
+            store,
+            shard,
+            merge,
+        }) => return run_study(&study, &store, shard.as_deref(), merge, &mut registry),
         Some(Command::Export { scene, dir }) => {
             let scene = SceneFile::load(&scene)?;
             check_not_input(&dir, &scene_inputs(&scene, &mut registry))?;
@@ -511,6 +544,68 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             out.display()
         ),
     }
+    Ok(())
+}
+
+/// `ssm-engine study`: a shard of a study's points (all by default), or
+/// the merge of its store.
+fn run_study(
+    path: &std::path::Path,
+    store: &std::path::Path,
+    shard: Option<&str>,
+    merge: bool,
+    registry: &mut Registry,
+) -> anyhow::Result<()> {
+    let study = StudyFile::load(path)?;
+    if merge {
+        let (table, failed) = study::merge(&study, store)?;
+        println!(
+            "merged {} points ({failed} failed) into {}",
+            study.points.values.len(),
+            table.display()
+        );
+        return Ok(());
+    }
+    let shard = shard.map(study::parse_shard).transpose()?.unwrap_or((1, 1));
+    let spinner = spinner();
+    let started = std::time::Instant::now();
+    let mut finished = 0usize;
+    let mut note = |index: usize, record: &study::store::Record| {
+        finished += 1;
+        let error = record.iter().find_map(|(n, c)| match (n.as_str(), c) {
+            ("error", study::store::Cell::Text(e)) => Some(e.clone()),
+            _ => None,
+        });
+        let line = match error {
+            Some(e) => format!("point {index}: failed: {e}"),
+            None => format!("point {index}: done"),
+        };
+        spinner.stage(&format!(
+            "{line} ({finished} this run, {:.1} s)",
+            started.elapsed().as_secs_f64()
+        ));
+    };
+    let report = study::run_shard(
+        &study,
+        store,
+        shard,
+        registry,
+        &ssm_engine::progress::Quiet,
+        &mut note,
+    );
+    spinner.finish();
+    let report = report?;
+    println!(
+        "{}: shard {}/{}: {} points, {} computed ({} failed), {} already in {}",
+        study.path.display(),
+        shard.0,
+        shard.1,
+        report.points,
+        report.computed,
+        report.failed,
+        report.skipped,
+        store.display()
+    );
     Ok(())
 }
 

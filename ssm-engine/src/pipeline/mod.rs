@@ -131,7 +131,7 @@ impl Ran {
 }
 
 /// The model a plan runs on.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct Model {
     /// The validated system the analyses run on.
     pub system: System,

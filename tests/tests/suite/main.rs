@@ -44,6 +44,7 @@ mod shaw_pierre;
 mod simulate;
 mod spectrum;
 mod ssm_autonomous;
+mod study;
 mod summary_schema;
 mod validation;
 mod workspace;
