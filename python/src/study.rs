@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyFloat, PyInt, PyList, PyString};
 
 use crate::errors::{raise, Family};
+use ssm_engine::plan::budget::Limits;
 use ssm_engine::plan::Plan;
 use ssm_engine::study::figures;
 use ssm_engine::study::points;
@@ -75,8 +76,8 @@ pub(crate) fn study_sample(
     n: usize,
     seed: u64,
 ) -> PyResult<Vec<Vec<(String, f64)>>> {
-    let sampled =
-        points::sample(ranges, n, seed).map_err(|e| raise(py, Family::Input, e.to_string()))?;
+    let sampled = points::sample(ranges, n, seed, &Limits::of_machine())
+        .map_err(|e| raise(py, Family::Input, e.to_string()))?;
     Ok(sampled
         .values
         .into_iter()

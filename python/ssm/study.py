@@ -435,7 +435,11 @@ def done(store: str | Path) -> set[int]:
     folder = Path(store) / "points"
     if not folder.exists():
         return set()
-    return {int(p.stem) for p in folder.glob("*.parquet") if p.stem.isdigit()}
+    return {
+        int(p.stem)
+        for p in folder.glob("*.parquet")
+        if p.stem.isdigit() and p.is_file() and not p.is_symlink()
+    }
 
 
 def read(store: str | Path) -> Any:
@@ -454,7 +458,7 @@ def read(store: str | Path) -> Any:
     if not meta.is_file():
         raise StudyError(f"store: {store} holds no study (no study.json)")
     dims = json.loads(meta.read_text()).get("dims")
-    paths = sorted((store / "points").glob("*.parquet"))
+    paths = [_record_path(store, i) for i in sorted(done(store))]
     if not paths:
         raise StudyError(f"store: {store} holds no finished point")
     tables = [pq.read_table(p) for p in paths]

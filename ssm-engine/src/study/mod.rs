@@ -205,6 +205,7 @@ impl StudyFile {
         let scene_path = path.parent().unwrap_or(Path::new(".")).join(&study.scene);
         let scene = SceneFile::load(&scene_path)?;
         let plan = plan::of_scene(&scene)?;
+        let limits = Limits::of_machine();
         if let Some(bad) = study
             .backbone_at
             .iter()
@@ -238,7 +239,7 @@ impl StudyFile {
                 })
                 .collect::<Result<Vec<_>, PointsError>>()
                 .map_err(points_error)?;
-            points::grid(axes).map_err(points_error)?
+            points::grid(axes, &limits).map_err(points_error)?
         } else if let Some(s) = &study.sample {
             let ranges = flatten(&s.ranges)
                 .into_iter()
@@ -254,7 +255,7 @@ impl StudyFile {
                 })
                 .collect::<Result<Vec<_>, _>>()
                 .map_err(points_error)?;
-            points::sample(ranges, s.n, s.seed).map_err(points_error)?
+            points::sample(ranges, s.n, s.seed, &limits).map_err(points_error)?
         } else {
             let values = study
                 .point
@@ -577,7 +578,14 @@ pub fn merge(study: &StudyFile, store_dir: &Path) -> Result<(PathBuf, usize), St
     }
     let mut records = Vec::with_capacity(meta.points);
     for k in 0..meta.points {
-        records.extend(store::read_records(&store.record_path(k))?);
+        let read = store::read_records(&store.record_path(k)).map_err(|e| match e {
+            StoreError::Format { path, message } => StoreError::Format {
+                path,
+                message: format!("{message}; remove it and run its shard again"),
+            },
+            other => other,
+        })?;
+        records.extend(read);
     }
     let failed = records
         .iter()

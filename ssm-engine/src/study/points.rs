@@ -5,6 +5,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
 
+use crate::plan::budget::Limits;
 use crate::plan::Plan;
 
 /// The sections of a [`Plan`] a point may set a key of (`"frc.epsilon"`),
@@ -24,6 +25,29 @@ pub const PLAN_SECTIONS: [&str; 10] = [
 
 /// The most points a study may have.
 pub const MAX_POINTS: usize = 10_000_000;
+
+/// Bytes a point of `parameters` parameters holds (its list, each name and
+/// value), counted before the points are made.
+const fn point_bytes(parameters: usize) -> usize {
+    64 + 112 * parameters
+}
+
+/// Checks that `count` points of `parameters` parameters fit in `limits`.
+///
+/// # Errors
+/// They would not: the message names the count, the estimate and the limit.
+pub fn check_memory(count: usize, parameters: usize, limits: &Limits) -> Result<(), PointsError> {
+    let bytes = count as f64 * point_bytes(parameters) as f64;
+    if bytes > limits.bytes {
+        return Err(PointsError(format!(
+            "{count} points of {parameters} parameters need about {:.1} GB, more than the {:.1} GB this process may use ({}); split the study",
+            bytes / 1e9,
+            limits.bytes / 1e9,
+            limits.memory_source
+        )));
+    }
+    Ok(())
+}
 
 /// One point: parameter name and value, in order.
 pub type Point = Vec<(String, Value)>;
@@ -77,8 +101,8 @@ fn check_value(name: &str, value: &Value) -> Result<(), PointsError> {
 /// # Errors
 /// No parameter, an unknown or repeated parameter, an empty list of
 /// values, a value that is not a number, string, boolean or list, more
-/// than [`MAX_POINTS`] points.
-pub fn grid(axes: Vec<(String, Vec<Value>)>) -> Result<Points, PointsError> {
+/// than [`MAX_POINTS`] points or more than `limits` hold.
+pub fn grid(axes: Vec<(String, Vec<Value>)>, limits: &Limits) -> Result<Points, PointsError> {
     if axes.is_empty() {
         return Err(PointsError("a grid needs at least one parameter".into()));
     }
@@ -97,6 +121,7 @@ pub fn grid(axes: Vec<(String, Vec<Value>)>) -> Result<Points, PointsError> {
             .filter(|&c| c <= MAX_POINTS)
             .ok_or_else(|| PointsError(format!("the grid has more than {MAX_POINTS} points")))?;
     }
+    check_memory(count, axes.len(), limits)?;
     let mut values = Vec::with_capacity(count);
     for mut k in 0..count {
         let mut point = vec![(String::new(), Value::Null); axes.len()];
@@ -146,11 +171,13 @@ pub fn given(values: Vec<Point>) -> Result<Points, PointsError> {
 ///
 /// # Errors
 /// `n` zero or above [`MAX_POINTS`], no range, an unknown or repeated
-/// parameter, a range that is empty or not finite.
+/// parameter, a range that is empty or not finite, more points than
+/// `limits` hold.
 pub fn sample(
     mut ranges: Vec<(String, f64, f64)>,
     n: usize,
     seed: u64,
+    limits: &Limits,
 ) -> Result<Points, PointsError> {
     if n == 0 || n > MAX_POINTS {
         return Err(PointsError(format!(
@@ -172,6 +199,7 @@ pub fn sample(
             )));
         }
     }
+    check_memory(n, ranges.len(), limits)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut values = vec![Vec::with_capacity(ranges.len()); n];
     for (name, low, high) in &ranges {

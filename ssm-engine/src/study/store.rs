@@ -292,9 +292,18 @@ pub fn write_record(path: &Path, record: &Record) -> Result<(), StoreError> {
 /// The rows of the Parquet file at `path`, each as a record.
 ///
 /// # Errors
-/// The file cannot be read, or holds a column of a type the store does not
+/// The file cannot be read, is not a regular file, or holds a column of a type the store does not
 /// write (nested, binary, dates).
 pub fn read_records(path: &Path) -> Result<Vec<Record>, StoreError> {
+    // a store's records are regular files: a link planted among them is not
+    // followed
+    let meta = std::fs::symlink_metadata(path).map_err(io(path))?;
+    if !meta.is_file() {
+        return Err(StoreError::Format {
+            path: path.to_owned(),
+            message: "not a regular file (a link, a directory or a device)".into(),
+        });
+    }
     let file = File::open(path).map_err(io(path))?;
     let reader = SerializedFileReader::new(file).map_err(format(path))?;
     let mut rows = Vec::new();
@@ -538,6 +547,8 @@ impl Store {
         };
         Ok(entries
             .filter_map(Result::ok)
+            // a link planted under a record's name is no record
+            .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
             .filter_map(|e| {
                 let name = e.file_name().to_string_lossy().into_owned();
                 let stem = name.strip_suffix(".parquet")?;

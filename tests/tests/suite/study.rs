@@ -235,10 +235,21 @@ fn reruns_compute_only_missing_points_and_failures_are_records() {
         "{e}"
     );
     std::fs::remove_file(store.join("points/00000004.parquet")).unwrap();
+    // a link planted under a record's name is no record, and is replaced,
+    // not written through
+    let target = dir.join("not-a-record.txt");
+    std::fs::write(&target, "mine").unwrap();
+    std::os::unix::fs::symlink(&target, store.join("points/00000000.parquet")).unwrap();
     let out = ok(&engine(&[&study, &"--store", &store]));
     assert!(
         out.contains("12 points, 9 computed (0 failed), 3 already"),
         "{out}"
+    );
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "mine");
+    assert!(
+        std::fs::symlink_metadata(store.join("points/00000000.parquet"))
+            .unwrap()
+            .is_file()
     );
     // a damping ratio the plugin refuses (a string): recorded per point
     let bad = GRID.replace("values = [0.01, 0.02, 0.03]", "values = [0.01, \"light\"]");
@@ -370,6 +381,23 @@ fn bad_studies_and_stores_are_refused() {
     assert_eq!(
         base_scene(),
         std::fs::read_to_string(dir.join("spatial_oscillator_frc.toml")).unwrap()
+    );
+    // the points are costed before they are made: nine million of them under
+    // a 1.5 GB address space are refused, naming the limit
+    let huge = "scene = \"spatial_oscillator_frc.toml\"\n[sample]\nn = 9000000\nseed = 1\nranges = { frc.epsilon = [0.01, 0.02], model.zeta1 = [0.01, 0.02] }\n";
+    std::fs::write(dir.join("huge.study.toml"), huge).unwrap();
+    let o = Command::new("bash")
+        .arg("-c")
+        .arg("ulimit -v 1500000 && exec \"$0\" study \"$1\" --store \"$2\"")
+        .arg(engine_binary())
+        .arg(dir.join("huge.study.toml"))
+        .arg(dir.join("huge"))
+        .output()
+        .unwrap();
+    let e = err(&o);
+    assert!(
+        e.contains("9000000 points of 2 parameters") && e.contains("ulimit -v"),
+        "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
