@@ -12,6 +12,7 @@
 //!   any of them at given times;
 //! - [`dopri`]: the Dormand-Prince 5(4) pair on complex states;
 //! - [`number`]: numbers from user input in messages and CSV files;
+//! - [`search`]: the first failing point of a costly test along a scan;
 //! - [`cancel`]: cooperative cancellation of the long loops.
 
 #![warn(missing_docs)]
@@ -22,6 +23,7 @@ pub mod continuation;
 pub mod dopri;
 pub mod number;
 pub mod poly;
+pub mod search;
 pub mod sparse_lu;
 pub mod stepper;
 

@@ -477,3 +477,31 @@ fn default_grid_finds_the_response_of_a_lightly_damped_duffing() {
         assert!((ssm - hb).abs() < tol * hb, "{ssm} vs {hb}");
     }
 }
+
+/// The amplitude scan's search (`ssm_kernel::search::first_true`, which
+/// bounds a forced response's amplitudes where its backbone estimate
+/// diverges) finds what a test of every index finds whenever the test
+/// switches once, for every length, stride and switching point up to 80, in
+/// at most `n / stride + log2(stride) + 2` evaluations.
+#[test]
+fn the_strided_search_finds_the_first_failing_index_of_a_full_scan() {
+    use ssm_kernel::search::first_true;
+    for n in 0..=80usize {
+        for stride in 1..=40usize {
+            for switch in 0..=n {
+                let mut calls = 0usize;
+                let found = first_true(n, stride, |k| {
+                    calls += 1;
+                    k >= switch
+                });
+                let full = (0..n).find(|&k| k >= switch);
+                assert_eq!(found, full, "n {n}, stride {stride}, switch {switch}");
+                let bound = n / stride + (stride as f64).log2().ceil() as usize + 2;
+                assert!(
+                    calls <= bound,
+                    "n {n}, stride {stride}: {calls} calls > {bound}"
+                );
+            }
+        }
+    }
+}
