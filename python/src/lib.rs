@@ -36,6 +36,7 @@ fn _ssm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(plugin::model_from_signals, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_figures, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_sample, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_check_parameter, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_plan_at, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_open_store, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_write_record, m)?)?;

@@ -67,6 +67,12 @@ pub(crate) fn study_figures<'py>(
         .collect()
 }
 
+/// Checks a parameter's name (`ssm_engine::study::points::check_parameter`).
+#[pyfunction]
+pub(crate) fn study_check_parameter(py: Python<'_>, name: &str) -> PyResult<()> {
+    points::check_parameter(name).map_err(|e| raise(py, Family::Input, e.to_string()))
+}
+
 /// `n` points drawn from `ranges` (`(parameter, low, high)`) with `seed`,
 /// as `(parameter, value)` lists (`ssm_engine::study::points::sample`).
 #[pyfunction]

@@ -180,27 +180,15 @@ class Arrays:
 
 
 def _check_parameters(names: Sequence[str]) -> None:
+    """Each name is ``model.<parameter>`` or ``<plan section>.<key>`` (the
+    engine's check, the one ``ssm-engine study`` makes)."""
+    from ._ssm import study_check_parameter
+
     for name in names:
-        head, _, rest = str(name).partition(".")
-        if not rest or head not in _PLAN_KEYS | {"model"}:
-            raise StudyError(
-                f"points: unknown parameter '{name}': give 'model.<parameter>' or "
-                f"'<plan section>.<key>' with a section among {sorted(_PLAN_KEYS)}"
-            )
-
-
-_PLAN_KEYS = {
-    "ssm",
-    "spectrum",
-    "backbone",
-    "invariance",
-    "transient",
-    "frc",
-    "validation",
-    "reference",
-    "report",
-    "simulate",
-}
+        try:
+            study_check_parameter(str(name))
+        except SsmError as e:
+            raise StudyError(str(e)) from None
 
 
 @dataclass(frozen=True)

@@ -180,61 +180,64 @@ fn write_rows(
         };
         let cells = rows.iter().map(|r| &r[j]);
         let levels: Vec<i16> = cells.clone().map(|c| i16::from(*c != Cell::Null)).collect();
+        // the values of a column of `T` (missing ones only in `levels`)
+        fn values<'c, T>(
+            cells: impl Iterator<Item = &'c Cell>,
+            of: impl Fn(&Cell) -> Option<T>,
+        ) -> Vec<T> {
+            cells.filter_map(of).collect()
+        }
         match kind {
             Kind::Null => {
+                let none: [i32; 0] = [];
                 column
                     .typed::<Int32Type>()
-                    .write_batch(&[], Some(&levels), None)?;
+                    .write_batch(&none, Some(&levels), None)?;
             }
             Kind::Bool => {
-                let v: Vec<bool> = cells
-                    .filter_map(|c| match c {
-                        Cell::Bool(b) => Some(*b),
-                        _ => None,
-                    })
-                    .collect();
+                let v = values(cells, |c| match c {
+                    Cell::Bool(b) => Some(*b),
+                    _ => None,
+                });
                 column
                     .typed::<BoolType>()
                     .write_batch(&v, Some(&levels), None)?;
             }
             Kind::Int => {
-                let v: Vec<i64> = cells
-                    .filter_map(|c| match c {
-                        Cell::Int(i) => Some(*i),
-                        _ => None,
-                    })
-                    .collect();
+                let v = values(cells, |c| match c {
+                    Cell::Int(i) => Some(*i),
+                    _ => None,
+                });
                 column
                     .typed::<Int64Type>()
                     .write_batch(&v, Some(&levels), None)?;
             }
+            // an integer column joined with numbers holds numbers
             Kind::Float => {
-                let v: Vec<f64> = cells
-                    .filter_map(|c| match c {
-                        Cell::Float(x) => Some(*x),
-                        // an integer column joined with numbers
-                        Cell::Int(i) => Some(*i as f64),
-                        _ => None,
-                    })
-                    .collect();
+                let v = values(cells, |c| match c {
+                    Cell::Float(x) => Some(*x),
+                    Cell::Int(i) => Some(*i as f64),
+                    _ => None,
+                });
                 column
                     .typed::<DoubleType>()
                     .write_batch(&v, Some(&levels), None)?;
             }
+            // text, lists as JSON, and the values of a column of mixed ones
             Kind::Text => {
-                let v: Vec<ByteArray> = cells
-                    .filter_map(|c| match c {
-                        Cell::Text(s) => Some(ByteArray::from(s.as_str())),
-                        Cell::List(v) => Some(ByteArray::from(Cell::list_text(v).as_str())),
-                        // a column of mixed values
-                        Cell::Bool(b) => Some(ByteArray::from(b.to_string().as_str())),
-                        Cell::Int(i) => Some(ByteArray::from(i.to_string().as_str())),
-                        Cell::Float(x) => Some(ByteArray::from(
-                            Cell::list_text(&[*x]).trim_matches(['[', ']']),
-                        )),
-                        _ => None,
-                    })
-                    .collect();
+                let v = values(cells, |c| {
+                    let text = match c {
+                        Cell::Null => return None,
+                        Cell::Text(s) => s.clone(),
+                        Cell::List(v) => Cell::list_text(v),
+                        Cell::Bool(b) => b.to_string(),
+                        Cell::Int(i) => i.to_string(),
+                        Cell::Float(x) => {
+                            Cell::list_text(&[*x]).trim_matches(['[', ']']).to_owned()
+                        }
+                    };
+                    Some(ByteArray::from(text.as_str()))
+                });
                 column
                     .typed::<ByteArrayType>()
                     .write_batch(&v, Some(&levels), None)?;
