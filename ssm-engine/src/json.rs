@@ -1,6 +1,6 @@
 //! Small shapes shared by the typed entries of `summary.json` and
-//! `identified.json`: complex numbers, a number or a list, and a reducer's
-//! diagnostics.
+//! `identified.json`: complex numbers, a number or a list, a reducer's
+//! diagnostics, and the work of a stage's sparse linear algebra.
 
 use std::collections::BTreeMap;
 
@@ -84,4 +84,28 @@ pub fn diagnostics(list: &[ssm_api::Diagnostic]) -> Diagnostics {
             (d.name.to_string(), v)
         })
         .collect()
+}
+
+/// The work of one stage's sparse linear algebra with the full system's
+/// matrices (`Lambda B - A`); the seconds are in `timing_s`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LinearWork {
+    /// Symbolic factorizations (sparsity analyses).
+    pub symbolic_factorizations: usize,
+    /// Numeric factorizations.
+    pub numeric_factorizations: usize,
+    /// Solves (each with its residual check and refinement).
+    pub solves: usize,
+}
+
+impl LinearWork {
+    /// The work counted by a homological solver.
+    pub fn of(counts: ssm_core::ssm::SolveCounts) -> Self {
+        LinearWork {
+            symbolic_factorizations: counts.symbolic,
+            numeric_factorizations: counts.factorizations,
+            solves: counts.solves,
+        }
+    }
 }

@@ -484,6 +484,7 @@ pub(crate) fn forced_response_multi(
         rho_max: None,
         forcing_on_master: s,
         warnings,
+        linear: forced.counts(),
     })
 }
 

@@ -230,6 +230,7 @@ pub(crate) fn forced_response_one_pair(
         rho_max: Some(rho_max),
         forcing_on_master: vec![s],
         warnings,
+        linear: ctx.forced.counts(),
     })
 }
 

@@ -169,4 +169,8 @@ pub struct ForcedResponse {
     pub forcing_on_master: Vec<C64>,
     /// Terms left out or other caveats.
     pub warnings: Vec<String>,
+    /// The sparse linear algebra with the full system's matrices: the
+    /// leading-order terms at each frequency solved or tabulated, the
+    /// non-autonomous terms at their nodes.
+    pub linear: crate::ssm::SolveCounts,
 }

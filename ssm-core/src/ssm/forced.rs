@@ -275,6 +275,11 @@ impl<'a> ForcedSsm<'a> {
         self.solver.solve(big, set, rhs)
     }
 
+    /// The factorizations and solves spent so far.
+    pub fn counts(&self) -> super::SolveCounts {
+        self.solver.stats.counts()
+    }
+
     /// Forgets cached numeric factorizations.
     pub(crate) fn clear(&mut self) {
         self.solver.clear_numeric();

@@ -84,6 +84,28 @@ pub struct SolveStats {
     pub solve_s: f64,
 }
 
+impl SolveStats {
+    /// The counts alone (what is the same from run to run).
+    pub fn counts(&self) -> SolveCounts {
+        SolveCounts {
+            symbolic: self.symbolic,
+            factorizations: self.factorizations,
+            solves: self.solves,
+        }
+    }
+}
+
+/// Work done in linear algebra, without its seconds.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SolveCounts {
+    /// Symbolic factorizations.
+    pub symbolic: usize,
+    /// Numeric factorizations.
+    pub factorizations: usize,
+    /// Solves.
+    pub solves: usize,
+}
+
 /// Solver for the homological equations of one SSM computation.
 pub(crate) struct Homological<'a> {
     n: usize,

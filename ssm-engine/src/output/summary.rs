@@ -18,7 +18,7 @@ use crate::analyses::report::write::ReportSummary;
 use crate::analyses::simulate::SimulationSummary;
 use crate::analyses::validation::write::ValidationSummary;
 use crate::analyses::Answers;
-use crate::json::{diagnostics, Complex, Diagnostics};
+use crate::json::{diagnostics, Complex, Diagnostics, LinearWork};
 use ssm_core::compare::pod::PodStudy;
 use ssm_core::model::plugin::PluginOrigin;
 use ssm_core::model::system::System;
@@ -89,7 +89,7 @@ pub(crate) struct Summary<'a> {
 
 /// The version of the shape of `summary.json` (its `schema_version`); it
 /// changes whenever a key is added, removed or changes its type.
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// `summary.json`: a run's summary, or that of a `[pod]` scene that asks
 /// for no SSM answer.
@@ -386,16 +386,33 @@ pub struct PodTimingSummary {
     pub total: f64,
 }
 
-/// Work of the sparse linear algebra of the SSM.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+/// Work of the sparse linear algebra with the full system's matrices, over
+/// every stage that does some, and per stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LinearAlgebraSummary {
-    /// Symbolic factorizations.
+    /// Symbolic factorizations, all stages.
     pub symbolic_factorizations: usize,
-    /// Numeric factorizations.
+    /// Numeric factorizations, all stages.
     pub numeric_factorizations: usize,
-    /// Solves.
+    /// Solves, all stages.
     pub solves: usize,
+    /// Per stage: `ssm` (the homological equations of every order), `frc`
+    /// (the forced response's leading-order and non-autonomous terms).
+    pub stages: BTreeMap<String, LinearWork>,
+}
+
+impl LinearAlgebraSummary {
+    /// The sum of `stages`, with them.
+    fn of(stages: BTreeMap<String, LinearWork>) -> Self {
+        let sum = |f: fn(&LinearWork) -> usize| stages.values().map(f).sum();
+        LinearAlgebraSummary {
+            symbolic_factorizations: sum(|w| w.symbolic_factorizations),
+            numeric_factorizations: sum(|w| w.numeric_factorizations),
+            solves: sum(|w| w.solves),
+            stages,
+        }
+    }
 }
 
 impl RunSummary {
@@ -468,11 +485,17 @@ impl RunSummary {
                 ssm_factorization: lin.factor_s,
                 ssm_solves: lin.solve_s,
             },
-            linear_algebra: LinearAlgebraSummary {
-                symbolic_factorizations: lin.symbolic,
-                numeric_factorizations: lin.factorizations,
-                solves: lin.solves,
-            },
+            linear_algebra: LinearAlgebraSummary::of(
+                [("ssm".to_owned(), LinearWork::of(lin.counts()))]
+                    .into_iter()
+                    .chain(
+                        s.answers
+                            .frc
+                            .as_ref()
+                            .map(|f| ("frc".to_owned(), f.linear_algebra)),
+                    )
+                    .collect(),
+            ),
             analyses: s.answers.analyses.clone(),
         }
     }

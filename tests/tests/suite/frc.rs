@@ -505,3 +505,37 @@ fn the_strided_search_finds_the_first_failing_index_of_a_full_scan() {
         }
     }
 }
+
+/// `summary.json` counts the forced response's sparse linear algebra with
+/// the SSM's: `linear_algebra.stages` holds `ssm` and `frc`, the totals are
+/// their sums, the forced response's own entry repeats its stage, and a
+/// scene without forcing has no `frc` stage. On the spatial oscillator the
+/// forced response solves at least once per Chebyshev node of its X0
+/// table (17 at the least) and its non-autonomous table (17 nodes).
+#[test]
+fn the_forced_response_s_factorizations_and_solves_are_counted() {
+    let s = ssm_tests::run_zoo("spatial_oscillator_cubic_fig5.toml");
+    let la = &s["linear_algebra"];
+    let stages = la["stages"].as_object().expect("stages");
+    assert_eq!(stages.keys().collect::<Vec<_>>(), ["frc", "ssm"]);
+    for key in [
+        "symbolic_factorizations",
+        "numeric_factorizations",
+        "solves",
+    ] {
+        let sum: u64 = stages.values().map(|v| v[key].as_u64().unwrap()).sum();
+        assert_eq!(la[key].as_u64(), Some(sum), "{key}");
+        assert_eq!(s["frc"]["linear_algebra"][key], stages["frc"][key], "{key}");
+    }
+    let frc = &stages["frc"];
+    assert!(frc["solves"].as_u64().unwrap() >= 34, "{frc}");
+    assert!(
+        frc["numeric_factorizations"].as_u64().unwrap() >= 34,
+        "{frc}"
+    );
+    let none = ssm_tests::run_zoo("spatial_oscillator_cubic.toml");
+    let stages = none["linear_algebra"]["stages"]
+        .as_object()
+        .expect("stages");
+    assert_eq!(stages.keys().collect::<Vec<_>>(), ["ssm"]);
+}

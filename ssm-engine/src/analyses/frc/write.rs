@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use ssm_kernel::number::short;
 
 use crate::analyses::reference::write::reference_curves;
-use crate::json::{Complex, PerPair};
+use crate::json::{Complex, LinearWork, PerPair};
 use crate::plot::{line_plot, Curve, PlotError, Scale};
 use ssm_core::compare::validation::SteadyReference;
 use ssm_core::fom::periodic::frc::ReferenceFrc;
@@ -167,6 +167,9 @@ pub struct FrcSummary {
     /// Largest polar amplitude searched (one pair).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rho_max: Option<f64>,
+    /// Its sparse linear algebra with the full system's matrices (also in
+    /// the run's `linear_algebra`).
+    pub linear_algebra: LinearWork,
 }
 
 /// A bifurcation located on a reduced forced response curve.
@@ -294,6 +297,7 @@ impl FrcSummary {
             forcing_on_master: PerPair::of(&forcing, one_pair),
             warnings: f.warnings.clone(),
             rho_max: f.rho_max,
+            linear_algebra: LinearWork::of(f.linear),
         }
     }
 }
