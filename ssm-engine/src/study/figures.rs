@@ -225,7 +225,8 @@ pub fn figures(
                     .copied()
                     .fold(first, |k, i| if amp[i] > amp[k] { i } else { k });
                 out.push((format!("{prefix}peak_amplitude"), Cell::Float(amp[k])));
-                out.push((format!("{prefix}peak_omega"), Cell::Float(omegas[k])));
+                let omega = omegas.get(k).copied().unwrap_or(f64::NAN);
+                out.push((format!("{prefix}peak_omega"), Cell::Float(omega)));
             }
             let of_curve = |kind: &str| {
                 let mut w: Vec<f64> = bifurcations
