@@ -30,6 +30,7 @@ mod pendulum;
 mod periodic;
 mod plan;
 mod plan_run;
+mod plate;
 mod plugin_boundary;
 mod pod;
 mod pod_chain;
