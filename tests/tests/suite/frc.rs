@@ -5,7 +5,7 @@
 
 use num_complex::Complex64 as C64;
 use ssm_core::model::system::System;
-use ssm_core::rom::frc::{one_pair_frc, response_amplitudes, Frc, OnePair};
+use ssm_core::rom::frc::{one_pair_frc, response_amplitudes, Bifurcation, Frc, OnePair};
 use ssm_core::spectrum::Normalization;
 use ssm_core::spectrum::{self, MasterMode};
 use ssm_core::ssm::analysis::polar;
@@ -135,18 +135,23 @@ fn duffing_frc_matches_harmonic_balance() {
         .collect();
     assert_eq!(sn.len(), 2, "{:?}", frc.bifurcations);
     let (w_lo, w_hi) = (sn[0].omega.min(sn[1].omega), sn[0].omega.max(sn[1].omega));
-    // the folds of the harmonic-balance curve, started near ours
-    let amp_near = |w: f64| {
+    // the folds of the harmonic-balance curve, started near ours: at the
+    // amplitude of our point nearest to each fold in rho (the largest
+    // amplitude within a frequency window would start the lower fold on the
+    // upper branch, where Newton may reach either fold)
+    let amp_at = |b: &Bifurcation| {
         frc.points
             .iter()
             .zip(&amps)
-            .filter(|(p, _)| (p.omega - w).abs() < 2e-3)
+            .min_by(|(p, _), (q, _)| (p.rho - b.rho).abs().total_cmp(&(q.rho - b.rho).abs()))
             .map(|(_, &a)| a)
-            .fold(0.0, f64::max)
+            .expect("points on the curve")
     };
-    for w in [w_lo, w_hi] {
-        let (w_ref, _) = hb_fold(eps, amp_near(w), w);
-        eprintln!("fold: SSM {w}, harmonic balance {w_ref}");
+    let mut folds: Vec<(f64, f64)> = sn.iter().map(|b| (b.omega, amp_at(b))).collect();
+    folds.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (w, a) in folds {
+        let (w_ref, _) = hb_fold(eps, a, w);
+        eprintln!("fold: SSM {w} (amplitude {a}), harmonic balance {w_ref}");
         assert!(((w - w_ref) / w_ref).abs() < 1e-3, "{w} vs {w_ref}");
     }
     // unstable points lie between the folds
