@@ -97,6 +97,10 @@ pub struct LinearWork {
     pub numeric_factorizations: usize,
     /// Solves (each with its residual check and refinement).
     pub solves: usize,
+    /// Krylov steps of the band solves made through a factorization at a
+    /// nearby value: directions added to a band's shared search space (each
+    /// one triangular solve pair and products with `A` and `B`).
+    pub krylov_iterations: usize,
 }
 
 impl LinearWork {
@@ -106,6 +110,7 @@ impl LinearWork {
             symbolic_factorizations: counts.symbolic,
             numeric_factorizations: counts.factorizations,
             solves: counts.solves,
+            krylov_iterations: counts.iterations,
         }
     }
 }

@@ -19,7 +19,9 @@ use std::collections::HashMap;
 
 use crate::model::system::{OutputMap, System};
 use crate::rom::accuracy::{self, percent};
-use crate::rom::frc::{one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair};
+use crate::rom::frc::{
+    one_pair_frc, response_amplitudes, ForcedCoefficients, OnePair, NONAUTONOMOUS_NODES,
+};
 use crate::rom::frc_result::{
     CurveDetails, ForcedResponse, FrcBifurcation, FrcCurve, FrcError, FrcRow,
 };
@@ -84,7 +86,11 @@ pub(crate) fn forced_response_one_pair(
 ) -> Result<ForcedResponse, FrcError> {
     let range = (sec.omega_range[0], sec.omega_range[1]);
     let mut forced = ForcedSsm::new(sys, masters, &ratios)?;
-    let s = forced.at(0.5 * (range.0 + range.1))?.resonant_forcing(0);
+    // one factorization at the band's middle serves the leading order's
+    // solves across the band
+    let center = 0.5 * (range.0 + range.1);
+    forced.anchor_at(center);
+    let s = forced.at(center)?.resonant_forcing(0);
     if s.norm() == 0.0 {
         return Err(FrcError::Unsupported(
             "the forcing does not reach the master mode (u^* F = 0): no resonant response".into(),
@@ -131,7 +137,11 @@ pub(crate) fn forced_response_one_pair(
         points,
         range,
         series,
-        nodes: ForcedCoefficients::nodes(range.0 - 0.1 * width, range.1 + 0.1 * width, 17),
+        nodes: ForcedCoefficients::nodes(
+            range.0 - 0.1 * width,
+            range.1 + 0.1 * width,
+            NONAUTONOMOUS_NODES,
+        ),
         tables: HashMap::new(),
     };
     let mut rows = Vec::new();
@@ -333,7 +343,9 @@ impl Context<'_> {
         let peak = f.points.iter().max_by(|a, b| a.rho.total_cmp(&b.rho));
         let (res60, error_estimate) = match peak {
             Some(pk) => {
-                let na = forced.expansion(ssm, sys, pk.omega, k_eff)?;
+                let mid = 0.5 * (range.0 + range.1);
+                let mut one = forced.expansions(ssm, sys, &[pk.omega], k_eff, Some(mid))?;
+                let na = one.pop().expect("one frequency, one expansion");
                 let mut res60 = 0.0f64;
                 let mut modal = Vec::with_capacity(ORBIT_SAMPLES);
                 for k in 0..ORBIT_SAMPLES {
@@ -498,7 +510,8 @@ const ORBIT_SAMPLES: usize = 64;
 
 /// Higher-order non-autonomous terms of order `k`: exact expansions at the
 /// Chebyshev nodes in `Omega`, interpolated in between (sigma, tau and the
-/// outputs' X).
+/// outputs' X); each multi-index's solves at the nodes go through one
+/// factorization at the middle of the nodes' band.
 fn nonautonomous_table(
     forced: &mut ForcedSsm,
     ssm: &SsmExpansion,
@@ -507,11 +520,15 @@ fn nonautonomous_table(
     k: usize,
     nodes: &[f64],
 ) -> Result<NaTable, FrcError> {
+    let (lo, hi) = nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &w| {
+            (a.min(w), b.max(w))
+        });
+    let expansions = forced.expansions(ssm, sys, nodes, k, Some(0.5 * (lo + hi)))?;
     let mut coeffs = Vec::with_capacity(nodes.len());
     let mut xs = Vec::with_capacity(nodes.len());
-    let mut set = None;
-    for &w in nodes {
-        let na = forced.expansion(ssm, sys, w, k)?;
+    for na in &expansions {
         coeffs.push(na.rotating_frame_coefficients());
         let h = &na.harmonics[0];
         xs.push(
@@ -524,11 +541,10 @@ fn nonautonomous_table(
                 })
                 .collect::<Vec<C64>>(),
         );
-        set = Some(na.set);
     }
     Ok(NaTable {
         coeffs,
         xs,
-        set: set.expect("at least one node"),
+        set: expansions[0].set.clone(),
     })
 }

@@ -87,6 +87,11 @@ pub struct ForcedCoefficients {
     eps: f64,
 }
 
+/// Chebyshev nodes in `Omega` at which the one-pair forced response computes
+/// its higher non-autonomous terms exactly (interpolated in between); their
+/// expansions are held together while they are computed.
+pub const NONAUTONOMOUS_NODES: usize = 17;
+
 impl ForcedCoefficients {
     /// Chebyshev nodes (second kind) on `[a, b]`.
     pub fn nodes(a: f64, b: f64, count: usize) -> Vec<f64> {

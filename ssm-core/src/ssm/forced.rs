@@ -26,7 +26,7 @@
 
 use ssm_api::PolyVector;
 
-use super::homological::{Homological, HomologicalError};
+use super::homological::{Homological, HomologicalError, Solution};
 use super::reduced_modes;
 use crate::model::system::System;
 use crate::spectrum::MasterMode;
@@ -189,6 +189,9 @@ pub struct ForcedSsm<'a> {
     coord_ratios: Vec<f64>,
     outputs: Vec<Vec<(usize, f64)>>,
     table: Option<Table>,
+    /// The frequency whose factorization preconditions the solves of
+    /// [`ForcedSsm::at`] (see [`ForcedSsm::anchor_at`]).
+    anchor: Option<f64>,
 }
 
 impl<'a> ForcedSsm<'a> {
@@ -242,6 +245,7 @@ impl<'a> ForcedSsm<'a> {
             coord_ratios,
             outputs: Vec::new(),
             table: None,
+            anchor: None,
         })
     }
 
@@ -275,6 +279,31 @@ impl<'a> ForcedSsm<'a> {
         self.solver.solve(big, set, rhs)
     }
 
+    /// Bordered solves at every value of `bigs` through the factorization at
+    /// the nearby `anchor` (see [`Homological::solve_band`]).
+    pub(crate) fn solve_band(
+        &mut self,
+        bigs: &[C64],
+        anchor: C64,
+        set: &[usize],
+        rhss: &[&[C64]],
+    ) -> Result<Vec<Solution>, HomologicalError> {
+        self.solver.solve_band(bigs, anchor, set, rhss)
+    }
+
+    /// Forgets the factorization at `anchor`.
+    pub(crate) fn release_anchor(&mut self, anchor: C64) {
+        self.solver.release_anchor(anchor);
+    }
+
+    /// Solves [`ForcedSsm::at`] through one factorization at `omega` (the
+    /// middle of a frequency band) for every frequency
+    /// ([`Homological::solve_band`]), instead of a factorization per
+    /// frequency.
+    pub fn anchor_at(&mut self, omega: f64) {
+        self.anchor = Some(omega);
+    }
+
     /// The factorizations and solves spent so far.
     pub fn counts(&self) -> super::SolveCounts {
         self.solver.stats.counts()
@@ -290,14 +319,18 @@ impl<'a> ForcedSsm<'a> {
         let mut harmonics = Vec::with_capacity(self.forcing.len());
         for (k, (multiple, f, set)) in self.forcing.iter().enumerate() {
             let big = C64::new(0.0, multiple * omega);
-            let (x, r) = self
-                .solver
-                .solve(big, set, f)
-                .map_err(|source| ForcedError::Solve {
-                    harmonic: k + 1,
-                    omega,
-                    source,
-                })?;
+            let solved = match self.anchor {
+                Some(c) => self
+                    .solver
+                    .solve_band(&[big], C64::new(0.0, multiple * c), set, &[f])
+                    .map(|mut v| v.pop().expect("one value")),
+                None => self.solver.solve(big, set, f),
+            };
+            let (x, r) = solved.map_err(|source| ForcedError::Solve {
+                harmonic: k + 1,
+                omega,
+                source,
+            })?;
             let mut s = vec![C64::new(0.0, 0.0); self.n_coords];
             for (&j, v) in set.iter().zip(r) {
                 s[j] = v;

@@ -33,12 +33,21 @@
 //! singular and is factorized at the nearby `Lambda_k + delta` instead; the
 //! bordered system stays regular, and iterative refinement with the true
 //! residual of the bordered system recovers full accuracy (each sweep reduces
-//! the error by about `|delta| ||B|| ||K^{-1}||`).
+//! the error by about `|delta| ||B|| ||K^{-1}||`). Where band solves run
+//! (finite-element models, [`iterates`]) every solve is refined so until its
+//! componentwise backward error reaches a few roundings or stops halving
+//! ([`Homological::residual`]): the LU is backward stable in norm only, and
+//! a badly scaled model's soft rows need the refinement.
 //!
 //! One symbolic LU (pattern of `A` and `B` together) serves every
 //! factorization; numeric factorizations are cached per distinct value of the
 //! factorized `Lambda` within an order (repeated values arise from resonances
 //! among master eigenvalues).
+//!
+//! The forced response needs the same system at a band of nearby values (one
+//! per frequency of its table); where the pattern's factors are expensive
+//! (fill above [`NEAR_FILL`]) [`Homological::solve_band`] solves them all
+//! through one factorization at an anchor of the band (module `band`).
 //!
 //! # References
 //! S. Jain, G. Haller, *How to compute invariant manifolds and their reduced
@@ -57,6 +66,9 @@ use faer::Mat;
 use crate::spectrum::modes::{spmv, spmv_t};
 
 use crate::C64;
+
+mod band;
+pub use band::band_vectors;
 
 /// Why a homological equation could not be solved.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -78,6 +90,9 @@ pub struct SolveStats {
     pub factorizations: usize,
     /// Solves.
     pub solves: usize,
+    /// Factorized solves of [`Homological::solve_band`] that grew its search
+    /// space.
+    pub iterations: usize,
     /// Seconds in symbolic and numeric factorization.
     pub factor_s: f64,
     /// Seconds in triangular solves and residual checks.
@@ -91,6 +106,7 @@ impl SolveStats {
             symbolic: self.symbolic,
             factorizations: self.factorizations,
             solves: self.solves,
+            iterations: self.iterations,
         }
     }
 }
@@ -104,6 +120,23 @@ pub struct SolveCounts {
     pub factorizations: usize,
     /// Solves.
     pub solves: usize,
+    /// Factorized solves at a nearby value that grew a band solve's search
+    /// space ([`Homological::solve_band`]).
+    pub iterations: usize,
+}
+
+/// A bordered solve's `w_k` and reduced-dynamics coefficients `r_k`.
+pub(crate) type Solution = (Vec<C64>, Vec<C64>);
+
+/// The residual of the bordered system and its backward errors
+/// ([`Homological::residual`]).
+struct Residual {
+    h: Vec<C64>,
+    g: Vec<C64>,
+    /// `||res||_2` against the 2-norm of the rows' Oettli-Prager bounds.
+    normwise: f64,
+    /// The largest row's Oettli-Prager ratio (with the `omega_2` guard).
+    componentwise: f64,
 }
 
 /// Solver for the homological equations of one SSM computation.
@@ -115,10 +148,18 @@ pub(crate) struct Homological<'a> {
     lu_symbolic: Option<SymbolicLu<usize>>,
     a_val: Vec<f64>,
     b_val: Vec<f64>,
+    /// `max_j |A_ij|` and `max_j |B_ij|` per row (the guard of the
+    /// componentwise backward error, [`Homological::residual`]).
+    row_max: (Vec<f64>, Vec<f64>),
     lambda: Vec<C64>,
     bv: Vec<Vec<C64>>,
     ub: Vec<Vec<C64>>,
     numeric: HashMap<(u64, u64), Lu<usize, C64>>,
+    /// Factorizations [`Homological::solve_band`] solves through.
+    anchors: Vec<band::AnchorLu>,
+    /// Whether [`Homological::solve_band`] iterates (decided once, from the
+    /// fill of the pattern: [`iterates`]).
+    iterative: Option<bool>,
     /// Work counters.
     pub stats: SolveStats,
 }
@@ -130,8 +171,50 @@ const SHIFT_BELOW: f64 = 1e-8;
 const SHIFT: f64 = 1e-6;
 /// Iterative-refinement sweeps at most.
 const MAX_REFINE: usize = 6;
-/// Accepted relative residual of the bordered system.
+/// Componentwise backward error at which iterative refinement stops where
+/// band solves run (a few roundings).
+const REFINED: f64 = 4.0 * f64::EPSILON;
+/// Normwise backward error at which iterative refinement stops elsewhere.
 const RESIDUAL_TOL: f64 = 1e-10;
+/// Nonzeros a column of the Cholesky factor of the symmetrized pattern (AMD
+/// order) must reach for [`Homological::solve_band`] to iterate rather
+/// than factorize anew: below it (chains, small models) a factorization
+/// costs a few triangular solves, and the iteration's tens of solves do
+/// not pay.
+const NEAR_FILL: f64 = 40.0;
+
+/// Whether a pattern factorizes dearly enough for [`Homological::solve_band`]
+/// to iterate: the fill of the symbolic Cholesky factor of `P + P^T` in
+/// approximate minimum degree order, per column, is at least [`NEAR_FILL`]
+/// (deterministic, unlike a timing: the same model gives the same digits).
+fn iterates(p: faer::sparse::SymbolicSparseColMatRef<'_, usize>) -> bool {
+    use faer::sparse::linalg::cholesky::{
+        factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering,
+    };
+    let n = p.nrows();
+    if n == 0 {
+        return false;
+    }
+    let mut triplets = Vec::with_capacity(2 * p.compute_nnz());
+    for j in 0..n {
+        for i in p.row_idx_of_col(j) {
+            triplets.push(faer::sparse::Triplet::new(i, j, 1.0f64));
+            triplets.push(faer::sparse::Triplet::new(j, i, 1.0f64));
+        }
+    }
+    let Ok(sym) = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets) else {
+        return false;
+    };
+    match factorize_symbolic_cholesky(
+        sym.symbolic(),
+        faer::Side::Upper,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams::default(),
+    ) {
+        Ok(chol) => chol.len_val() as f64 / n as f64 >= NEAR_FILL,
+        Err(_) => false,
+    }
+}
 
 impl<'a> Homological<'a> {
     /// Prepares the union pattern of `A` and `B` and the border vectors `B v_i`
@@ -191,10 +274,13 @@ impl<'a> Homological<'a> {
             lu_symbolic: None,
             a_val,
             b_val,
+            row_max: (row_max(a), row_max(b)),
             lambda: lambda.to_vec(),
             bv,
             ub,
             numeric: HashMap::new(),
+            anchors: Vec::new(),
+            iterative: None,
             stats: SolveStats::default(),
         }
     }
@@ -209,35 +295,55 @@ impl<'a> Homological<'a> {
     fn factor(&mut self, sigma: C64) -> Result<&Lu<usize, C64>, HomologicalError> {
         let key = (sigma.re.to_bits(), sigma.im.to_bits());
         if !self.numeric.contains_key(&key) {
-            let t = Instant::now();
-            if self.lu_symbolic.is_none() {
-                let sym = SymbolicLu::try_new(self.symbolic.as_ref()).map_err(|e| {
-                    HomologicalError::Singular {
-                        detail: format!("symbolic LU failed: {e:?}"),
-                    }
-                })?;
-                self.lu_symbolic = Some(sym);
-                self.stats.symbolic += 1;
-            }
-            let vals: Vec<C64> = self
-                .a_val
-                .iter()
-                .zip(&self.b_val)
-                .map(|(&a, &b)| sigma * b - a)
-                .collect();
-            let mat = SparseColMat::new(self.symbolic.clone(), vals);
-            let lu = Lu::try_new_with_symbolic(
-                self.lu_symbolic.clone().expect("computed above"),
-                mat.as_ref(),
-            )
-            .map_err(|e| HomologicalError::Singular {
-                detail: format!("sparse LU of Lambda B - A at Lambda = {sigma:.4e} failed: {e:?}"),
-            })?;
-            self.stats.factorizations += 1;
-            self.stats.factor_s += t.elapsed().as_secs_f64();
+            let lu = self.fresh_lu(sigma)?;
             self.numeric.insert(key, lu);
         }
         Ok(&self.numeric[&key])
+    }
+
+    /// A new LU of `sigma B - A` (counted).
+    fn fresh_lu(&mut self, sigma: C64) -> Result<Lu<usize, C64>, HomologicalError> {
+        let t = Instant::now();
+        if self.lu_symbolic.is_none() {
+            let sym = SymbolicLu::try_new(self.symbolic.as_ref()).map_err(|e| {
+                HomologicalError::Singular {
+                    detail: format!("symbolic LU failed: {e:?}"),
+                }
+            })?;
+            self.lu_symbolic = Some(sym);
+            self.stats.symbolic += 1;
+        }
+        let vals: Vec<C64> = self
+            .a_val
+            .iter()
+            .zip(&self.b_val)
+            .map(|(&a, &b)| sigma * b - a)
+            .collect();
+        let mat = SparseColMat::new(self.symbolic.clone(), vals);
+        let lu = Lu::try_new_with_symbolic(
+            self.lu_symbolic.clone().expect("computed above"),
+            mat.as_ref(),
+        )
+        .map_err(|e| HomologicalError::Singular {
+            detail: format!("sparse LU of Lambda B - A at Lambda = {sigma:.4e} failed: {e:?}"),
+        })?;
+        self.stats.factorizations += 1;
+        self.stats.factor_s += t.elapsed().as_secs_f64();
+        Ok(lu)
+    }
+
+    /// The value factorized for `lambda` with resonant set `set`: `lambda`
+    /// itself, or shifted by [`SHIFT`] when it is within [`SHIFT_BELOW`] of
+    /// a resonant master eigenvalue.
+    fn factorized_at(&self, lambda: C64, set: &[usize]) -> C64 {
+        let mut sigma = lambda;
+        for &i in set {
+            let li = self.lambda[i];
+            if (lambda - li).norm() <= SHIFT_BELOW * li.norm() {
+                sigma = lambda + C64::new(SHIFT, SHIFT) * li.norm();
+            }
+        }
+        sigma
     }
 
     fn lu_solve(lu: &Lu<usize, C64>, rhs: &[C64]) -> Vec<C64> {
@@ -256,13 +362,7 @@ impl<'a> Homological<'a> {
         rhs: &[C64],
     ) -> Result<(Vec<C64>, Vec<C64>), HomologicalError> {
         // factorize at a shifted value when Lambda hits a resonant eigenvalue
-        let mut sigma = lambda;
-        for &i in set {
-            let li = self.lambda[i];
-            if (lambda - li).norm() <= SHIFT_BELOW * li.norm() {
-                sigma = lambda + C64::new(SHIFT, SHIFT) * li.norm();
-            }
-        }
+        let sigma = self.factorized_at(lambda, set);
         self.factor(sigma)?;
         let t = Instant::now();
         let key = (sigma.re.to_bits(), sigma.im.to_bits());
@@ -300,25 +400,50 @@ impl<'a> Homological<'a> {
                 "the bordered system at Lambda = {lambda:.4e} has a singular Schur complement (a resonant master eigenvalue is not simple)"
             ))
         })?;
-        let mut rel = f64::INFINITY;
+        // where band solves run (dear factors: finite-element models, whose
+        // rows differ in scale by orders of magnitude), refine until the
+        // componentwise backward error reaches rounding or neither backward
+        // error halves any more (Arioli, Demmel and Duff's stagnation test,
+        // with the normwise error the one that converges at a shifted
+        // factorization), keeping an update unless it worsens both; elsewhere
+        // until the normwise error is below RESIDUAL_TOL
+        let componentwise = *self
+            .iterative
+            .get_or_insert_with(|| iterates(self.symbolic.as_ref()));
+        let mut res = self.residual(lambda, set, &w, &coeffs, rhs);
         for _ in 0..MAX_REFINE {
-            let (res_h, res_g, scale) = self.residual(lambda, set, &w, &coeffs, rhs);
-            let norm = (res_h
-                .iter()
-                .chain(&res_g)
-                .map(|c| c.norm_sqr())
-                .sum::<f64>())
-            .sqrt();
-            rel = norm / scale.max(f64::MIN_POSITIVE);
-            if !rel.is_finite() || rel <= RESIDUAL_TOL {
+            let done = if componentwise {
+                !res.componentwise.is_finite() || res.componentwise <= REFINED
+            } else {
+                !res.normwise.is_finite() || res.normwise <= RESIDUAL_TOL
+            };
+            if done {
                 break;
             }
-            let Some((dw, dr)) = block_solve(&res_h, &res_g) else {
+            let Some((dw, dr)) = block_solve(&res.h, &res.g) else {
                 break;
             };
-            w.iter_mut().zip(&dw).for_each(|(x, d)| *x += d);
-            coeffs.iter_mut().zip(&dr).for_each(|(x, d)| *x += d);
+            let w1: Vec<C64> = w.iter().zip(&dw).map(|(x, d)| x + d).collect();
+            let c1: Vec<C64> = coeffs.iter().zip(&dr).map(|(x, d)| x + d).collect();
+            let res1 = self.residual(lambda, set, &w1, &c1, rhs);
+            if !componentwise {
+                (w, coeffs, res) = (w1, c1, res1);
+                continue;
+            }
+            let progress = res1.componentwise <= 0.5 * res.componentwise
+                || res1.normwise <= 0.5 * res.normwise;
+            // an update is kept unless it worsens both (a NaN one worsens)
+            let better = |a: f64, b: f64| a.partial_cmp(&b).is_some_and(|o| o.is_le());
+            let worse = !better(res1.componentwise, res.componentwise)
+                && !better(res1.normwise, res.normwise);
+            if !worse {
+                (w, coeffs, res) = (w1, c1, res1);
+            }
+            if !progress {
+                break;
+            }
         }
+        let rel = res.normwise;
         self.stats.solves += 1;
         self.stats.solve_s += t.elapsed().as_secs_f64();
         let finite = |v: &[C64]| v.iter().all(|c| c.re.is_finite() && c.im.is_finite());
@@ -335,15 +460,27 @@ impl<'a> Homological<'a> {
         Ok((w, coeffs))
     }
 
-    /// Residual `(h - M w - B V r, -U^* B w)` of the bordered system and the
-    /// scale `||(|h| + |M| |w| + |B V| |r|, ||U^* B|| ||w||)||` it is
-    /// measured against (the Oettli-Prager componentwise backward error,
-    /// aggregated in the 2-norm).
+    /// Residual `(h - M w - B V r, -U^* B w)` of the bordered system with
+    /// its normwise and componentwise backward errors.
+    ///
+    /// The componentwise one is the Oettli-Prager error `max_i |res_i| /
+    /// (|h| + |M| |w| + |B V| |r|)_i` (border rows against `|U^* B| |w|`),
+    /// where a row whose bound is below `1000 N eps` of `max_j |M_ij|
+    /// ||w||_inf + |h_i|` (a component that vanishes, e.g. by symmetry, whose
+    /// bound is rounding) is measured against `|M| |w| + max_j |M_ij|
+    /// ||w||_inf` instead (Arioli, Demmel and Duff's `omega_2`). It is what a
+    /// backward-stable solve of a badly scaled system does not guarantee and
+    /// iterative refinement restores: a fine plate's rows couple
+    /// displacements, slopes and membrane motion whose stiffnesses differ by
+    /// orders of magnitude, and an unrefined LU solve leaves `1e-7` to `1e-4`
+    /// there (forward errors to match) at a normwise `1e-15`.
     ///
     /// # References
     /// W. Oettli, W. Prager, Numer. Math. 6 (1964) 405-409; M. Arioli, J.
     /// Demmel, I. Duff, SIAM J. Matrix Anal. Appl. 10 (1989) 165-190
-    /// (stopping iterative refinement of sparse solves).
+    /// (stopping iterative refinement of sparse solves); R. D. Skeel, Math.
+    /// Comp. 35 (1980) 817-832 (one step of refinement in working precision
+    /// suffices for componentwise stability).
     fn residual(
         &self,
         lambda: C64,
@@ -351,46 +488,104 @@ impl<'a> Homological<'a> {
         w: &[C64],
         coeffs: &[C64],
         rhs: &[C64],
-    ) -> (Vec<C64>, Vec<C64>, f64) {
+    ) -> Residual {
         let bw = spmv(self.b, w);
         let aw = spmv(self.a, w);
-        // Oettli-Prager: each row against `(|Lambda| |B| + |A|) |w|`, what
-        // rounding in a backward-stable solve leaves (not `|Lambda B w - A
-        // w|`, which cancels in the stiff rows of a fine mesh and would ask
-        // for more than double precision can give)
+        let mut h: Vec<C64> = (0..self.n)
+            .map(|i| rhs[i] - (lambda * bw[i] - aw[i]))
+            .collect();
+        for (t, &c) in set.iter().enumerate() {
+            h.iter_mut()
+                .zip(&self.bv[c])
+                .for_each(|(x, v)| *x -= v * coeffs[t]);
+        }
+        let g: Vec<C64> = set.iter().map(|&c| -dot(&self.ub[c], w)).collect();
+        let (den, scale) = self.bounds(lambda, set, w, coeffs, rhs);
+        let mut componentwise = 0.0f64;
+        let mut norm2 = 0.0;
+        for (x, d) in h.iter().chain(&g).zip(&den) {
+            norm2 += x.norm_sqr();
+            if x.norm() > 0.0 {
+                componentwise = componentwise.max(if *d > 0.0 {
+                    x.norm() / d
+                } else {
+                    f64::INFINITY
+                });
+            }
+        }
+        Residual {
+            h,
+            g,
+            normwise: norm2.sqrt() / scale.max(f64::MIN_POSITIVE),
+            componentwise,
+        }
+    }
+
+    /// The rows' Oettli-Prager bounds of [`Homological::residual`] (leading
+    /// rows, then border rows, with the `omega_2` guard) and the 2-norm of
+    /// `(|h| + |M| |w| + |B V| |r|, ||U^* B|| ||w||)`, the normwise scale.
+    fn bounds(
+        &self,
+        lambda: C64,
+        set: &[usize],
+        w: &[C64],
+        coeffs: &[C64],
+        rhs: &[C64],
+    ) -> (Vec<f64>, f64) {
         let w_abs: Vec<f64> = w.iter().map(|c| c.norm()).collect();
+        let w_inf = w_abs.iter().fold(0.0f64, |m, &x| m.max(x));
+        let w_norm = w_abs.iter().map(|x| x * x).sum::<f64>().sqrt();
         let bw_abs = abs_spmv(self.b, &w_abs);
         let aw_abs = abs_spmv(self.a, &w_abs);
+        let guard = 1000.0 * self.n as f64 * f64::EPSILON;
+        let guarded = |bound: f64, row_inf: f64, rhs_abs: f64| {
+            let cap = row_inf * w_inf;
+            if bound <= guard * (cap + rhs_abs) {
+                bound + cap
+            } else {
+                bound
+            }
+        };
         let mut scale2 = 0.0;
-        let res_h: Vec<C64> = (0..self.n)
+        let mut den: Vec<f64> = (0..self.n)
             .map(|i| {
-                let mut v = lambda * bw[i] - aw[i];
                 let mut bound = lambda.norm() * bw_abs[i] + aw_abs[i];
                 for (t, &c) in set.iter().enumerate() {
-                    v += self.bv[c][i] * coeffs[t];
                     bound += (self.bv[c][i] * coeffs[t]).norm();
                 }
-                scale2 += rhs[i].norm_sqr() + bound * bound;
-                rhs[i] - v
+                let rhs_abs = rhs[i].norm();
+                scale2 += rhs_abs * rhs_abs + bound * bound;
+                let row_inf = self.row_max.0[i].max(lambda.norm() * self.row_max.1[i]);
+                guarded(bound + rhs_abs, row_inf, rhs_abs)
             })
             .collect();
-        // each border row `u^* B w = 0` is measured against `||u^* B|| ||w||`,
-        // its own backward-error scale: `u` carries the units of `1/v`, which
-        // differ from those of `h` by powers of the frequency
-        let w_norm = w.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
-        let res_g: Vec<C64> = set
-            .iter()
-            .map(|&c| {
-                let ub_norm = self.ub[c].iter().map(|x| x.norm_sqr()).sum::<f64>().sqrt();
-                scale2 += (ub_norm * w_norm).powi(2);
-                -dot(&self.ub[c], w)
-            })
-            .collect();
-        (res_h, res_g, scale2.sqrt())
+        // each border row `u^* B w = 0` is measured against `|u^* B| |w|`:
+        // `u` carries the units of `1/v`, which differ from those of `h` by
+        // powers of the frequency
+        den.extend(set.iter().map(|&c| {
+            let ub = &self.ub[c];
+            let ub_norm = ub.iter().map(|x| x.norm_sqr()).sum::<f64>().sqrt();
+            scale2 += (ub_norm * w_norm).powi(2);
+            let bound: f64 = ub.iter().zip(&w_abs).map(|(u, x)| u.norm() * x).sum();
+            let row_inf = ub.iter().fold(0.0f64, |m, u| m.max(u.norm()));
+            guarded(bound, row_inf, 0.0)
+        }));
+        (den, scale2.sqrt())
     }
 }
 
 /// `|M| x` for a non-negative `x`.
+/// `max_j |m_ij|` per row.
+fn row_max(m: SparseColMatRef<'_, usize, f64>) -> Vec<f64> {
+    let mut out = vec![0.0f64; m.nrows()];
+    for j in 0..m.ncols() {
+        for (i, v) in m.row_idx_of_col(j).zip(m.val_of_col(j)) {
+            out[i] = out[i].max(v.abs());
+        }
+    }
+    out
+}
+
 fn abs_spmv(m: SparseColMatRef<'_, usize, f64>, x: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; m.nrows()];
     for (j, &xj) in x.iter().enumerate() {

@@ -51,8 +51,8 @@ use crate::model::system::System;
 use crate::spectrum::modes::spmv;
 use crate::spectrum::MasterMode;
 use crate::C64;
+pub use homological::{band_vectors, SolveCounts, SolveStats};
 use homological::{Homological, HomologicalError};
-pub use homological::{SolveCounts, SolveStats};
 use ssm_kernel::poly::{eval_poly, Composition, MultiIndexSet};
 
 /// Continuous or discrete time.

@@ -116,6 +116,28 @@ impl ForcedSsm<'_> {
         omega: f64,
         order: usize,
     ) -> Result<NonAutonomous, ForcedError> {
+        let mut one = self.expansions(ssm, sys, &[omega], order, None)?;
+        Ok(one.pop().expect("one frequency, one expansion"))
+    }
+
+    /// The expansions of [`ForcedSsm::expansion`] at every frequency of
+    /// `omegas`, computed multi-index by multi-index for all of them; with
+    /// `anchor` (a frequency of their band), each multi-index's equations at
+    /// all frequencies are solved through one factorization at the anchor's
+    /// `Lambda` and one shared search space ([`ForcedSsm::solve_band`])
+    /// instead of a factorization per frequency; multi-indices whose shifts
+    /// differ by damping alone share the factorization, released after the
+    /// last order that uses it. Without `anchor`, every frequency is solved
+    /// directly. Holds every frequency's coefficients at once (`omegas.len()`
+    /// times those of one expansion).
+    pub fn expansions(
+        &mut self,
+        ssm: &SsmExpansion,
+        sys: &System,
+        omegas: &[f64],
+        order: usize,
+        anchor: Option<f64>,
+    ) -> Result<Vec<NonAutonomous>, ForcedError> {
         let order = order.min(ssm.order);
         if order > 0
             && sys.forcing.iter().any(|h| {
@@ -133,94 +155,54 @@ impl ForcedSsm<'_> {
         let set = MultiIndexSet::new(nvar, order);
         let wset = MultiIndexSet::new(nvar, order + 1);
         let ssm_index = |e: &[u16]| ssm.set.index(e);
-        // Jacobian series DF(W(p)) = sum over terms and factors, orders >= 1
-        let w_of = |idx: usize, state: usize| ssm.w[idx][state];
-        let mut jac: Vec<(usize, usize, Vec<C64>)> = Vec::new();
-        for t in sys.nonlinearity.terms.iter() {
-            for (fi, fv) in t.factors.iter().enumerate() {
-                let mut series = vec![C64::new(0.0, 0.0); set.len()];
-                series[0] = C64::new(t.coeff * f64::from(fv.power), 0.0);
-                for (gi, gv) in t.factors.iter().enumerate() {
-                    let pw = if gi == fi { gv.power - 1 } else { gv.power };
-                    for _ in 0..pw {
-                        series = mul_series(&set, &series, &|idx| {
-                            ssm_index(set.exponents(idx)).map_or(C64::new(0.0, 0.0), |si| {
-                                if idx == 0 {
-                                    C64::new(0.0, 0.0)
-                                } else {
-                                    w_of(si, gv.var as usize)
-                                }
-                            })
-                        });
-                    }
-                }
-                jac.push((t.eq as usize, fv.var as usize, series));
-            }
-        }
+        let jac = jacobian_series(ssm, sys, &set);
         let lambda = self.lambda().to_vec();
         let coord_ratio = self.coord_ratios().to_vec();
-        let mut harmonics = Vec::new();
+        let zero = C64::new(0.0, 0.0);
+        let shift_of =
+            |e: &[u16]| -> C64 { lambda.iter().zip(e).map(|(l, &kv)| l * f64::from(kv)).sum() };
+        let mut out: Vec<NonAutonomous> = omegas
+            .iter()
+            .map(|&omega| NonAutonomous {
+                omega,
+                order,
+                set: set.clone(),
+                harmonics: Vec::new(),
+            })
+            .collect();
         for h in 0..self.n_harmonics() {
             let (multiple, f) = self.harmonic(h);
             let f = f.to_vec();
-            let mut x: Vec<Vec<C64>> = vec![Vec::new(); set.len()];
-            let mut s: Vec<Vec<C64>> = vec![vec![C64::new(0.0, 0.0); nvar]; set.len()];
+            // per frequency: x_k, s_k of every multi-index
+            let mut xs: Vec<Vec<Vec<C64>>> = vec![vec![Vec::new(); set.len()]; omegas.len()];
+            let mut ss: Vec<Vec<Vec<C64>>> = vec![vec![vec![zero; nvar]; set.len()]; omegas.len()];
+            // the anchors (below) and the last order each serves, to release
+            // its factorization after that order; values equal up to rounding
+            // share one anchor
+            let near = |a: C64, b: C64| (a - b).norm() <= 1e-12 * a.norm().max(b.norm());
+            let mut last: Vec<(C64, usize)> = Vec::new();
             for k in 0..=order {
                 for idx in set.of_order(k) {
-                    let e = set.exponents(idx).to_vec();
-                    let mut rhs = if k == 0 {
-                        f.clone()
-                    } else {
-                        vec![C64::new(0.0, 0.0); n]
-                    };
-                    // [DF(W) X]_k
-                    for (eq, var, series) in &jac {
-                        for (j, xj) in x.iter().enumerate().take(set.of_order(k).start) {
-                            if let Some(t) = sub_index(&set, &e, set.exponents(j)) {
-                                rhs[*eq] += series[t] * xj[*var];
-                            }
+                    if let Some(c) = anchor {
+                        let at = C64::new(0.0, multiple * c + shift_of(set.exponents(idx)).im);
+                        match last.iter_mut().find(|(a, _)| near(*a, at)) {
+                            Some(entry) => entry.1 = k,
+                            None => last.push((at, k)),
                         }
                     }
-                    // - B [DX R_nl + DW_nl S]_k
-                    let done = set.of_order(k).start;
-                    let dx_r = derivative_apply(
-                        &set,
-                        done,
-                        &e,
-                        &|j| Some(x[j].clone()),
-                        &|v, m| r_nl(ssm, v, m),
-                        n,
-                    );
-                    let dw_s = derivative_apply(
-                        &wset,
-                        wset.of_order(k + 1).end,
-                        &e,
-                        &|j| {
-                            let ej = wset.exponents(j);
-                            let o: u16 = ej.iter().sum();
-                            if o < 2 {
-                                return None;
-                            }
-                            ssm_index(ej).map(|si| ssm.w[si].clone())
-                        },
-                        &|v, m| {
-                            set.index(m)
-                                .filter(|&mi| mi < done)
-                                .map_or(C64::new(0.0, 0.0), |mi| s[mi][v])
-                        },
-                        n,
-                    );
-                    let corr: Vec<C64> = dx_r.iter().zip(&dw_s).map(|(a, b)| a + b).collect();
-                    let bc = spmv(sys.b.as_ref(), &corr);
-                    for (r, c) in rhs.iter_mut().zip(&bc) {
-                        *r -= c;
-                    }
-                    let big = C64::new(0.0, multiple * omega)
-                        + lambda
-                            .iter()
-                            .zip(&e)
-                            .map(|(l, &kv)| l * f64::from(kv))
-                            .sum::<C64>();
+                }
+            }
+            let anchor_of = |e: &[u16]| {
+                anchor.and_then(|c| {
+                    let at = C64::new(0.0, multiple * c + shift_of(e).im);
+                    last.iter().find(|(a, _)| near(*a, at)).map(|(a, _)| *a)
+                })
+            };
+            for k in 0..=order {
+                let done = set.of_order(k).start;
+                for idx in set.of_order(k) {
+                    let e = set.exponents(idx).to_vec();
+                    let shift = shift_of(&e);
                     let phase: f64 = multiple
                         + coord_ratio
                             .iter()
@@ -233,29 +215,137 @@ impl ForcedSsm<'_> {
                         .filter(|(_, &rc)| (phase - rc).abs() <= 1e-9 * rc.abs().max(1.0))
                         .map(|(c, _)| c)
                         .collect();
-                    let (xk, sk) =
-                        self.solve(big, &set_res, &rhs)
-                            .map_err(|source| ForcedError::Solve {
-                                harmonic: h + 1,
-                                omega,
-                                source,
-                            })?;
-                    x[idx] = xk;
-                    for (&c, v) in set_res.iter().zip(sk) {
-                        s[idx][c] = v;
+                    // the lower multi-indices j with e - j in the set, and e - j
+                    let below: Vec<(usize, usize)> = (0..done)
+                        .filter_map(|j| sub_index(&set, &e, set.exponents(j)).map(|t| (j, t)))
+                        .collect();
+                    let mut rhss = Vec::with_capacity(omegas.len());
+                    for node in 0..omegas.len() {
+                        let (x, s) = (&xs[node], &ss[node]);
+                        let mut rhs = if k == 0 { f.clone() } else { vec![zero; n] };
+                        // [DF(W) X]_k
+                        for (eq, var, series) in &jac {
+                            for &(j, t) in &below {
+                                rhs[*eq] += series[t] * x[j][*var];
+                            }
+                        }
+                        // - B [DX R_nl + DW_nl S]_k
+                        let dx_r = derivative_apply(
+                            &set,
+                            done,
+                            &e,
+                            &|j| Some(x[j].clone()),
+                            &|v, m| r_nl(ssm, v, m),
+                            n,
+                        );
+                        let dw_s = derivative_apply(
+                            &wset,
+                            wset.of_order(k + 1).end,
+                            &e,
+                            &|j| {
+                                let ej = wset.exponents(j);
+                                let o: u16 = ej.iter().sum();
+                                if o < 2 {
+                                    return None;
+                                }
+                                ssm_index(ej).map(|si| ssm.w[si].clone())
+                            },
+                            &|v, m| {
+                                set.index(m)
+                                    .filter(|&mi| mi < done)
+                                    .map_or(zero, |mi| s[mi][v])
+                            },
+                            n,
+                        );
+                        let corr: Vec<C64> = dx_r.iter().zip(&dw_s).map(|(a, b)| a + b).collect();
+                        let bc = spmv(sys.b.as_ref(), &corr);
+                        for (r, c) in rhs.iter_mut().zip(&bc) {
+                            *r -= c;
+                        }
+                        rhss.push(rhs);
                     }
+                    let bigs: Vec<C64> = omegas
+                        .iter()
+                        .map(|&omega| C64::new(0.0, multiple * omega) + shift)
+                        .collect();
+                    let fail = |source| ForcedError::Solve {
+                        harmonic: h + 1,
+                        omega: omegas[0],
+                        source,
+                    };
+                    let solved = match anchor_of(&e) {
+                        // the anchor on the imaginary axis: multi-indices
+                        // whose shifts differ by damping alone share it
+                        Some(at) => {
+                            let refs: Vec<&[C64]> = rhss.iter().map(Vec::as_slice).collect();
+                            self.solve_band(&bigs, at, &set_res, &refs).map_err(fail)?
+                        }
+                        None => bigs
+                            .iter()
+                            .zip(&rhss)
+                            .zip(omegas)
+                            .map(|((&big, rhs), &omega)| {
+                                self.solve(big, &set_res, rhs).map_err(|source| {
+                                    ForcedError::Solve {
+                                        harmonic: h + 1,
+                                        omega,
+                                        source,
+                                    }
+                                })
+                            })
+                            .collect::<Result<Vec<_>, _>>()?,
+                    };
+                    for (node, (xk, sk)) in solved.into_iter().enumerate() {
+                        xs[node][idx] = xk;
+                        for (&c, v) in set_res.iter().zip(sk) {
+                            ss[node][idx][c] = v;
+                        }
+                    }
+                }
+                for &(at, _) in last.iter().filter(|(_, l)| *l == k) {
+                    self.release_anchor(at);
                 }
                 self.clear();
             }
-            harmonics.push(NaHarmonic { multiple, x, s });
+            for ((o, x), s) in out.iter_mut().zip(xs).zip(ss) {
+                o.harmonics.push(NaHarmonic { multiple, x, s });
+            }
         }
-        Ok(NonAutonomous {
-            omega,
-            order,
-            set,
-            harmonics,
-        })
+        Ok(out)
     }
+}
+
+/// The Jacobian series `DF(W(p))` to the order of `set`: per term and factor
+/// of the nonlinearity, `(equation, variable, series)` (orders >= 1).
+fn jacobian_series(
+    ssm: &SsmExpansion,
+    sys: &System,
+    set: &MultiIndexSet,
+) -> Vec<(usize, usize, Vec<C64>)> {
+    let zero = C64::new(0.0, 0.0);
+    let mut jac: Vec<(usize, usize, Vec<C64>)> = Vec::new();
+    for t in sys.nonlinearity.terms.iter() {
+        for (fi, fv) in t.factors.iter().enumerate() {
+            let mut series = vec![zero; set.len()];
+            series[0] = C64::new(t.coeff * f64::from(fv.power), 0.0);
+            for (gi, gv) in t.factors.iter().enumerate() {
+                let pw = if gi == fi { gv.power - 1 } else { gv.power };
+                for _ in 0..pw {
+                    series = mul_series(set, &series, &|idx| {
+                        ssm.set.index(set.exponents(idx)).map_or(zero, |si| {
+                            if idx == 0 {
+                                zero
+                            } else {
+                                ssm.w[si][gv.var as usize]
+                            }
+                        })
+                    });
+                }
+            }
+            jac.push((t.eq as usize, fv.var as usize, series));
+        }
+    }
+    jac
 }
 
 impl NonAutonomous {

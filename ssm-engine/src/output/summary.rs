@@ -89,7 +89,7 @@ pub(crate) struct Summary<'a> {
 
 /// The version of the shape of `summary.json` (its `schema_version`); it
 /// changes whenever a key is added, removed or changes its type.
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// `summary.json`: a run's summary, or that of a `[pod]` scene that asks
 /// for no SSM answer.
@@ -397,6 +397,8 @@ pub struct LinearAlgebraSummary {
     pub numeric_factorizations: usize,
     /// Solves, all stages.
     pub solves: usize,
+    /// Krylov steps of band solves, all stages.
+    pub krylov_iterations: usize,
     /// Per stage: `ssm` (the homological equations of every order), `frc`
     /// (the forced response's leading-order and non-autonomous terms).
     pub stages: BTreeMap<String, LinearWork>,
@@ -410,6 +412,7 @@ impl LinearAlgebraSummary {
             symbolic_factorizations: sum(|w| w.symbolic_factorizations),
             numeric_factorizations: sum(|w| w.numeric_factorizations),
             solves: sum(|w| w.solves),
+            krylov_iterations: sum(|w| w.krylov_iterations),
             stages,
         }
     }

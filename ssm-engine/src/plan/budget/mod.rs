@@ -20,9 +20,10 @@ pub(crate) use runs::{check_pod, check_pod_reducer};
 
 use super::{Plan, PlanError};
 use ssm_core::model::system::System;
+use ssm_core::rom::frc::NONAUTONOMOUS_NODES;
 use ssm_core::spec::SsmSpec;
 use ssm_core::spectrum::{MasterMode, Method, DENSE_LIMIT};
-use ssm_core::ssm::Dynamics;
+use ssm_core::ssm::{band_vectors, Dynamics};
 
 /// Elementary operations per second assumed by the estimates (complex
 /// multiply-adds and sparse-solve entries on one core of a 2-core machine,
@@ -328,7 +329,11 @@ fn check_order(
 /// The SSM to `order` with `pairs` master pairs: the composition `F(W)`
 /// (series products over pairs of multi-indices, eq. 55), one sparse solve
 /// per multi-index, and the storage of `W` and of the composition's series;
-/// twice that with a forcing (the non-autonomous SSM, eq. 60).
+/// twice that with a forcing (the non-autonomous SSM, eq. 60), whose
+/// expansions at the forced response's interpolation nodes are held
+/// together (every node's `x_k`, [`NONAUTONOMOUS_NODES`] times the SSM's
+/// coefficients) and solved in bands (at most [`band_vectors`] vectors of
+/// the model's size at once).
 fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
     let nvar = 2 * pairs;
     let n_idx = multi_indices(nvar, order);
@@ -346,7 +351,9 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
     if forced {
         Cost {
             ops: 2.0 * once.ops,
-            bytes: 2.0 * once.bytes,
+            bytes: 2.0 * once.bytes
+                + 16.0 * NONAUTONOMOUS_NODES as f64 * n_idx * (sizes.states + nvar as f64)
+                + 16.0 * band_vectors(NONAUTONOMOUS_NODES) as f64 * sizes.states,
         }
     } else {
         once
