@@ -298,7 +298,7 @@ impl<'a> ForcedSsm<'a> {
 
     /// Solves [`ForcedSsm::at`] through one factorization at `omega` (the
     /// middle of a frequency band) for every frequency
-    /// ([`Homological::solve_band`]), instead of a factorization per
+    /// (`Homological::solve_band`), instead of a factorization per
     /// frequency.
     pub fn anchor_at(&mut self, omega: f64) {
         self.anchor = Some(omega);

@@ -90,7 +90,7 @@ pub struct SolveStats {
     pub factorizations: usize,
     /// Solves.
     pub solves: usize,
-    /// Factorized solves of [`Homological::solve_band`] that grew its search
+    /// Factorized solves of `Homological::solve_band` that grew its search
     /// space.
     pub iterations: usize,
     /// Seconds in symbolic and numeric factorization.
@@ -121,7 +121,7 @@ pub struct SolveCounts {
     /// Solves.
     pub solves: usize,
     /// Factorized solves at a nearby value that grew a band solve's search
-    /// space ([`Homological::solve_band`]).
+    /// space (`Homological::solve_band`).
     pub iterations: usize,
 }
 

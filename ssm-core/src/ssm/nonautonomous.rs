@@ -124,7 +124,7 @@ impl ForcedSsm<'_> {
     /// `omegas`, computed multi-index by multi-index for all of them; with
     /// `anchor` (a frequency of their band), each multi-index's equations at
     /// all frequencies are solved through one factorization at the anchor's
-    /// `Lambda` and one shared search space ([`ForcedSsm::solve_band`])
+    /// `Lambda` and one shared search space (`ForcedSsm::solve_band`)
     /// instead of a factorization per frequency; multi-indices whose shifts
     /// differ by damping alone share the factorization, released after the
     /// last order that uses it. Without `anchor`, every frequency is solved
