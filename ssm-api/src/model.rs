@@ -49,6 +49,18 @@ impl SparseMatrix {
         m
     }
 
+    /// Rayleigh damping `C = alpha M + beta K`.
+    pub fn rayleigh(mass: &Self, stiffness: &Self, alpha: f64, beta: f64) -> Self {
+        let mut c = Self::zeros(mass.nrows as usize, mass.ncols as usize);
+        for (r, col, v) in mass.iter() {
+            c.push(r, col, alpha * v);
+        }
+        for (r, col, v) in stiffness.iter() {
+            c.push(r, col, beta * v);
+        }
+        c
+    }
+
     /// Adds `value` at `(row, col)` (summed with any earlier entry there).
     pub fn push(&mut self, row: usize, col: usize, value: f64) {
         if value != 0.0 {

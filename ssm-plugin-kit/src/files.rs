@@ -35,14 +35,7 @@ pub fn mechanical_from_files(
     let damping = match (files.damping, rayleigh) {
         (Some(c), _) => c,
         (None, Some([alpha, beta])) => {
-            let mut c = SparseMatrix::zeros(n, n);
-            for (i, j, v) in files.mass.iter() {
-                c.push(i, j, alpha * v);
-            }
-            for (i, j, v) in files.stiffness.iter() {
-                c.push(i, j, beta * v);
-            }
-            c
+            SparseMatrix::rayleigh(&files.mass, &files.stiffness, alpha, beta)
         }
         (None, None) => SparseMatrix::zeros(n, n),
     };

@@ -81,16 +81,9 @@ pub fn build(p: &Params) -> Result<Model, PluginError> {
     let (mut mass, mut stiffness) = (SparseMatrix::zeros(n, n), SparseMatrix::zeros(n, n));
     let mut force = PolyVector::zeros(n, 2 * n);
     mesh.assemble(&dofs, &mut mass, &mut stiffness, &mut force);
-    let mut damping = SparseMatrix::zeros(n, n);
-    for (r, c, v) in mass.iter() {
-        damping.push(r, c, alpha * v);
-    }
-    for (r, c, v) in stiffness.iter() {
-        damping.push(r, c, beta * v);
-    }
+    sys.damping = SparseMatrix::rayleigh(&mass, &stiffness, alpha, beta);
     sys.mass = mass;
     sys.stiffness = stiffness;
-    sys.damping = damping;
     sys.internal_force = force;
     let at = |s: f64| mesh.transverse_at(&dofs, s);
     sys.extra_outputs = vec![("w_mid".into(), at(0.5)), ("w_quarter".into(), at(0.25))];

@@ -82,6 +82,24 @@ pub struct LocalTerm {
     pub vars: Vec<usize>,
 }
 
+impl LocalTerm {
+    /// Adds `terms` to `force` at the global indices `global` of the
+    /// element's local unknowns; a term whose component or a factor is a
+    /// removed unknown (`None`) vanishes.
+    pub fn scatter(terms: &[Self], global: &[Option<usize>], force: &mut ssm_api::PolyVector) {
+        let mut factors: Vec<(usize, u32)> = Vec::with_capacity(3);
+        'term: for t in terms {
+            let Some(eq) = global[t.eq] else { continue };
+            factors.clear();
+            for &v in &t.vars {
+                let Some(gv) = global[v] else { continue 'term };
+                factors.push((gv, 1));
+            }
+            force.push(eq, t.coeff, &factors);
+        }
+    }
+}
+
 /// A two-node von Karman beam element of length `length`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Element {

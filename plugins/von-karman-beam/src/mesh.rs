@@ -135,7 +135,6 @@ impl Mesh {
         let (me, ke) = (element.mass(), element.stiffness());
         let mut terms: Vec<LocalTerm> = element.quadratic_force();
         terms.extend(element.cubic_force());
-        let mut factors: Vec<(usize, u32)> = Vec::with_capacity(3);
         for e in 0..self.elements {
             let g = Self::element_dofs(numbering, e);
             for i in 0..6 {
@@ -147,15 +146,7 @@ impl Mesh {
                     }
                 }
             }
-            'term: for t in &terms {
-                let Some(eq) = g[t.eq] else { continue };
-                factors.clear();
-                for &v in &t.vars {
-                    let Some(gv) = g[v] else { continue 'term };
-                    factors.push((gv, 1));
-                }
-                force.push(eq, t.coeff, &factors);
-            }
+            LocalTerm::scatter(&terms, &g, force);
         }
     }
 

@@ -190,16 +190,9 @@ fn build(name: &str, params: &str) -> Result<Model, PluginError> {
     let (mut mass, mut stiffness) = (SparseMatrix::zeros(n, n), SparseMatrix::zeros(n, n));
     let mut force = PolyVector::zeros(n, 2 * n);
     mesh.assemble(&numbering, &mut mass, &mut stiffness, &mut force);
-    let mut damping = SparseMatrix::zeros(n, n);
-    for (r, c, v) in mass.iter() {
-        damping.push(r, c, alpha * v);
-    }
-    for (r, c, v) in stiffness.iter() {
-        damping.push(r, c, beta * v);
-    }
+    sys.damping = SparseMatrix::rayleigh(&mass, &stiffness, alpha, beta);
     sys.mass = mass;
     sys.stiffness = stiffness;
-    sys.damping = damping;
     sys.internal_force = force;
     let (a, b) = (mesh.a, mesh.b);
     let load = match p.text("load") {

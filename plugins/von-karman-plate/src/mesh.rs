@@ -7,6 +7,7 @@
 use ssm_api::{PolyVector, SparseMatrix};
 
 use crate::element::{bending_dof, Element, Material, CORNERS, DOF_NAMES, NODE_DOFS};
+use von_karman_beam::LocalTerm;
 
 /// Transverse condition on the plate's four edges.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -168,7 +169,6 @@ impl Mesh {
         let element = self.element();
         let (me, ke) = (element.mass(), element.stiffness());
         let terms = element.polynomial_force();
-        let mut factors: Vec<(usize, u32)> = Vec::with_capacity(3);
         for ey in 0..self.ny {
             for ex in 0..self.nx {
                 let g = Self::element_dofs(numbering, ex, ey);
@@ -185,15 +185,7 @@ impl Mesh {
                         }
                     }
                 }
-                'term: for t in &terms {
-                    let Some(eq) = g[t.eq] else { continue };
-                    factors.clear();
-                    for &v in &t.vars {
-                        let Some(gv) = g[v] else { continue 'term };
-                        factors.push((gv, 1));
-                    }
-                    force.push(eq, t.coeff, &factors);
-                }
+                LocalTerm::scatter(&terms, &g, force);
             }
         }
     }
