@@ -98,8 +98,9 @@ pub struct LinearWork {
     /// Solves (each with its residual check and refinement).
     pub solves: usize,
     /// Krylov steps of the band solves made through a factorization at a
-    /// nearby value: directions added to a band's shared search space (each
-    /// one triangular solve pair and products with `A` and `B`).
+    /// nearby value: directions added to a band's shared search space and
+    /// terms of a band's Taylor series in `Omega` (each a refined solve
+    /// through that factorization and products with `A` and `B`).
     pub krylov_iterations: usize,
 }
 

@@ -30,6 +30,7 @@ use crate::spectrum::MasterMode;
 use crate::ssm::analysis::{invariance_error, polar, Polar};
 use crate::ssm::forced::{table_warning, ForcedSsm};
 use crate::ssm::modal_residual::ModalResidual;
+use crate::ssm::nonautonomous::NaSeries;
 use crate::ssm::SsmExpansion;
 use crate::C64;
 use ssm_kernel::poly::MultiIndexSet;
@@ -43,6 +44,10 @@ struct NaTable {
     xs: Vec<Vec<C64>>,
     /// Multi-indices of the expansion.
     set: MultiIndexSet,
+    /// The expansion as Taylor series over the nodes' band, where the model's
+    /// factors are dear and the series converged (any frequency of the band
+    /// is then an evaluation).
+    series: Option<NaSeries>,
 }
 
 /// One non-autonomous order tried for a curve.
@@ -344,7 +349,13 @@ impl Context<'_> {
         let (res60, error_estimate) = match peak {
             Some(pk) => {
                 let mid = 0.5 * (range.0 + range.1);
-                let mut one = forced.expansions(ssm, sys, &[pk.omega], k_eff, Some(mid))?;
+                let band = table
+                    .and_then(|t| t.series.as_ref())
+                    .filter(|s| s.contains(pk.omega));
+                let mut one = match band {
+                    Some(s) => vec![s.at(pk.omega)],
+                    None => forced.expansions(ssm, sys, &[pk.omega], k_eff, Some(mid))?,
+                };
                 let na = one.pop().expect("one frequency, one expansion");
                 let mut res60 = 0.0f64;
                 let mut modal = Vec::with_capacity(ORBIT_SAMPLES);
@@ -525,7 +536,16 @@ fn nonautonomous_table(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &w| {
             (a.min(w), b.max(w))
         });
-    let expansions = forced.expansions(ssm, sys, nodes, k, Some(0.5 * (lo + hi)))?;
+    let mid = 0.5 * (lo + hi);
+    let series = if forced.iterative() {
+        forced.expansion_series(ssm, sys, nodes, k, mid)?
+    } else {
+        None
+    };
+    let expansions = match &series {
+        Some(s) => nodes.iter().map(|&w| s.at(w)).collect(),
+        None => forced.expansions_solved(ssm, sys, nodes, k, Some(mid))?,
+    };
     let mut coeffs = Vec::with_capacity(nodes.len());
     let mut xs = Vec::with_capacity(nodes.len());
     for na in &expansions {
@@ -546,5 +566,6 @@ fn nonautonomous_table(
         coeffs,
         xs,
         set: expansions[0].set.clone(),
+        series,
     })
 }

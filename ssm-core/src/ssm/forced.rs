@@ -170,6 +170,20 @@ pub(crate) fn table_warning(error: f64, range: (f64, f64)) -> Option<String> {
 /// Most Chebyshev nodes (exact solves) spent on an output table.
 const OUTPUT_TABLE_MAX_NODES: usize = 129;
 
+use super::nonautonomous::series_accept;
+
+/// `sum_m c_m t^m` for vectors `c_m` (Horner); empty for no terms.
+pub(crate) fn horner(terms: &[Vec<C64>], t: f64) -> Vec<C64> {
+    let Some(last) = terms.last() else {
+        return Vec::new();
+    };
+    let mut out = last.clone();
+    for c in terms.iter().rev().skip(1) {
+        out.iter_mut().zip(c).for_each(|(o, ci)| *o = *o * t + ci);
+    }
+    out
+}
+
 /// Value of a forcing polynomial at the origin (its constant terms).
 fn at_origin(p: &PolyVector, n: usize) -> Vec<f64> {
     let mut v = vec![0.0; n];
@@ -291,6 +305,50 @@ impl<'a> ForcedSsm<'a> {
         self.solver.solve_band(bigs, anchor, set, rhss)
     }
 
+    /// Taylor coefficients along `Lambda(t) = anchor + delta + slope t`
+    /// through the factorization at `anchor` (see
+    /// `Homological::solve_series`).
+    pub(crate) fn solve_series(
+        &mut self,
+        anchor: C64,
+        delta: C64,
+        slope: C64,
+        set: &[usize],
+        rhs: &[Vec<C64>],
+    ) -> Result<Option<(Vec<Solution>, f64)>, HomologicalError> {
+        self.solver.solve_series(anchor, delta, slope, set, rhs)
+    }
+
+    /// The componentwise backward error of a bordered solution at `lambda`.
+    pub(crate) fn backward_error(
+        &self,
+        lambda: C64,
+        set: &[usize],
+        w: &[C64],
+        r: &[C64],
+        rhs: &[C64],
+    ) -> f64 {
+        self.solver.backward_error(lambda, set, w, r, rhs)
+    }
+
+    /// Whether band solves iterate through one factorization (the model's
+    /// factors are dear).
+    pub(crate) fn iterative(&mut self) -> bool {
+        self.solver.iterative()
+    }
+
+    /// Whether the model's forcing is constant in the state (what the
+    /// higher-order non-autonomous terms need).
+    pub(crate) fn forcing_is_constant(&self, sys: &System) -> bool {
+        sys.forcing.iter().all(|h| {
+            h.cos
+                .terms
+                .iter()
+                .chain(h.sin.terms.iter())
+                .all(|t| t.factors.is_empty())
+        })
+    }
+
     /// Forgets the factorization at `anchor`.
     pub(crate) fn release_anchor(&mut self, anchor: C64) {
         self.solver.release_anchor(anchor);
@@ -379,18 +437,99 @@ impl<'a> ForcedSsm<'a> {
     ) -> Result<f64, ForcedError> {
         self.outputs = weights.iter().map(|w| w.to_vec()).collect();
         self.table = None;
-        let table = chebyshev::adaptive(
-            a,
-            b,
-            OUTPUT_TABLE_TOLERANCE,
-            OUTPUT_TABLE_MAX_NODES,
-            |omega| self.solve_outputs(omega),
-        )?;
+        let series = if self.solver.iterative() {
+            self.output_series(a, b)?
+        } else {
+            None
+        };
+        let table = match series {
+            // the outputs' Taylor series in Omega, tabulated
+            Some((center, half_width, terms)) => chebyshev::adaptive(
+                a,
+                b,
+                OUTPUT_TABLE_TOLERANCE,
+                OUTPUT_TABLE_MAX_NODES,
+                |omega| {
+                    let t = (omega - center) / half_width;
+                    Ok::<_, ForcedError>(horner(&terms, t))
+                },
+            )?,
+            None => chebyshev::adaptive(
+                a,
+                b,
+                OUTPUT_TABLE_TOLERANCE,
+                OUTPUT_TABLE_MAX_NODES,
+                |omega| self.solve_outputs(omega),
+            )?,
+        };
         let error = table.error;
         if error <= OUTPUT_TABLE_ACCEPT {
             self.table = Some(table);
         }
         Ok(error)
+    }
+
+    /// The outputs of `X0` over `[a, b]` as Taylor series in `t = (Omega -
+    /// center) / half_width` (module `series` of `homological`: one
+    /// factorization at the middle per harmonic), each term's output
+    /// coefficients harmonic-major as [`ForcedSsm::solve_outputs`] gives
+    /// them; `None` when a harmonic's series does not converge or its value
+    /// at either end or the middle misses the componentwise backward error
+    /// of `series_accept`.
+    #[allow(clippy::type_complexity)]
+    fn output_series(
+        &mut self,
+        a: f64,
+        b: f64,
+    ) -> Result<Option<(f64, f64, Vec<Vec<C64>>)>, ForcedError> {
+        let (center, half_width) = (0.5 * (a + b), 0.5 * (b - a));
+        if !(half_width > 0.0 && half_width.is_finite()) {
+            return Ok(None);
+        }
+        let mut terms: Vec<Vec<C64>> = Vec::new();
+        for (k, (multiple, f, set)) in self.forcing.iter().enumerate() {
+            let anchor = C64::new(0.0, multiple * center);
+            let slope = C64::new(0.0, multiple * half_width);
+            let zero = C64::new(0.0, 0.0);
+            let solved = self
+                .solver
+                .solve_series(anchor, zero, slope, set, std::slice::from_ref(f))
+                .map_err(|source| ForcedError::Solve {
+                    harmonic: k + 1,
+                    omega: center,
+                    source,
+                })?;
+            let Some((series, floor)) = solved else {
+                return Ok(None);
+            };
+            let (w, r): (Vec<Vec<C64>>, Vec<Vec<C64>>) = series.into_iter().unzip();
+            for t in [-1.0, 0.0, 1.0] {
+                let (wt, rt) = (horner(&w, t), horner(&r, t));
+                let error = self
+                    .solver
+                    .backward_error(anchor + slope * t, set, &wt, &rt, f);
+                if error.is_nan() || error > series_accept(floor) {
+                    return Ok(None);
+                }
+            }
+            if terms.len() < w.len() {
+                terms.resize(w.len(), Vec::new());
+            }
+            for (m, xm) in w.iter().enumerate() {
+                let row = &mut terms[m];
+                row.resize(k * self.outputs.len(), zero);
+                row.extend(
+                    self.outputs
+                        .iter()
+                        .map(|o| o.iter().map(|&(s, v)| xm[s] * v).sum::<C64>()),
+                );
+            }
+        }
+        let width = self.forcing.len() * self.outputs.len();
+        terms
+            .iter_mut()
+            .for_each(|row| row.resize(width, C64::new(0.0, 0.0)));
+        Ok(Some((center, half_width, terms)))
     }
 
     /// The outputs of [`ForcedSsm::tabulate_outputs`] at `omega`:

@@ -68,7 +68,9 @@ use crate::spectrum::modes::{spmv, spmv_t};
 use crate::C64;
 
 mod band;
+mod series;
 pub use band::band_vectors;
+pub use series::MAX_TERMS as SERIES_TERMS;
 
 /// Why a homological equation could not be solved.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -90,8 +92,9 @@ pub struct SolveStats {
     pub factorizations: usize,
     /// Solves.
     pub solves: usize,
-    /// Factorized solves of `Homological::solve_band` that grew its search
-    /// space.
+    /// Factorized solves at a nearby value: those that grew a band solve's
+    /// search space (`Homological::solve_band`) and the Taylor coefficients
+    /// of band series (`Homological::solve_series`).
     pub iterations: usize,
     /// Seconds in symbolic and numeric factorization.
     pub factor_s: f64,
@@ -120,8 +123,9 @@ pub struct SolveCounts {
     pub factorizations: usize,
     /// Solves.
     pub solves: usize,
-    /// Factorized solves at a nearby value that grew a band solve's search
-    /// space (`Homological::solve_band`).
+    /// Factorized solves at a nearby value: those that grew a band solve's
+    /// search space and the Taylor coefficients of band series (both through
+    /// one factorization for many frequencies).
     pub iterations: usize,
 }
 
@@ -285,6 +289,14 @@ impl<'a> Homological<'a> {
         }
     }
 
+    /// Whether band solves iterate through a factorization at an anchor
+    /// ([`iterates`]: the pattern factorizes dearly), decided once.
+    pub(crate) fn iterative(&mut self) -> bool {
+        *self
+            .iterative
+            .get_or_insert_with(|| iterates(self.symbolic.as_ref()))
+    }
+
     /// Forgets cached numeric factorizations (called between orders, where
     /// values of `Lambda` no longer repeat).
     pub(crate) fn clear_numeric(&mut self) {
@@ -363,6 +375,7 @@ impl<'a> Homological<'a> {
     ) -> Result<(Vec<C64>, Vec<C64>), HomologicalError> {
         // factorize at a shifted value when Lambda hits a resonant eigenvalue
         let sigma = self.factorized_at(lambda, set);
+        self.iterative();
         self.factor(sigma)?;
         let t = Instant::now();
         let key = (sigma.re.to_bits(), sigma.im.to_bits());
@@ -407,9 +420,7 @@ impl<'a> Homological<'a> {
         // with the normwise error the one that converges at a shifted
         // factorization), keeping an update unless it worsens both; elsewhere
         // until the normwise error is below RESIDUAL_TOL
-        let componentwise = *self
-            .iterative
-            .get_or_insert_with(|| iterates(self.symbolic.as_ref()));
+        let componentwise = self.iterative == Some(true);
         let mut res = self.residual(lambda, set, &w, &coeffs, rhs);
         for _ in 0..MAX_REFINE {
             let done = if componentwise {

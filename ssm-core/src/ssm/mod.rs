@@ -51,7 +51,7 @@ use crate::model::system::System;
 use crate::spectrum::modes::spmv;
 use crate::spectrum::MasterMode;
 use crate::C64;
-pub use homological::{band_vectors, SolveCounts, SolveStats};
+pub use homological::{band_vectors, SolveCounts, SolveStats, SERIES_TERMS};
 use homological::{Homological, HomologicalError};
 use ssm_kernel::poly::{eval_poly, Composition, MultiIndexSet};
 

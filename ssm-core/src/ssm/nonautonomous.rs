@@ -31,6 +31,10 @@ use crate::spectrum::modes::spmv;
 use crate::C64;
 use ssm_kernel::poly::MultiIndexSet;
 
+mod series;
+pub(crate) use series::accept as series_accept;
+pub use series::NaSeries;
+
 /// One harmonic's expansion: coefficient of `e^{i kappa phi} p^k`.
 #[derive(Debug, Clone)]
 pub struct NaHarmonic {
@@ -139,23 +143,41 @@ impl ForcedSsm<'_> {
         anchor: Option<f64>,
     ) -> Result<Vec<NonAutonomous>, ForcedError> {
         let order = order.min(ssm.order);
-        if order > 0
-            && sys.forcing.iter().any(|h| {
-                h.cos
-                    .terms
-                    .iter()
-                    .chain(h.sin.terms.iter())
-                    .any(|t| !t.factors.is_empty())
-            })
-        {
+        if order > 0 && !self.forcing_is_constant(sys) {
             return Err(ForcedError::StateDependentForcing);
         }
-        let n = sys.n_states();
+        // a band of frequencies on a model with dear factors: one Taylor
+        // series per multi-index through one factorization per anchor
+        if let Some(c) = anchor.filter(|_| omegas.len() > 1 && self.iterative()) {
+            if let Some(series) = self.expansion_series(ssm, sys, omegas, order, c)? {
+                return Ok(omegas.iter().map(|&w| series.at(w)).collect());
+            }
+        }
+        self.expansions_solved(ssm, sys, omegas, order, anchor)
+    }
+
+    /// [`ForcedSsm::expansions`] solved frequency by frequency (directly,
+    /// or with `anchor` through band solves), without a series.
+    pub fn expansions_solved(
+        &mut self,
+        ssm: &SsmExpansion,
+        sys: &System,
+        omegas: &[f64],
+        order: usize,
+        anchor: Option<f64>,
+    ) -> Result<Vec<NonAutonomous>, ForcedError> {
+        let order = order.min(ssm.order);
         let nvar = ssm.dim();
         let set = MultiIndexSet::new(nvar, order);
         let wset = MultiIndexSet::new(nvar, order + 1);
-        let ssm_index = |e: &[u16]| ssm.set.index(e);
         let jac = jacobian_series(ssm, sys, &set);
+        let cx = Rhs {
+            ssm,
+            sys,
+            set: &set,
+            wset: &wset,
+            jac: &jac,
+        };
         let lambda = self.lambda().to_vec();
         let coord_ratio = self.coord_ratios().to_vec();
         let zero = C64::new(0.0, 0.0);
@@ -176,94 +198,30 @@ impl ForcedSsm<'_> {
             // per frequency: x_k, s_k of every multi-index
             let mut xs: Vec<Vec<Vec<C64>>> = vec![vec![Vec::new(); set.len()]; omegas.len()];
             let mut ss: Vec<Vec<Vec<C64>>> = vec![vec![vec![zero; nvar]; set.len()]; omegas.len()];
-            // the anchors (below) and the last order each serves, to release
-            // its factorization after that order; values equal up to rounding
-            // share one anchor
-            let near = |a: C64, b: C64| (a - b).norm() <= 1e-12 * a.norm().max(b.norm());
-            let mut last: Vec<(C64, usize)> = Vec::new();
-            for k in 0..=order {
-                for idx in set.of_order(k) {
-                    if let Some(c) = anchor {
-                        let at = C64::new(0.0, multiple * c + shift_of(set.exponents(idx)).im);
-                        match last.iter_mut().find(|(a, _)| near(*a, at)) {
-                            Some(entry) => entry.1 = k,
-                            None => last.push((at, k)),
-                        }
-                    }
-                }
-            }
+            // the anchors and the last order each serves, to release its
+            // factorization after that order
+            let last = anchor.map_or_else(Vec::new, |c| band_anchors(&set, multiple, c, &shift_of));
             let anchor_of = |e: &[u16]| {
-                anchor.and_then(|c| {
-                    let at = C64::new(0.0, multiple * c + shift_of(e).im);
-                    last.iter().find(|(a, _)| near(*a, at)).map(|(a, _)| *a)
-                })
+                anchor.and_then(|c| anchor_for(&last, C64::new(0.0, multiple * c + shift_of(e).im)))
             };
             for k in 0..=order {
                 let done = set.of_order(k).start;
                 for idx in set.of_order(k) {
                     let e = set.exponents(idx).to_vec();
                     let shift = shift_of(&e);
-                    let phase: f64 = multiple
-                        + coord_ratio
-                            .iter()
-                            .zip(&e)
-                            .map(|(r, &kv)| r * f64::from(kv))
-                            .sum::<f64>();
-                    let set_res: Vec<usize> = coord_ratio
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, &rc)| (phase - rc).abs() <= 1e-9 * rc.abs().max(1.0))
-                        .map(|(c, _)| c)
-                        .collect();
+                    let set_res = resonant_set(&coord_ratio, multiple, &e);
                     // the lower multi-indices j with e - j in the set, and e - j
                     let below: Vec<(usize, usize)> = (0..done)
                         .filter_map(|j| sub_index(&set, &e, set.exponents(j)).map(|t| (j, t)))
                         .collect();
-                    let mut rhss = Vec::with_capacity(omegas.len());
-                    for node in 0..omegas.len() {
-                        let (x, s) = (&xs[node], &ss[node]);
-                        let mut rhs = if k == 0 { f.clone() } else { vec![zero; n] };
-                        // [DF(W) X]_k
-                        for (eq, var, series) in &jac {
-                            for &(j, t) in &below {
-                                rhs[*eq] += series[t] * x[j][*var];
-                            }
-                        }
-                        // - B [DX R_nl + DW_nl S]_k
-                        let dx_r = derivative_apply(
-                            &set,
-                            done,
-                            &e,
-                            &|j| Some(x[j].clone()),
-                            &|v, m| r_nl(ssm, v, m),
-                            n,
-                        );
-                        let dw_s = derivative_apply(
-                            &wset,
-                            wset.of_order(k + 1).end,
-                            &e,
-                            &|j| {
-                                let ej = wset.exponents(j);
-                                let o: u16 = ej.iter().sum();
-                                if o < 2 {
-                                    return None;
-                                }
-                                ssm_index(ej).map(|si| ssm.w[si].clone())
-                            },
-                            &|v, m| {
-                                set.index(m)
-                                    .filter(|&mi| mi < done)
-                                    .map_or(zero, |mi| s[mi][v])
-                            },
-                            n,
-                        );
-                        let corr: Vec<C64> = dx_r.iter().zip(&dw_s).map(|(a, b)| a + b).collect();
-                        let bc = spmv(sys.b.as_ref(), &corr);
-                        for (r, c) in rhs.iter_mut().zip(&bc) {
-                            *r -= c;
-                        }
-                        rhss.push(rhs);
-                    }
+                    let rhss: Vec<Vec<C64>> = (0..omegas.len())
+                        .map(|node| {
+                            let forcing = (k == 0).then_some(f.as_slice());
+                            let x: Vec<&[C64]> = xs[node].iter().map(Vec::as_slice).collect();
+                            let s: Vec<&[C64]> = ss[node].iter().map(Vec::as_slice).collect();
+                            cx.rhs(&e, done, &below, &x, &s, forcing)
+                        })
+                        .collect();
                     let bigs: Vec<C64> = omegas
                         .iter()
                         .map(|&omega| C64::new(0.0, multiple * omega) + shift)
@@ -315,9 +273,85 @@ impl ForcedSsm<'_> {
     }
 }
 
+/// What the right-hand side of one multi-index's equation is made of: the
+/// autonomous SSM, the system, the multi-index sets of `X` and `W` and the
+/// Jacobian series `DF(W(p))`.
+pub(super) struct Rhs<'s> {
+    pub ssm: &'s SsmExpansion,
+    pub sys: &'s System,
+    pub set: &'s MultiIndexSet,
+    pub wset: &'s MultiIndexSet,
+    pub jac: &'s [(usize, usize, Vec<C64>)],
+}
+
+impl Rhs<'_> {
+    /// The right-hand side at multi-index `e` (order `k`, the multi-indices
+    /// of lower orders `..done`, `below` its pairs `(j, e - j)`) from the
+    /// lower orders' `x` (an empty vector: zero) and `s`, with the forcing
+    /// `F_h` at `k = 0`: `F_h delta_{k0} + [DF(W) X]_k - B [DX R_nl + DW_nl
+    /// S]_k` (module docs). Linear in `x` and `s` but for the forcing.
+    pub fn rhs(
+        &self,
+        e: &[u16],
+        done: usize,
+        below: &[(usize, usize)],
+        x: &[&[C64]],
+        s: &[&[C64]],
+        forcing: Option<&[C64]>,
+    ) -> Vec<C64> {
+        let (ssm, set, wset) = (self.ssm, self.set, self.wset);
+        let n = self.sys.n_states();
+        let zero = C64::new(0.0, 0.0);
+        let k: u16 = e.iter().sum();
+        let mut rhs = forcing.map_or_else(|| vec![zero; n], <[C64]>::to_vec);
+        // [DF(W) X]_k
+        for (eq, var, series) in self.jac {
+            for &(j, t) in below {
+                if let Some(xv) = x[j].get(*var) {
+                    rhs[*eq] += series[t] * xv;
+                }
+            }
+        }
+        // - B [DX R_nl + DW_nl S]_k
+        let dx_r = derivative_apply(
+            set,
+            done,
+            e,
+            &|j| (!x[j].is_empty()).then(|| x[j].to_vec()),
+            &|v, m| r_nl(ssm, v, m),
+            n,
+        );
+        let dw_s = derivative_apply(
+            wset,
+            wset.of_order(usize::from(k) + 1).end,
+            e,
+            &|j| {
+                let ej = wset.exponents(j);
+                let o: u16 = ej.iter().sum();
+                if o < 2 {
+                    return None;
+                }
+                ssm.set.index(ej).map(|si| ssm.w[si].clone())
+            },
+            &|v, m| {
+                set.index(m)
+                    .filter(|&mi| mi < done)
+                    .map_or(zero, |mi| s[mi][v])
+            },
+            n,
+        );
+        let corr: Vec<C64> = dx_r.iter().zip(&dw_s).map(|(a, b)| a + b).collect();
+        let bc = spmv(self.sys.b.as_ref(), &corr);
+        for (r, c) in rhs.iter_mut().zip(&bc) {
+            *r -= c;
+        }
+        rhs
+    }
+}
+
 /// The Jacobian series `DF(W(p))` to the order of `set`: per term and factor
 /// of the nonlinearity, `(equation, variable, series)` (orders >= 1).
-fn jacobian_series(
+pub(super) fn jacobian_series(
     ssm: &SsmExpansion,
     sys: &System,
     set: &MultiIndexSet,
@@ -462,6 +496,56 @@ impl NonAutonomous {
     }
 }
 
+/// The anchors of a band around `center` for the harmonic `multiple`: the
+/// points `i (kappa center + Im k . lambda)` of the multi-indices `k` of
+/// `set` (values equal up to rounding are one: multi-indices whose shifts
+/// differ by damping alone share a factorization), each with the last order
+/// it serves (its factorization is released after it).
+pub(super) fn band_anchors(
+    set: &MultiIndexSet,
+    multiple: f64,
+    center: f64,
+    shift_of: &dyn Fn(&[u16]) -> C64,
+) -> Vec<(C64, usize)> {
+    let mut last: Vec<(C64, usize)> = Vec::new();
+    for k in 0..=set.max_order() {
+        for idx in set.of_order(k) {
+            let at = C64::new(0.0, multiple * center + shift_of(set.exponents(idx)).im);
+            match last.iter_mut().find(|(a, _)| near(*a, at)) {
+                Some(entry) => entry.1 = k,
+                None => last.push((at, k)),
+            }
+        }
+    }
+    last
+}
+
+/// The anchor of [`band_anchors`] equal to `at` up to rounding.
+pub(super) fn anchor_for(anchors: &[(C64, usize)], at: C64) -> Option<C64> {
+    anchors.iter().find(|(a, _)| near(*a, at)).map(|(a, _)| *a)
+}
+
+fn near(a: C64, b: C64) -> bool {
+    (a - b).norm() <= 1e-12 * a.norm().max(b.norm())
+}
+
+/// The reduced coordinates `c` resonant with harmonic `multiple` at
+/// multi-index `e`: `kappa + k . r = r_c` (module docs).
+pub(super) fn resonant_set(coord_ratio: &[f64], multiple: f64, e: &[u16]) -> Vec<usize> {
+    let phase: f64 = multiple
+        + coord_ratio
+            .iter()
+            .zip(e)
+            .map(|(r, &kv)| r * f64::from(kv))
+            .sum::<f64>();
+    coord_ratio
+        .iter()
+        .enumerate()
+        .filter(|(_, &rc)| (phase - rc).abs() <= 1e-9 * rc.abs().max(1.0))
+        .map(|(c, _)| c)
+        .collect()
+}
+
 /// Coefficient of `p^m` in the nonlinear part of `R_v`.
 fn r_nl(ssm: &SsmExpansion, v: usize, m: &[u16]) -> C64 {
     let o: u16 = m.iter().sum();
@@ -480,7 +564,7 @@ fn r_nl(ssm: &SsmExpansion, v: usize, m: &[u16]) -> C64 {
 }
 
 /// Index of `e - f` when it is a multi-index of the set.
-fn sub_index(set: &MultiIndexSet, e: &[u16], f: &[u16]) -> Option<usize> {
+pub(super) fn sub_index(set: &MultiIndexSet, e: &[u16], f: &[u16]) -> Option<usize> {
     let mut d = Vec::with_capacity(e.len());
     for (a, b) in e.iter().zip(f) {
         if b > a {

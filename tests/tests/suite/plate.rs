@@ -77,54 +77,23 @@ fn plate_backbone_hardens_like_the_single_mode_galerkin() {
     );
 }
 
-/// The forced response's non-autonomous expansions on the 8 x 8 plate (708
-/// states, factors dear enough for band solves): at the 17 Chebyshev nodes
-/// of a band around the first frequency, to order 4 in `p`, the band solves
-/// (one factorization per anchor, one shared search space for the nodes)
-/// agree with a direct sparse LU solve (refined to componentwise backward
-/// stability) at every node and multi-index within 1e-10 of each
-/// coefficient vector, with one factorization per distinct
-/// anchor at most (the imaginary parts of `Omega + k . lambda`,
-/// `k_1 - k_2` in `-4..=4`: 9) against one per node and multi-index (255).
-#[test]
-fn band_solved_expansions_agree_with_direct_solves_on_the_plate() {
-    use ssm_core::rom::frc::ForcedCoefficients;
-    use ssm_core::ssm::forced::ForcedSsm;
-    let sys = system("von-karman-plate", "plate", "nx = 8\nny = 8\nbeta = 2e-5");
-    let sp = spectrum::compute(
-        sys.a.as_ref(),
-        sys.b.as_ref(),
-        &spectrum_options(Some(Method::Sparse), 6),
-    )
-    .expect("plate spectrum");
-    let norm = Normalization::default();
-    let masters = spectrum::master_modes(&sys, &sp, &[1], norm).expect("master pair");
-    let ssm = ssm_of(&sys, &sp, &[1], 5, norm);
-    let nodes = ForcedCoefficients::nodes(280.0, 380.0, 17);
-    let order = 4;
-    let run = |anchor: Option<f64>| {
-        let mut forced = ForcedSsm::new(&sys, &masters, &[1.0]).expect("forced SSM");
-        let na = forced
-            .expansions(&ssm, &sys, &nodes, order, anchor)
-            .expect("expansions");
-        (na, forced.counts())
-    };
-    let (band, band_counts) = run(Some(330.0));
-    let (direct, direct_counts) = run(None);
-    eprintln!("band: {band_counts:?}; direct: {direct_counts:?}");
-    assert_eq!(direct_counts.iterations, 0);
-    assert!(band_counts.iterations > 0, "{band_counts:?}");
-    assert!(band_counts.factorizations <= 9, "{band_counts:?}");
-    let per_node = band[0].set.len();
-    assert_eq!(direct_counts.factorizations, nodes.len() * per_node);
+/// Largest relative difference, over frequencies, harmonics and
+/// multi-indices, between the coefficient vectors `x`, `s` of two sets of
+/// expansions (a vector that is zero in `b` must be zero in `a`).
+fn worst_difference(
+    a: &[ssm_core::ssm::nonautonomous::NonAutonomous],
+    b: &[ssm_core::ssm::nonautonomous::NonAutonomous],
+) -> f64 {
+    assert_eq!(a.len(), b.len());
     let mut worst = 0.0f64;
-    for (b, d) in band.iter().zip(&direct) {
-        for (hb, hd) in b.harmonics.iter().zip(&d.harmonics) {
-            for (xb, xd) in hb.x.iter().zip(&hd.x).chain(hb.s.iter().zip(&hd.s)) {
-                let scale = xd.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
-                let diff = xb
+    for (ea, eb) in a.iter().zip(b) {
+        assert_eq!(ea.omega, eb.omega);
+        for (ha, hb) in ea.harmonics.iter().zip(&eb.harmonics) {
+            for (xa, xb) in ha.x.iter().zip(&hb.x).chain(ha.s.iter().zip(&hb.s)) {
+                let scale = xb.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
+                let diff = xa
                     .iter()
-                    .zip(xd)
+                    .zip(xb)
                     .map(|(p, q)| (p - q).norm_sqr())
                     .sum::<f64>()
                     .sqrt();
@@ -136,6 +105,148 @@ fn band_solved_expansions_agree_with_direct_solves_on_the_plate() {
             }
         }
     }
-    eprintln!("band vs direct: worst relative difference {worst:.2e}");
-    assert!(worst <= 1e-10, "{worst:e}");
+    worst
+}
+
+/// The 8 x 8 plate (708 states, factors dear enough for band solves), its
+/// O(5) SSM of the first pair and its forced SSM.
+fn plate_forced() -> (
+    ssm_core::model::system::System,
+    Vec<ssm_core::spectrum::MasterMode>,
+    ssm_core::ssm::SsmExpansion,
+) {
+    let sys = system("von-karman-plate", "plate", "nx = 8\nny = 8\nbeta = 2e-5");
+    let sp = spectrum::compute(
+        sys.a.as_ref(),
+        sys.b.as_ref(),
+        &spectrum_options(Some(Method::Sparse), 6),
+    )
+    .expect("plate spectrum");
+    let norm = Normalization::default();
+    let masters = spectrum::master_modes(&sys, &sp, &[1], norm).expect("master pair");
+    let ssm = ssm_of(&sys, &sp, &[1], 5, norm);
+    (sys, masters, ssm)
+}
+
+/// The forced response's non-autonomous expansions on the 8 x 8 plate at
+/// the 17 Chebyshev nodes of a band around the first frequency `omega_1`,
+/// three ways: as Taylor series in `Omega` (one factorization per anchor,
+/// the imaginary parts of `Omega + k . lambda`, and a few dozen solves per
+/// multi-index), by band solves (the same factorizations, one shared search
+/// space for the nodes), and by a direct sparse LU solve at every node and
+/// multi-index (refined to componentwise backward stability). To order 2 in
+/// `p` (the order the plate's forced response takes) the series converge and
+/// agree with the direct solves within 1e-10 of each coefficient vector
+/// through 5 factorizations (`k_1 - k_2` in `-2..=2`) against 102. To order 4
+/// the multi-index `(3, 0)` meets the near internal resonance `3 lambda_1 +
+/// i Omega ~ lambda_(2,2)` (`omega_(2,2) ~ 4 omega_1` on a square plate)
+/// inside the band: its series cannot converge and is refused, and the band
+/// solves, which the expansions then take, agree with the direct solves
+/// within 1e-10 through at most 9 factorizations against 255.
+#[test]
+fn series_and_band_expansions_agree_with_direct_solves_on_the_plate() {
+    use ssm_core::rom::frc::ForcedCoefficients;
+    use ssm_core::ssm::forced::ForcedSsm;
+    let (sys, masters, ssm) = plate_forced();
+    let nodes = ForcedCoefficients::nodes(280.0, 380.0, 17);
+    let fresh = || ForcedSsm::new(&sys, &masters, &[1.0]).expect("forced SSM");
+    let direct = |order: usize| {
+        let mut forced = fresh();
+        let out = forced
+            .expansions_solved(&ssm, &sys, &nodes, order, None)
+            .expect("direct");
+        let counts = forced.counts();
+        assert_eq!(counts.iterations, 0);
+        assert_eq!(counts.factorizations, nodes.len() * out[0].set.len());
+        out
+    };
+    // order 2: the series
+    let mut forced = fresh();
+    let series = forced
+        .expansion_series(&ssm, &sys, &nodes, 2, 330.0)
+        .expect("series")
+        .expect("the series converges over the band and passes its checks");
+    let series_counts = forced.counts();
+    let series_at: Vec<_> = nodes.iter().map(|&w| series.at(w)).collect();
+    let mut forced = fresh();
+    let through_expansions = forced
+        .expansions(&ssm, &sys, &nodes, 2, Some(330.0))
+        .expect("expansions");
+    assert_eq!(forced.counts(), series_counts, "expansions take the series");
+    assert_eq!(worst_difference(&through_expansions, &series_at), 0.0);
+    let per_index = series.set.len();
+    assert!(series_counts.factorizations <= 5, "{series_counts:?}");
+    assert!(
+        series_counts.iterations <= ssm_core::ssm::SERIES_TERMS * per_index,
+        "{series_counts:?}"
+    );
+    let s_err = worst_difference(&series_at, &direct(2));
+    eprintln!(
+        "series: {series_counts:?} ({} terms at most), worst relative difference to direct {s_err:.2e}",
+        series.terms()
+    );
+    assert!(s_err <= 1e-10, "series {s_err:e}");
+    // order 4: the series is refused, the band solves take over
+    let mut forced = fresh();
+    let refused = forced
+        .expansion_series(&ssm, &sys, &nodes, 4, 330.0)
+        .expect("series");
+    assert!(refused.is_none(), "a series across an internal resonance");
+    let mut forced = fresh();
+    let band = forced
+        .expansions_solved(&ssm, &sys, &nodes, 4, Some(330.0))
+        .expect("band");
+    let band_counts = forced.counts();
+    assert!(band_counts.iterations > 0, "{band_counts:?}");
+    assert!(band_counts.factorizations <= 9, "{band_counts:?}");
+    let mut forced = fresh();
+    let through_expansions = forced
+        .expansions(&ssm, &sys, &nodes, 4, Some(330.0))
+        .expect("expansions");
+    assert_eq!(worst_difference(&through_expansions, &band), 0.0);
+    let b_err = worst_difference(&band, &direct(4));
+    eprintln!("band: {band_counts:?}, worst relative difference to direct {b_err:.2e}");
+    assert!(b_err <= 1e-10, "band {b_err:e}");
+}
+
+/// A band that holds a non-master eigenvalue of the pencil (the plate's
+/// second frequency, near 2.5 times the first): the series of `X0` cannot
+/// converge over it, the series is refused, and the expansions, solved
+/// frequency by frequency instead, still agree with direct solves within
+/// 1e-10 away from that eigenvalue.
+#[test]
+fn a_band_over_a_pencil_eigenvalue_is_solved_frequency_by_frequency() {
+    use ssm_core::rom::frc::ForcedCoefficients;
+    use ssm_core::ssm::forced::ForcedSsm;
+    let (sys, masters, ssm) = plate_forced();
+    let omega2 = ssm_core::spectrum::compute(
+        sys.a.as_ref(),
+        sys.b.as_ref(),
+        &spectrum_options(Some(Method::Sparse), 6),
+    )
+    .expect("plate spectrum")
+    .eigenvalues
+    .iter()
+    .map(|l| l.im)
+    .filter(|&w| w > 1.5 * masters[0].lambda.im)
+    .fold(f64::INFINITY, f64::min);
+    let (lo, hi) = (280.0, 1.3 * omega2);
+    let center = 0.5 * (lo + hi);
+    assert!((omega2 - center).abs() < 0.5 * (hi - lo), "{omega2}");
+    let nodes = ForcedCoefficients::nodes(lo, hi, 8);
+    let mut forced = ForcedSsm::new(&sys, &masters, &[1.0]).expect("forced SSM");
+    let series = forced
+        .expansion_series(&ssm, &sys, &nodes, 2, center)
+        .expect("series");
+    assert!(series.is_none(), "a series over a pencil eigenvalue");
+    let mut forced = ForcedSsm::new(&sys, &masters, &[1.0]).expect("forced SSM");
+    let solved = forced
+        .expansions(&ssm, &sys, &nodes, 2, Some(center))
+        .expect("expansions");
+    let mut forced = ForcedSsm::new(&sys, &masters, &[1.0]).expect("forced SSM");
+    let direct = forced
+        .expansions_solved(&ssm, &sys, &nodes, 2, None)
+        .expect("direct");
+    let err = worst_difference(&solved, &direct);
+    assert!(err <= 1e-10, "{err:e}");
 }

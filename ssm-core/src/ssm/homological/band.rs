@@ -43,7 +43,7 @@ use faer::linalg::matmul::matmul;
 use faer::sparse::linalg::solvers::Lu;
 use faer::{Accum, Mat, MatRef, Par};
 
-use super::{dot, iterates, solve_small, Homological, HomologicalError, Solution};
+use super::{dot, Homological, HomologicalError, Solution};
 use crate::spectrum::modes::spmv;
 use crate::C64;
 
@@ -68,16 +68,16 @@ const DROP: f64 = 1e-15;
 pub(super) struct AnchorLu {
     /// The anchor as requested.
     at: C64,
-    lu: Lu<usize, C64>,
+    pub(super) lu: Lu<usize, C64>,
     /// Border solves and Schur complement of the last resonant set.
-    border: Option<Border>,
+    pub(super) border: Option<Border>,
 }
 
 /// `Y = M^-1 B V_I` and `S = U_I^* B Y` (row-major) at an anchor.
-struct Border {
+pub(super) struct Border {
     set: Vec<usize>,
-    y: Vec<Vec<C64>>,
-    schur: Vec<C64>,
+    pub(super) y: Vec<Vec<C64>>,
+    pub(super) schur: Vec<C64>,
 }
 
 /// `sum_i conj(a_i) b_i`.
@@ -314,9 +314,7 @@ impl Homological<'_> {
         set: &[usize],
         rhss: &[&[C64]],
     ) -> Result<Vec<Solution>, HomologicalError> {
-        let direct = !*self
-            .iterative
-            .get_or_insert_with(|| iterates(self.symbolic.as_ref()));
+        let direct = !self.iterative();
         let slot = if direct || lambdas.is_empty() {
             None
         } else {
@@ -349,7 +347,11 @@ impl Homological<'_> {
     /// The cached factorization at `anchor` with the border of `set`,
     /// computed when missing: at `anchor`, or shifted off a master
     /// eigenvalue it hits (as in [`Homological::solve`]).
-    fn anchor_slot(&mut self, anchor: C64, set: &[usize]) -> Result<usize, HomologicalError> {
+    pub(super) fn anchor_slot(
+        &mut self,
+        anchor: C64,
+        set: &[usize],
+    ) -> Result<usize, HomologicalError> {
         let slot = match self.anchors.iter().position(|a| a.at == anchor) {
             Some(slot) => slot,
             None => {
@@ -402,23 +404,11 @@ impl Homological<'_> {
     ) -> (Vec<Option<Solution>>, usize) {
         let zero = C64::new(0.0, 0.0);
         let (n, r) = (self.n, set.len());
-        let anc = &self.anchors[slot];
-        let border = anc.border.as_ref().expect("set by anchor_slot");
         // P^-1: the bordered block solve at the anchor
         let precond = |v: &[C64]| -> Option<Vec<C64>> {
-            let w0 = Self::lu_solve(&anc.lu, &v[..n]);
-            let mut s_rhs: Vec<C64> = set
-                .iter()
-                .zip(&v[n..])
-                .map(|(&i, &gi)| dot(&self.ub[i], &w0) - gi)
-                .collect();
-            solve_small(&border.schur, &mut s_rhs, r)?;
-            let mut out = w0;
-            for (yc, rc) in border.y.iter().zip(&s_rhs) {
-                out.iter_mut().zip(yc).for_each(|(x, yv)| *x -= yv * rc);
-            }
-            out.extend(s_rhs);
-            Some(out)
+            let (mut w, r) = self.anchor_block_solve(slot, set, &v[..n], &v[n..])?;
+            w.extend(r);
+            Some(w)
         };
         let padded = |rhs: &[C64]| -> Vec<C64> {
             let mut b = rhs.to_vec();

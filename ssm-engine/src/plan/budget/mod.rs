@@ -23,7 +23,7 @@ use ssm_core::model::system::System;
 use ssm_core::rom::frc::NONAUTONOMOUS_NODES;
 use ssm_core::spec::SsmSpec;
 use ssm_core::spectrum::{MasterMode, Method, DENSE_LIMIT};
-use ssm_core::ssm::{band_vectors, Dynamics};
+use ssm_core::ssm::{band_vectors, Dynamics, SERIES_TERMS};
 
 /// Elementary operations per second assumed by the estimates (complex
 /// multiply-adds and sparse-solve entries on one core of a 2-core machine,
@@ -332,8 +332,10 @@ fn check_order(
 /// twice that with a forcing (the non-autonomous SSM, eq. 60), whose
 /// expansions at the forced response's interpolation nodes are held
 /// together (every node's `x_k`, [`NONAUTONOMOUS_NODES`] times the SSM's
-/// coefficients) and solved in bands (at most [`band_vectors`] vectors of
-/// the model's size at once).
+/// coefficients) and solved in bands: as Taylor series in `Omega` (at most
+/// [`SERIES_TERMS`] vectors of the model's size per multi-index, kept with
+/// the nodes' expansions) or, where a series fails, by band solves (at most
+/// [`band_vectors`] such vectors at once).
 fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
     let nvar = 2 * pairs;
     let n_idx = multi_indices(nvar, order);
@@ -353,7 +355,9 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
             ops: 2.0 * once.ops,
             bytes: 2.0 * once.bytes
                 + 16.0 * NONAUTONOMOUS_NODES as f64 * n_idx * (sizes.states + nvar as f64)
-                + 16.0 * band_vectors(NONAUTONOMOUS_NODES) as f64 * sizes.states,
+                + 16.0
+                    * (SERIES_TERMS as f64 * n_idx).max(band_vectors(NONAUTONOMOUS_NODES) as f64)
+                    * sizes.states,
         }
     } else {
         once

@@ -1,0 +1,207 @@
+//! The bordered system along a segment of values, solved as a Taylor series
+//! through one factorization.
+//!
+//! Along `Lambda(t) = Lambda_0 + delta + slope t`, `t` in `[-1, 1]`, the
+//! bordered matrix of [`Homological::solve`] is `M(t) = M_0 + (delta + slope
+//! t) E` with `M_0 = M(Lambda_0)` and `E = diag(B, 0)`. For a right-hand side
+//! given by its Taylor coefficients, `b(t) = sum_m b_m t^m`, the solution
+//! `y(t) = sum_m y_m t^m` satisfies, coefficient by coefficient,
+//!
+//! `(M_0 + delta E) y_m = b_m - slope E y_(m-1)`,
+//!
+//! a recursion of solves with one matrix: each is the block solve of the
+//! factorization at `Lambda_0` refined against `M_0 + delta E` (`delta`, the
+//! damping part of a shift, is small) until its componentwise backward error
+//! reaches rounding. The series converges for `|t|` below the distance to the
+//! nearest `t` where `M(t)` is singular, a non-master eigenvalue of the
+//! pencil (the bordered master modes keep `M(t)` regular), geometrically, so
+//! a band of frequencies a pencil eigenvalue is not near costs one
+//! factorization and a few dozen solves instead of a factorization per
+//! frequency. Truncated after `y_D` (with `deg b <= D`), the polynomial solves
+//! the system with the residual `slope t^(D+1) E y_D` exactly; the recursion
+//! stops when two successive terms are below [`TAIL`] of the largest, and the
+//! caller checks the componentwise backward error of the values it uses
+//! against the floor the coefficients' own refined solves reached.
+//! The coefficients `y_m` span the Krylov space of `M_0^-1 E`: this is moment
+//! matching, as in Krylov model reduction of frequency responses.
+//!
+//! # References
+//! Z. Bai, *Krylov subspace techniques for reduced-order modeling of
+//! large-scale dynamical systems*, Appl. Numer. Math. 43 (2002) 9-44, Sect. 3
+//! (moments of a frequency response through one factorization); R. D. Skeel,
+//! Math. Comp. 35 (1980) 817-832 (iterative refinement for componentwise
+//! stability).
+
+use std::time::Instant;
+
+use super::{dot, solve_small, Homological, HomologicalError, Solution, REFINED};
+use crate::spectrum::modes::spmv;
+use crate::C64;
+
+/// Size of a term, relative to the largest, below which (twice in a row,
+/// past the right-hand side's degree) the series stops.
+const TAIL: f64 = 1e-16;
+/// Terms a series holds at most; a segment that needs more is too close to
+/// an eigenvalue of the pencil for one expansion.
+pub const MAX_TERMS: usize = 48;
+/// Refinement sweeps of one coefficient's solve at most.
+const MAX_SWEEPS: usize = 6;
+
+fn size(s: &Solution) -> f64 {
+    s.0.iter()
+        .chain(&s.1)
+        .map(|c| c.norm_sqr())
+        .sum::<f64>()
+        .sqrt()
+}
+
+impl Homological<'_> {
+    /// The block solve of the bordered system at the anchor of `slot` (its
+    /// LU, border solves and Schur complement): `(w, r)` for the right-hand
+    /// side `(h, g)`; `None` at a singular Schur complement.
+    pub(super) fn anchor_block_solve(
+        &self,
+        slot: usize,
+        set: &[usize],
+        h: &[C64],
+        g: &[C64],
+    ) -> Option<Solution> {
+        let anc = &self.anchors[slot];
+        let border = anc.border.as_ref().expect("set by anchor_slot");
+        let w0 = Self::lu_solve(&anc.lu, h);
+        let mut s_rhs: Vec<C64> = set
+            .iter()
+            .zip(g)
+            .map(|(&i, &gi)| dot(&self.ub[i], &w0) - gi)
+            .collect();
+        solve_small(&border.schur, &mut s_rhs, set.len())?;
+        let mut w = w0;
+        for (yc, rc) in border.y.iter().zip(&s_rhs) {
+            w.iter_mut().zip(yc).for_each(|(x, yv)| *x -= yv * rc);
+        }
+        Some((w, s_rhs))
+    }
+
+    /// The Taylor coefficients `y_0, .., y_D` of the module docs' solution
+    /// along `Lambda(t) = anchor + delta + slope t` for the right-hand side
+    /// coefficients `rhs` (`b_0, b_1, ..`; `D + 1 >= rhs.len()`), through
+    /// the factorization at `anchor` (kept until
+    /// [`Homological::release_anchor`]), with the largest componentwise
+    /// backward error at which a coefficient's refinement stopped (the
+    /// floor this model's solves reach, rounding where it is well scaled).
+    /// `None` when the anchor would be
+    /// factorized at a shifted value (it hits a master eigenvalue) or the
+    /// series does not converge within [`MAX_TERMS`] terms.
+    ///
+    /// # Errors
+    /// The anchor's factorization failed.
+    pub(crate) fn solve_series(
+        &mut self,
+        anchor: C64,
+        delta: C64,
+        slope: C64,
+        set: &[usize],
+        rhs: &[Vec<C64>],
+    ) -> Result<Option<(Vec<Solution>, f64)>, HomologicalError> {
+        let all: Vec<usize> = (0..self.lambda.len()).collect();
+        if self.factorized_at(anchor, &all) != anchor {
+            return Ok(None);
+        }
+        let slot = self.anchor_slot(anchor, set)?;
+        let t = Instant::now();
+        let lambda = anchor + delta;
+        let zero = C64::new(0.0, 0.0);
+        let zero_g = vec![zero; set.len()];
+        let mut terms: Vec<Solution> = Vec::new();
+        let mut sizes: Vec<f64> = Vec::new();
+        let mut largest = 0.0f64;
+        let mut quiet = 0;
+        let mut converged = false;
+        let mut floor = 0.0f64;
+        for m in 0..MAX_TERMS {
+            let mut c = rhs.get(m).cloned().unwrap_or_else(|| vec![zero; self.n]);
+            if let Some((w, _)) = terms.last() {
+                let bw = spmv(self.b, w);
+                c.iter_mut().zip(&bw).for_each(|(x, b)| *x -= slope * b);
+            }
+            let Some((term, error)) = self.refined_at_anchor(slot, lambda, set, &c, &zero_g) else {
+                break;
+            };
+            floor = floor.max(error);
+            let s = size(&term);
+            if !s.is_finite() {
+                break;
+            }
+            largest = largest.max(s);
+            terms.push(term);
+            sizes.push(s);
+            if m + 1 < rhs.len() {
+                continue;
+            }
+            if s <= TAIL * largest {
+                quiet += 1;
+                if quiet == 2 {
+                    converged = true;
+                    break;
+                }
+            } else {
+                quiet = 0;
+            }
+            // past the right-hand side, a series outside its disc of
+            // convergence grows: stop at once
+            let past = m + 1 - rhs.len();
+            if past >= 4 && s > sizes[m - 4] {
+                break;
+            }
+        }
+        self.stats.iterations += terms.len();
+        self.stats.solve_s += t.elapsed().as_secs_f64();
+        Ok(converged.then_some((terms, floor)))
+    }
+
+    /// One coefficient's solve at `lambda` through the anchor's block solve,
+    /// refined until its componentwise backward error reaches rounding or
+    /// stops halving.
+    fn refined_at_anchor(
+        &self,
+        slot: usize,
+        lambda: C64,
+        set: &[usize],
+        h: &[C64],
+        g: &[C64],
+    ) -> Option<(Solution, f64)> {
+        let (mut w, mut r) = self.anchor_block_solve(slot, set, h, g)?;
+        let mut res = self.residual(lambda, set, &w, &r, h);
+        for _ in 0..MAX_SWEEPS {
+            if !res.componentwise.is_finite() || res.componentwise <= REFINED {
+                break;
+            }
+            let (dw, dr) = self.anchor_block_solve(slot, set, &res.h, &res.g)?;
+            let w1: Vec<C64> = w.iter().zip(&dw).map(|(x, d)| x + d).collect();
+            let r1: Vec<C64> = r.iter().zip(&dr).map(|(x, d)| x + d).collect();
+            let res1 = self.residual(lambda, set, &w1, &r1, h);
+            if !(res1.componentwise < res.componentwise || res1.normwise < res.normwise) {
+                break;
+            }
+            let halved = res1.componentwise <= 0.5 * res.componentwise;
+            (w, r, res) = (w1, r1, res1);
+            if !halved {
+                break;
+            }
+        }
+        Some(((w, r), res.componentwise))
+    }
+
+    /// The componentwise backward error of `(w, r)` as a solution of the
+    /// bordered system at `lambda` with right-hand side `rhs`.
+    pub(crate) fn backward_error(
+        &self,
+        lambda: C64,
+        set: &[usize],
+        w: &[C64],
+        r: &[C64],
+        rhs: &[C64],
+    ) -> f64 {
+        self.residual(lambda, set, w, r, rhs).componentwise
+    }
+}

@@ -1,0 +1,275 @@
+//! The non-autonomous expansion over a band of forcing frequencies as one
+//! Taylor series in `Omega` per multi-index.
+//!
+//! With `Omega = center + half_width t`, the equation of multi-index `k`
+//! (module docs of `nonautonomous`) is the bordered system along
+//! `Lambda(t) = i kappa center + k . lambda + i kappa half_width t`, and its
+//! right-hand side is linear in the lower multi-indices' `x_j`, `s_j` with
+//! coefficients that do not depend on `Omega` (the forcing `F_h` enters at
+//! `k = 0` alone, as a constant). So if every lower coefficient is a
+//! polynomial in `t`, the right-hand side is one of the same degree, built
+//! term by term with the same formula, and the solution is a Taylor series
+//! in `t` whose coefficients follow from one factorization (module `series`
+//! of `homological`): a band costs one factorization per distinct imaginary
+//! part of `k . lambda` and a few dozen solves per multi-index, whatever the
+//! number of frequencies, and any frequency of the band is then a
+//! polynomial evaluation. Each multi-index's series is accepted only where
+//! its value at every frequency asked for solves that frequency's bordered
+//! system to a componentwise backward error of [`ACCEPT`], or ten times the
+//! floor its coefficients' refined solves reached (with the
+//! right-hand side evaluated from the lower series, as a direct solve at that
+//! frequency would see it); otherwise the caller solves frequency by
+//! frequency.
+//!
+//! # References
+//! Z. Bai, Appl. Numer. Math. 43 (2002) 9-44 (moment matching through one
+//! factorization); M. Li, S. Jain, G. Haller, Nonlinear Dyn. 111 (2023),
+//! eq. (60).
+
+use super::{
+    anchor_for, band_anchors, jacobian_series, resonant_set, sub_index, NaHarmonic, NonAutonomous,
+    Rhs,
+};
+use crate::model::system::System;
+use crate::ssm::forced::{horner, ForcedError, ForcedSsm};
+use crate::ssm::homological::HomologicalError;
+use crate::ssm::SsmExpansion;
+use crate::C64;
+use ssm_kernel::poly::MultiIndexSet;
+
+/// Componentwise backward error every frequency's evaluated solution may
+/// have where the model's solves reach rounding (some 5000 roundings: a
+/// series sums terms of decreasing size, each refined to rounding).
+const ACCEPT: f64 = 1e-12;
+
+/// The componentwise backward error a frequency's evaluated solution must
+/// meet when the refined solves of its series' coefficients stopped at
+/// `floor`: [`ACCEPT`], or ten times that floor on a model whose refined
+/// solves do not reach rounding (a fine mesh's badly scaled rows; a direct
+/// solve at the frequency stops at the same floor).
+pub(crate) fn accept(floor: f64) -> f64 {
+    ACCEPT.max(10.0 * floor)
+}
+
+/// One harmonic's series: `x[idx][m]`, `s[idx][m]`, the coefficient of `t^m`.
+#[derive(Debug, Clone)]
+struct SeriesHarmonic {
+    multiple: f64,
+    x: Vec<Vec<Vec<C64>>>,
+    s: Vec<Vec<Vec<C64>>>,
+}
+
+/// The non-autonomous part of the periodic SSM to order `order` in `p` over
+/// the band `center +- half_width`, as Taylor series in `t = (Omega -
+/// center) / half_width` (module docs).
+#[derive(Debug, Clone)]
+pub struct NaSeries {
+    /// Middle of the band.
+    pub center: f64,
+    /// Half its width.
+    pub half_width: f64,
+    /// Highest order in `p`.
+    pub order: usize,
+    /// Multi-indices up to `order`.
+    pub set: MultiIndexSet,
+    harmonics: Vec<SeriesHarmonic>,
+}
+
+impl NaSeries {
+    /// The longest series (terms of one multi-index).
+    pub fn terms(&self) -> usize {
+        self.harmonics
+            .iter()
+            .flat_map(|h| h.x.iter().map(Vec::len))
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Whether `omega` lies in the band.
+    pub fn contains(&self, omega: f64) -> bool {
+        (omega - self.center).abs() <= self.half_width * (1.0 + 1e-12)
+    }
+
+    /// The expansion at `omega` (in the band: [`NaSeries::contains`]).
+    pub fn at(&self, omega: f64) -> NonAutonomous {
+        let t = (omega - self.center) / self.half_width;
+        NonAutonomous {
+            omega,
+            order: self.order,
+            set: self.set.clone(),
+            harmonics: self
+                .harmonics
+                .iter()
+                .map(|h| NaHarmonic {
+                    multiple: h.multiple,
+                    x: h.x.iter().map(|terms| horner(terms, t)).collect(),
+                    s: h.s.iter().map(|terms| horner(terms, t)).collect(),
+                })
+                .collect(),
+        }
+    }
+}
+
+impl ForcedSsm<'_> {
+    /// The expansion of [`ForcedSsm::expansion`] over the band around
+    /// `center` that holds every frequency of `omegas`, as Taylor series in
+    /// `Omega` (module docs), checked at each of `omegas`. `None` when a
+    /// series does not converge over the band (a pencil eigenvalue near it)
+    /// or misses the check at one of `omegas`; the factorizations spent are
+    /// counted either way.
+    ///
+    /// # Errors
+    /// A factorization failed; the forcing depends on the state.
+    pub fn expansion_series(
+        &mut self,
+        ssm: &SsmExpansion,
+        sys: &System,
+        omegas: &[f64],
+        order: usize,
+        center: f64,
+    ) -> Result<Option<NaSeries>, ForcedError> {
+        let order = order.min(ssm.order);
+        if order > 0 && !self.forcing_is_constant(sys) {
+            return Err(ForcedError::StateDependentForcing);
+        }
+        let half_width = omegas
+            .iter()
+            .fold(0.0f64, |m, &w| m.max((w - center).abs()));
+        if omegas.is_empty() || !(half_width > 0.0 && half_width.is_finite()) {
+            return Ok(None);
+        }
+        let nvar = ssm.dim();
+        let set = MultiIndexSet::new(nvar, order);
+        let wset = MultiIndexSet::new(nvar, order + 1);
+        let jac = jacobian_series(ssm, sys, &set);
+        let cx = Rhs {
+            ssm,
+            sys,
+            set: &set,
+            wset: &wset,
+            jac: &jac,
+        };
+        let lambda = self.lambda().to_vec();
+        let coord_ratio = self.coord_ratios().to_vec();
+        let shift_of =
+            |e: &[u16]| -> C64 { lambda.iter().zip(e).map(|(l, &kv)| l * f64::from(kv)).sum() };
+        let ts: Vec<f64> = omegas.iter().map(|w| (w - center) / half_width).collect();
+        let mut harmonics = Vec::with_capacity(self.n_harmonics());
+        for h in 0..self.n_harmonics() {
+            let (multiple, f) = self.harmonic(h);
+            let f = f.to_vec();
+            let anchors = band_anchors(&set, multiple, center, &shift_of);
+            let solved =
+                self.harmonic_series(&cx, &coord_ratio, h, &f, &anchors, center, half_width, &ts);
+            for &(at, _) in &anchors {
+                self.release_anchor(at);
+            }
+            let Some((x, s)) = solved.map_err(|source| ForcedError::Solve {
+                harmonic: h + 1,
+                omega: center,
+                source,
+            })?
+            else {
+                return Ok(None);
+            };
+            harmonics.push(SeriesHarmonic { multiple, x, s });
+        }
+        Ok(Some(NaSeries {
+            center,
+            half_width,
+            order,
+            set,
+            harmonics,
+        }))
+    }
+
+    /// One harmonic's series, multi-index by multi-index (`None`: not
+    /// converged or not accepted at a check point `ts`).
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn harmonic_series(
+        &mut self,
+        cx: &Rhs,
+        coord_ratio: &[f64],
+        h: usize,
+        f: &[C64],
+        anchors: &[(C64, usize)],
+        center: f64,
+        half_width: f64,
+        ts: &[f64],
+    ) -> Result<Option<(Vec<Vec<Vec<C64>>>, Vec<Vec<Vec<C64>>>)>, HomologicalError> {
+        let set = cx.set;
+        let (multiple, _) = self.harmonic(h);
+        let nvar = set.nvar();
+        let zero = C64::new(0.0, 0.0);
+        let lambda = self.lambda().to_vec();
+        let shift_of =
+            |e: &[u16]| -> C64 { lambda.iter().zip(e).map(|(l, &kv)| l * f64::from(kv)).sum() };
+        let mut xs: Vec<Vec<Vec<C64>>> = vec![Vec::new(); set.len()];
+        let mut ss: Vec<Vec<Vec<C64>>> = vec![Vec::new(); set.len()];
+        let empty: &[C64] = &[];
+        let zeros = vec![zero; nvar];
+        for k in 0..=set.max_order() {
+            let done = set.of_order(k).start;
+            for idx in set.of_order(k) {
+                let e = set.exponents(idx).to_vec();
+                let shift = shift_of(&e);
+                let set_res = resonant_set(coord_ratio, multiple, &e);
+                let below: Vec<(usize, usize)> = (0..done)
+                    .filter_map(|j| sub_index(set, &e, set.exponents(j)).map(|t| (j, t)))
+                    .collect();
+                // the right-hand side's Taylor coefficients, of the lower
+                // series' degree
+                let terms = if k == 0 {
+                    1
+                } else {
+                    (0..done).map(|j| xs[j].len()).max().unwrap_or(1)
+                };
+                let rhs: Vec<Vec<C64>> = (0..terms)
+                    .map(|m| {
+                        let x: Vec<&[C64]> = (0..done)
+                            .map(|j| xs[j].get(m).map_or(empty, Vec::as_slice))
+                            .collect();
+                        let s: Vec<&[C64]> = (0..done)
+                            .map(|j| ss[j].get(m).map_or(zeros.as_slice(), Vec::as_slice))
+                            .collect();
+                        let forcing = (k == 0 && m == 0).then_some(f);
+                        cx.rhs(&e, done, &below, &x, &s, forcing)
+                    })
+                    .collect();
+                let at = anchor_for(anchors, C64::new(0.0, multiple * center + shift.im))
+                    .expect("every multi-index has its anchor");
+                let big = C64::new(0.0, multiple * center) + shift;
+                let slope = C64::new(0.0, multiple * half_width);
+                let Some((series, floor)) =
+                    self.solve_series(at, big - at, slope, &set_res, &rhs)?
+                else {
+                    return Ok(None);
+                };
+                let (w, r): (Vec<Vec<C64>>, Vec<Vec<C64>>) = series.into_iter().unzip();
+                // every frequency asked for: its value solves its system
+                for &t in ts {
+                    let (wt, rt, bt) = (horner(&w, t), horner(&r, t), horner(&rhs, t));
+                    let error = self.backward_error(big + slope * t, &set_res, &wt, &rt, &bt);
+                    if error.is_nan() || error > accept(floor) {
+                        return Ok(None);
+                    }
+                }
+                ss[idx] = r
+                    .into_iter()
+                    .map(|rv| {
+                        let mut full = vec![zero; nvar];
+                        for (&c, v) in set_res.iter().zip(rv) {
+                            full[c] = v;
+                        }
+                        full
+                    })
+                    .collect();
+                xs[idx] = w;
+            }
+            for &(at, _) in anchors.iter().filter(|(_, l)| *l == k) {
+                self.release_anchor(at);
+            }
+        }
+        Ok(Some((xs, ss)))
+    }
+}
