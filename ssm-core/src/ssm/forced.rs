@@ -26,7 +26,7 @@
 
 use ssm_api::PolyVector;
 
-use super::homological::{Homological, HomologicalError, Solution};
+use super::homological::{horner, series_accept, Homological, HomologicalError, Solution};
 use super::reduced_modes;
 use crate::model::system::System;
 use crate::spectrum::MasterMode;
@@ -169,20 +169,6 @@ pub(crate) fn table_warning(error: f64, range: (f64, f64)) -> Option<String> {
 
 /// Most Chebyshev nodes (exact solves) spent on an output table.
 const OUTPUT_TABLE_MAX_NODES: usize = 129;
-
-use super::nonautonomous::series_accept;
-
-/// `sum_m c_m t^m` for vectors `c_m` (Horner); empty for no terms.
-pub(crate) fn horner(terms: &[Vec<C64>], t: f64) -> Vec<C64> {
-    let Some(last) = terms.last() else {
-        return Vec::new();
-    };
-    let mut out = last.clone();
-    for c in terms.iter().rev().skip(1) {
-        out.iter_mut().zip(c).for_each(|(o, ci)| *o = *o * t + ci);
-    }
-    out
-}
 
 /// Value of a forcing polynomial at the origin (its constant terms).
 fn at_origin(p: &PolyVector, n: usize) -> Vec<f64> {

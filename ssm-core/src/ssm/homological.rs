@@ -71,6 +71,7 @@ mod band;
 mod series;
 pub use band::band_vectors;
 pub use series::MAX_TERMS as SERIES_TERMS;
+pub(crate) use series::{accept as series_accept, horner};
 
 /// Why a homological equation could not be solved.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

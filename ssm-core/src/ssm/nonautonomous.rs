@@ -32,7 +32,6 @@ use crate::C64;
 use ssm_kernel::poly::MultiIndexSet;
 
 mod series;
-pub(crate) use series::accept as series_accept;
 pub use series::NaSeries;
 
 /// One harmonic's expansion: coefficient of `e^{i kappa phi} p^k`.

@@ -47,6 +47,32 @@ pub const MAX_TERMS: usize = 48;
 /// Refinement sweeps of one coefficient's solve at most.
 const MAX_SWEEPS: usize = 6;
 
+/// Componentwise backward error a value evaluated from a series may have
+/// where the model's solves reach rounding (some 5000 roundings: a series
+/// sums terms of decreasing size, each refined to rounding).
+const ACCEPT: f64 = 1e-12;
+
+/// The componentwise backward error a value evaluated from a series must
+/// meet when the refined solves of its coefficients stopped at `floor`:
+/// [`ACCEPT`], or ten times that floor on a model whose refined solves do
+/// not reach rounding (a fine mesh's badly scaled rows; a direct solve at
+/// that value stops at the same floor).
+pub(crate) fn accept(floor: f64) -> f64 {
+    ACCEPT.max(10.0 * floor)
+}
+
+/// `sum_m c_m t^m` for vectors `c_m` (Horner); empty for no terms.
+pub(crate) fn horner(terms: &[Vec<C64>], t: f64) -> Vec<C64> {
+    let Some(last) = terms.last() else {
+        return Vec::new();
+    };
+    let mut out = last.clone();
+    for c in terms.iter().rev().skip(1) {
+        out.iter_mut().zip(c).for_each(|(o, ci)| *o = *o * t + ci);
+    }
+    out
+}
+
 fn size(s: &Solution) -> f64 {
     s.0.iter()
         .chain(&s.1)

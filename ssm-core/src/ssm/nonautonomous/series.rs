@@ -15,7 +15,7 @@
 //! number of frequencies, and any frequency of the band is then a
 //! polynomial evaluation. Each multi-index's series is accepted only where
 //! its value at every frequency asked for solves that frequency's bordered
-//! system to a componentwise backward error of [`ACCEPT`], or ten times the
+//! system to a componentwise backward error of 1e-12, or ten times the
 //! floor its coefficients' refined solves reached (with the
 //! right-hand side evaluated from the lower series, as a direct solve at that
 //! frequency would see it); otherwise the caller solves frequency by
@@ -31,25 +31,11 @@ use super::{
     Rhs,
 };
 use crate::model::system::System;
-use crate::ssm::forced::{horner, ForcedError, ForcedSsm};
-use crate::ssm::homological::HomologicalError;
+use crate::ssm::forced::{ForcedError, ForcedSsm};
+use crate::ssm::homological::{horner, series_accept, HomologicalError};
 use crate::ssm::SsmExpansion;
 use crate::C64;
 use ssm_kernel::poly::MultiIndexSet;
-
-/// Componentwise backward error every frequency's evaluated solution may
-/// have where the model's solves reach rounding (some 5000 roundings: a
-/// series sums terms of decreasing size, each refined to rounding).
-const ACCEPT: f64 = 1e-12;
-
-/// The componentwise backward error a frequency's evaluated solution must
-/// meet when the refined solves of its series' coefficients stopped at
-/// `floor`: [`ACCEPT`], or ten times that floor on a model whose refined
-/// solves do not reach rounding (a fine mesh's badly scaled rows; a direct
-/// solve at the frequency stops at the same floor).
-pub(crate) fn accept(floor: f64) -> f64 {
-    ACCEPT.max(10.0 * floor)
-}
 
 /// One harmonic's series: `x[idx][m]`, `s[idx][m]`, the coefficient of `t^m`.
 #[derive(Debug, Clone)]
@@ -250,7 +236,7 @@ impl ForcedSsm<'_> {
                 for &t in ts {
                     let (wt, rt, bt) = (horner(&w, t), horner(&r, t), horner(&rhs, t));
                     let error = self.backward_error(big + slope * t, &set_res, &wt, &rt, &bt);
-                    if error.is_nan() || error > accept(floor) {
+                    if error.is_nan() || error > series_accept(floor) {
                         return Ok(None);
                     }
                 }
