@@ -266,6 +266,7 @@ impl Context<'_> {
                 self.outputs,
                 k_eff,
                 &self.nodes,
+                0.5 * (self.range.0 + self.range.1),
             )?;
             self.tables.insert(k_eff, t);
         }
@@ -522,7 +523,8 @@ const ORBIT_SAMPLES: usize = 64;
 /// Higher-order non-autonomous terms of order `k`: exact expansions at the
 /// Chebyshev nodes in `Omega`, interpolated in between (sigma, tau and the
 /// outputs' X); each multi-index's solves at the nodes go through one
-/// factorization at the middle of the nodes' band.
+/// factorization at `mid`, the middle of the nodes' band and of the forced
+/// response's range (where the X0 table's factorization is).
 fn nonautonomous_table(
     forced: &mut ForcedSsm,
     ssm: &SsmExpansion,
@@ -530,13 +532,8 @@ fn nonautonomous_table(
     outputs: &[&OutputMap],
     k: usize,
     nodes: &[f64],
+    mid: f64,
 ) -> Result<NaTable, FrcError> {
-    let (lo, hi) = nodes
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &w| {
-            (a.min(w), b.max(w))
-        });
-    let mid = 0.5 * (lo + hi);
     let series = if forced.iterative() {
         forced.expansion_series(ssm, sys, nodes, k, mid)?
     } else {

@@ -335,9 +335,19 @@ impl<'a> ForcedSsm<'a> {
         })
     }
 
-    /// Forgets the factorization at `anchor`.
+    /// Forgets the factorization at `anchor`, unless it is the one of
+    /// [`ForcedSsm::anchor_at`] (`i kappa_h Omega` at the band's middle, kept
+    /// for [`ForcedSsm::at`], the X0 table and the multi-index 0 of every
+    /// later expansion).
     pub(crate) fn release_anchor(&mut self, anchor: C64) {
-        self.solver.release_anchor(anchor);
+        let pinned = self.anchor.is_some_and(|c| {
+            self.forcing
+                .iter()
+                .any(|(multiple, _, _)| C64::new(0.0, multiple * c) == anchor)
+        });
+        if !pinned {
+            self.solver.release_anchor(anchor);
+        }
     }
 
     /// Solves [`ForcedSsm::at`] through one factorization at `omega` (the

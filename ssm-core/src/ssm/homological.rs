@@ -144,6 +144,63 @@ struct Residual {
     componentwise: f64,
 }
 
+/// A sparse LU of `M = sigma B - A`, or of `D_r M D_c` with the diagonal
+/// equilibration `scale = (D_r, D_c)` (each row, then each column, scaled
+/// to a largest entry between 1/2 and 1 by a power of two, so that scaling
+/// rounds nothing): where band solves run (finite-element models whose rows
+/// differ in scale by orders of magnitude) the pivots of the equilibrated
+/// matrix keep an unrefined solve's componentwise backward error small, and
+/// a refined solve needs fewer sweeps.
+///
+/// # References
+/// N. J. Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed.,
+/// SIAM (2002), Sect. 9.8 (scaling and equilibration); E. Anderson et al.,
+/// *LAPACK Users' Guide*, 3rd ed., SIAM (1999) (`xGEEQU`).
+pub(super) struct Factor {
+    lu: Lu<usize, C64>,
+    scale: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+/// The power of two nearest below `1 / m` (`1` for a zero or non-finite
+/// `m`).
+fn inverse_power_of_two(m: f64) -> f64 {
+    if m > 0.0 && m.is_finite() {
+        (-m.log2().ceil()).exp2()
+    } else {
+        1.0
+    }
+}
+
+/// Scales `vals` (the values of `pattern`) to `D_r M D_c` and returns `(D_r,
+/// D_c)` (see [`Factor`]).
+fn equilibrate_in_place(
+    pattern: faer::sparse::SymbolicSparseColMatRef<'_, usize>,
+    vals: &mut [C64],
+) -> (Vec<f64>, Vec<f64>) {
+    let n = pattern.nrows();
+    let mut row_max = vec![0.0f64; n];
+    for j in 0..pattern.ncols() {
+        for k in pattern.col_range(j) {
+            let i = pattern.row_idx()[k];
+            row_max[i] = row_max[i].max(vals[k].norm());
+        }
+    }
+    let row: Vec<f64> = row_max.into_iter().map(inverse_power_of_two).collect();
+    let mut col = vec![1.0f64; pattern.ncols()];
+    for (j, cj) in col.iter_mut().enumerate() {
+        let mut m = 0.0f64;
+        for k in pattern.col_range(j) {
+            vals[k] *= row[pattern.row_idx()[k]];
+            m = m.max(vals[k].norm());
+        }
+        *cj = inverse_power_of_two(m);
+        for k in pattern.col_range(j) {
+            vals[k] *= *cj;
+        }
+    }
+    (row, col)
+}
+
 /// Solver for the homological equations of one SSM computation.
 pub(crate) struct Homological<'a> {
     n: usize,
@@ -159,7 +216,7 @@ pub(crate) struct Homological<'a> {
     lambda: Vec<C64>,
     bv: Vec<Vec<C64>>,
     ub: Vec<Vec<C64>>,
-    numeric: HashMap<(u64, u64), Lu<usize, C64>>,
+    numeric: HashMap<(u64, u64), Factor>,
     /// Factorizations [`Homological::solve_band`] solves through.
     anchors: Vec<band::AnchorLu>,
     /// Whether [`Homological::solve_band`] iterates (decided once, from the
@@ -305,7 +362,7 @@ impl<'a> Homological<'a> {
     }
 
     /// The LU of `sigma B - A`, computed or cached.
-    fn factor(&mut self, sigma: C64) -> Result<&Lu<usize, C64>, HomologicalError> {
+    fn factor(&mut self, sigma: C64) -> Result<&Factor, HomologicalError> {
         let key = (sigma.re.to_bits(), sigma.im.to_bits());
         if !self.numeric.contains_key(&key) {
             let lu = self.fresh_lu(sigma)?;
@@ -314,8 +371,10 @@ impl<'a> Homological<'a> {
         Ok(&self.numeric[&key])
     }
 
-    /// A new LU of `sigma B - A` (counted).
-    fn fresh_lu(&mut self, sigma: C64) -> Result<Lu<usize, C64>, HomologicalError> {
+    /// A new LU of `sigma B - A` (counted); where band solves run, of the
+    /// equilibrated matrix (see [`Factor`]).
+    fn fresh_lu(&mut self, sigma: C64) -> Result<Factor, HomologicalError> {
+        let equilibrate = self.iterative();
         let t = Instant::now();
         if self.lu_symbolic.is_none() {
             let sym = SymbolicLu::try_new(self.symbolic.as_ref()).map_err(|e| {
@@ -326,12 +385,13 @@ impl<'a> Homological<'a> {
             self.lu_symbolic = Some(sym);
             self.stats.symbolic += 1;
         }
-        let vals: Vec<C64> = self
+        let mut vals: Vec<C64> = self
             .a_val
             .iter()
             .zip(&self.b_val)
             .map(|(&a, &b)| sigma * b - a)
             .collect();
+        let scale = equilibrate.then(|| equilibrate_in_place(self.symbolic.as_ref(), &mut vals));
         let mat = SparseColMat::new(self.symbolic.clone(), vals);
         let lu = Lu::try_new_with_symbolic(
             self.lu_symbolic.clone().expect("computed above"),
@@ -342,7 +402,7 @@ impl<'a> Homological<'a> {
         })?;
         self.stats.factorizations += 1;
         self.stats.factor_s += t.elapsed().as_secs_f64();
-        Ok(lu)
+        Ok(Factor { lu, scale })
     }
 
     /// The value factorized for `lambda` with resonant set `set`: `lambda`
@@ -359,10 +419,19 @@ impl<'a> Homological<'a> {
         sigma
     }
 
-    fn lu_solve(lu: &Lu<usize, C64>, rhs: &[C64]) -> Vec<C64> {
-        let mut x = Mat::<C64>::from_fn(rhs.len(), 1, |i, _| rhs[i]);
-        lu.solve_in_place(x.as_mut());
-        (0..rhs.len()).map(|i| x[(i, 0)]).collect()
+    fn lu_solve(f: &Factor, rhs: &[C64]) -> Vec<C64> {
+        match &f.scale {
+            None => {
+                let mut x = Mat::<C64>::from_fn(rhs.len(), 1, |i, _| rhs[i]);
+                f.lu.solve_in_place(x.as_mut());
+                (0..rhs.len()).map(|i| x[(i, 0)]).collect()
+            }
+            Some((row, col)) => {
+                let mut x = Mat::<C64>::from_fn(rhs.len(), 1, |i, _| rhs[i] * row[i]);
+                f.lu.solve_in_place(x.as_mut());
+                (0..rhs.len()).map(|i| x[(i, 0)] * col[i]).collect()
+            }
+        }
     }
 
     /// Solves the bordered system at `lambda` with resonant master coordinates

@@ -167,21 +167,12 @@ impl ForcedSsm<'_> {
     ) -> Result<Vec<NonAutonomous>, ForcedError> {
         let order = order.min(ssm.order);
         let nvar = ssm.dim();
-        let set = MultiIndexSet::new(nvar, order);
-        let wset = MultiIndexSet::new(nvar, order + 1);
-        let jac = jacobian_series(ssm, sys, &set);
-        let cx = Rhs {
-            ssm,
-            sys,
-            set: &set,
-            wset: &wset,
-            jac: &jac,
-        };
+        let cx = Rhs::new(ssm, sys, order);
+        let set = &cx.set;
         let lambda = self.lambda().to_vec();
         let coord_ratio = self.coord_ratios().to_vec();
         let zero = C64::new(0.0, 0.0);
-        let shift_of =
-            |e: &[u16]| -> C64 { lambda.iter().zip(e).map(|(l, &kv)| l * f64::from(kv)).sum() };
+        let shift_of = |e: &[u16]| shift(&lambda, e);
         let mut out: Vec<NonAutonomous> = omegas
             .iter()
             .map(|&omega| NonAutonomous {
@@ -199,10 +190,11 @@ impl ForcedSsm<'_> {
             let mut ss: Vec<Vec<Vec<C64>>> = vec![vec![vec![zero; nvar]; set.len()]; omegas.len()];
             // the anchors and the last order each serves, to release its
             // factorization after that order
-            let last = anchor.map_or_else(Vec::new, |c| band_anchors(&set, multiple, c, &shift_of));
-            let anchor_of = |e: &[u16]| {
-                anchor.and_then(|c| anchor_for(&last, C64::new(0.0, multiple * c + shift_of(e).im)))
-            };
+            // on the imaginary axis: multi-indices whose shifts differ by
+            // damping alone share the anchor
+            let at = |c: f64, e: &[u16]| C64::new(0.0, multiple * c + shift_of(e).im);
+            let last = anchor.map_or_else(Vec::new, |c| band_anchors(set, &|e| at(c, e)));
+            let anchor_of = |e: &[u16]| anchor.and_then(|c| anchor_for(&last, at(c, e)));
             for k in 0..=order {
                 let done = set.of_order(k).start;
                 for idx in set.of_order(k) {
@@ -211,7 +203,7 @@ impl ForcedSsm<'_> {
                     let set_res = resonant_set(&coord_ratio, multiple, &e);
                     // the lower multi-indices j with e - j in the set, and e - j
                     let below: Vec<(usize, usize)> = (0..done)
-                        .filter_map(|j| sub_index(&set, &e, set.exponents(j)).map(|t| (j, t)))
+                        .filter_map(|j| sub_index(set, &e, set.exponents(j)).map(|t| (j, t)))
                         .collect();
                     let rhss: Vec<Vec<C64>> = (0..omegas.len())
                         .map(|node| {
@@ -278,12 +270,31 @@ impl ForcedSsm<'_> {
 pub(super) struct Rhs<'s> {
     pub ssm: &'s SsmExpansion,
     pub sys: &'s System,
-    pub set: &'s MultiIndexSet,
-    pub wset: &'s MultiIndexSet,
-    pub jac: &'s [(usize, usize, Vec<C64>)],
+    pub set: MultiIndexSet,
+    pub wset: MultiIndexSet,
+    pub jac: Vec<(usize, usize, Vec<C64>)>,
 }
 
-impl Rhs<'_> {
+/// `k . lambda` of multi-index `k` (exponents `e`).
+pub(super) fn shift(lambda: &[C64], e: &[u16]) -> C64 {
+    lambda.iter().zip(e).map(|(l, &kv)| l * f64::from(kv)).sum()
+}
+
+impl<'s> Rhs<'s> {
+    /// The context of the equations to order `order` in `p` on top of `ssm`.
+    pub fn new(ssm: &'s SsmExpansion, sys: &'s System, order: usize) -> Self {
+        let set = MultiIndexSet::new(ssm.dim(), order);
+        let wset = MultiIndexSet::new(ssm.dim(), order + 1);
+        let jac = jacobian_series(ssm, sys, &set);
+        Self {
+            ssm,
+            sys,
+            set,
+            wset,
+            jac,
+        }
+    }
+
     /// The right-hand side at multi-index `e` (order `k`, the multi-indices
     /// of lower orders `..done`, `below` its pairs `(j, e - j)`) from the
     /// lower orders' `x` (an empty vector: zero) and `s`, with the forcing
@@ -298,13 +309,13 @@ impl Rhs<'_> {
         s: &[&[C64]],
         forcing: Option<&[C64]>,
     ) -> Vec<C64> {
-        let (ssm, set, wset) = (self.ssm, self.set, self.wset);
+        let (ssm, set, wset) = (self.ssm, &self.set, &self.wset);
         let n = self.sys.n_states();
         let zero = C64::new(0.0, 0.0);
         let k: u16 = e.iter().sum();
         let mut rhs = forcing.map_or_else(|| vec![zero; n], <[C64]>::to_vec);
         // [DF(W) X]_k
-        for (eq, var, series) in self.jac {
+        for (eq, var, series) in &self.jac {
             for &(j, t) in below {
                 if let Some(xv) = x[j].get(*var) {
                     rhs[*eq] += series[t] * xv;
@@ -495,21 +506,14 @@ impl NonAutonomous {
     }
 }
 
-/// The anchors of a band around `center` for the harmonic `multiple`: the
-/// points `i (kappa center + Im k . lambda)` of the multi-indices `k` of
-/// `set` (values equal up to rounding are one: multi-indices whose shifts
-/// differ by damping alone share a factorization), each with the last order
-/// it serves (its factorization is released after it).
-pub(super) fn band_anchors(
-    set: &MultiIndexSet,
-    multiple: f64,
-    center: f64,
-    shift_of: &dyn Fn(&[u16]) -> C64,
-) -> Vec<(C64, usize)> {
+/// The anchors `at(k)` of the multi-indices `k` of `set` (values equal up
+/// to rounding are one, and share a factorization), each with the last
+/// order it serves (its factorization is released after it).
+pub(super) fn band_anchors(set: &MultiIndexSet, at: &dyn Fn(&[u16]) -> C64) -> Vec<(C64, usize)> {
     let mut last: Vec<(C64, usize)> = Vec::new();
     for k in 0..=set.max_order() {
         for idx in set.of_order(k) {
-            let at = C64::new(0.0, multiple * center + shift_of(set.exponents(idx)).im);
+            let at = at(set.exponents(idx));
             match last.iter_mut().find(|(a, _)| near(*a, at)) {
                 Some(entry) => entry.1 = k,
                 None => last.push((at, k)),

@@ -130,14 +130,15 @@ fn plate_forced() -> (
 
 /// The forced response's non-autonomous expansions on the 8 x 8 plate at
 /// the 17 Chebyshev nodes of a band around the first frequency `omega_1`,
-/// three ways: as Taylor series in `Omega` (one factorization per anchor,
-/// the imaginary parts of `Omega + k . lambda`, and a few dozen solves per
-/// multi-index), by band solves (the same factorizations, one shared search
-/// space for the nodes), and by a direct sparse LU solve at every node and
-/// multi-index (refined to componentwise backward stability). To order 2 in
-/// `p` (the order the plate's forced response takes) the series converge and
-/// agree with the direct solves within 1e-10 of each coefficient vector
-/// through 5 factorizations (`k_1 - k_2` in `-2..=2`) against 102. To order 4
+/// three ways: as Taylor series in `Omega` (one factorization per
+/// multi-index, at its value `i Omega + k . lambda` at the band's middle, and
+/// a few dozen solves), by band solves (one factorization per imaginary part
+/// of that value, one shared search space for the nodes), and by a direct
+/// sparse LU solve at every node and multi-index (refined to componentwise
+/// backward stability). To order 2 in `p` (the order the plate's forced
+/// response takes) the series converge and agree with the direct solves
+/// within 1e-10 of each coefficient vector through 6 factorizations against
+/// 102. To order 4
 /// the multi-index `(3, 0)` meets the near internal resonance `3 lambda_1 +
 /// i Omega ~ lambda_(2,2)` (`omega_(2,2) ~ 4 omega_1` on a square plate)
 /// inside the band: its series cannot converge and is refused, and the band
@@ -175,7 +176,7 @@ fn series_and_band_expansions_agree_with_direct_solves_on_the_plate() {
     assert_eq!(forced.counts(), series_counts, "expansions take the series");
     assert_eq!(worst_difference(&through_expansions, &series_at), 0.0);
     let per_index = series.set.len();
-    assert!(series_counts.factorizations <= 5, "{series_counts:?}");
+    assert!(series_counts.factorizations <= 6, "{series_counts:?}");
     assert!(
         series_counts.iterations <= ssm_core::ssm::SERIES_TERMS * per_index,
         "{series_counts:?}"

@@ -40,7 +40,6 @@
 use std::time::Instant;
 
 use faer::linalg::matmul::matmul;
-use faer::sparse::linalg::solvers::Lu;
 use faer::{Accum, Mat, MatRef, Par};
 
 use super::{dot, Homological, HomologicalError, Solution};
@@ -68,7 +67,7 @@ const DROP: f64 = 1e-15;
 pub(super) struct AnchorLu {
     /// The anchor as requested.
     at: C64,
-    pub(super) lu: Lu<usize, C64>,
+    pub(super) lu: super::Factor,
     /// Border solves and Schur complement of the last resonant set.
     pub(super) border: Option<Border>,
 }

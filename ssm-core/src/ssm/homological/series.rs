@@ -34,7 +34,7 @@
 
 use std::time::Instant;
 
-use super::{dot, solve_small, Homological, HomologicalError, Solution, REFINED};
+use super::{dot, solve_small, Homological, HomologicalError, Solution};
 use crate::spectrum::modes::spmv;
 use crate::C64;
 
@@ -44,6 +44,11 @@ const TAIL: f64 = 1e-16;
 /// Terms a series holds at most; a segment that needs more is too close to
 /// an eigenvalue of the pencil for one expansion.
 pub const MAX_TERMS: usize = 48;
+/// Componentwise backward error at which a coefficient's refinement stops:
+/// some 50 roundings, a hundred times below what the series' values must
+/// meet ([`ACCEPT`]), so that on an equilibrated factorization most
+/// coefficients take one solve.
+const TERM_REFINED: f64 = 1e-14;
 /// Refinement sweeps of one coefficient's solve at most.
 const MAX_SWEEPS: usize = 6;
 
@@ -186,8 +191,8 @@ impl Homological<'_> {
     }
 
     /// One coefficient's solve at `lambda` through the anchor's block solve,
-    /// refined until its componentwise backward error reaches rounding or
-    /// stops halving.
+    /// refined until its componentwise backward error is below
+    /// [`TERM_REFINED`] or stops halving; with that error.
     fn refined_at_anchor(
         &self,
         slot: usize,
@@ -199,7 +204,7 @@ impl Homological<'_> {
         let (mut w, mut r) = self.anchor_block_solve(slot, set, h, g)?;
         let mut res = self.residual(lambda, set, &w, &r, h);
         for _ in 0..MAX_SWEEPS {
-            if !res.componentwise.is_finite() || res.componentwise <= REFINED {
+            if !res.componentwise.is_finite() || res.componentwise <= TERM_REFINED {
                 break;
             }
             let (dw, dr) = self.anchor_block_solve(slot, set, &res.h, &res.g)?;

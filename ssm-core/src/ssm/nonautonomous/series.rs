@@ -27,8 +27,7 @@
 //! eq. (60).
 
 use super::{
-    anchor_for, band_anchors, jacobian_series, resonant_set, sub_index, NaHarmonic, NonAutonomous,
-    Rhs,
+    anchor_for, band_anchors, resonant_set, shift, sub_index, NaHarmonic, NonAutonomous, Rhs,
 };
 use crate::model::system::System;
 use crate::ssm::forced::{ForcedError, ForcedSsm};
@@ -124,27 +123,19 @@ impl ForcedSsm<'_> {
         if omegas.is_empty() || !(half_width > 0.0 && half_width.is_finite()) {
             return Ok(None);
         }
-        let nvar = ssm.dim();
-        let set = MultiIndexSet::new(nvar, order);
-        let wset = MultiIndexSet::new(nvar, order + 1);
-        let jac = jacobian_series(ssm, sys, &set);
-        let cx = Rhs {
-            ssm,
-            sys,
-            set: &set,
-            wset: &wset,
-            jac: &jac,
-        };
+        let cx = Rhs::new(ssm, sys, order);
+        let set = &cx.set;
         let lambda = self.lambda().to_vec();
         let coord_ratio = self.coord_ratios().to_vec();
-        let shift_of =
-            |e: &[u16]| -> C64 { lambda.iter().zip(e).map(|(l, &kv)| l * f64::from(kv)).sum() };
+        let shift_of = |e: &[u16]| shift(&lambda, e);
         let ts: Vec<f64> = omegas.iter().map(|w| (w - center) / half_width).collect();
         let mut harmonics = Vec::with_capacity(self.n_harmonics());
         for h in 0..self.n_harmonics() {
             let (multiple, f) = self.harmonic(h);
             let f = f.to_vec();
-            let anchors = band_anchors(&set, multiple, center, &shift_of);
+            // at each multi-index's own value at the center (damping
+            // included): every coefficient's solve is then one refined solve
+            let anchors = band_anchors(set, &|e| C64::new(0.0, multiple * center) + shift_of(e));
             let solved =
                 self.harmonic_series(&cx, &coord_ratio, h, &f, &anchors, center, half_width, &ts);
             for &(at, _) in &anchors {
@@ -164,7 +155,7 @@ impl ForcedSsm<'_> {
             center,
             half_width,
             order,
-            set,
+            set: cx.set.clone(),
             harmonics,
         }))
     }
@@ -183,13 +174,12 @@ impl ForcedSsm<'_> {
         half_width: f64,
         ts: &[f64],
     ) -> Result<Option<(Vec<Vec<Vec<C64>>>, Vec<Vec<Vec<C64>>>)>, HomologicalError> {
-        let set = cx.set;
+        let set = &cx.set;
         let (multiple, _) = self.harmonic(h);
         let nvar = set.nvar();
         let zero = C64::new(0.0, 0.0);
         let lambda = self.lambda().to_vec();
-        let shift_of =
-            |e: &[u16]| -> C64 { lambda.iter().zip(e).map(|(l, &kv)| l * f64::from(kv)).sum() };
+        let shift_of = |e: &[u16]| shift(&lambda, e);
         let mut xs: Vec<Vec<Vec<C64>>> = vec![Vec::new(); set.len()];
         let mut ss: Vec<Vec<Vec<C64>>> = vec![Vec::new(); set.len()];
         let empty: &[C64] = &[];
@@ -222,9 +212,8 @@ impl ForcedSsm<'_> {
                         cx.rhs(&e, done, &below, &x, &s, forcing)
                     })
                     .collect();
-                let at = anchor_for(anchors, C64::new(0.0, multiple * center + shift.im))
-                    .expect("every multi-index has its anchor");
                 let big = C64::new(0.0, multiple * center) + shift;
+                let at = anchor_for(anchors, big).expect("every multi-index has its anchor");
                 let slope = C64::new(0.0, multiple * half_width);
                 let Some((series, floor)) =
                     self.solve_series(at, big - at, slope, &set_res, &rhs)?
