@@ -182,7 +182,9 @@ fn at_origin(p: &PolyVector, n: usize) -> Vec<f64> {
 /// The leading-order periodic SSM of one system and master set, evaluated at
 /// any forcing frequency; one symbolic LU serves every frequency.
 pub struct ForcedSsm<'a> {
-    solver: Homological<'a>,
+    /// The bordered solver (its series solves serve the non-autonomous
+    /// expansions directly).
+    pub(super) solver: Homological<'a>,
     forcing: Vec<(f64, Vec<C64>, Vec<usize>)>,
     n_coords: usize,
     lambda: Vec<C64>,
@@ -289,32 +291,6 @@ impl<'a> ForcedSsm<'a> {
         rhss: &[&[C64]],
     ) -> Result<Vec<Solution>, HomologicalError> {
         self.solver.solve_band(bigs, anchor, set, rhss)
-    }
-
-    /// Taylor coefficients along `Lambda(t) = anchor + delta + slope t`
-    /// through the factorization at `anchor` (see
-    /// `Homological::solve_series`).
-    pub(crate) fn solve_series(
-        &mut self,
-        anchor: C64,
-        delta: C64,
-        slope: C64,
-        set: &[usize],
-        rhs: &[Vec<C64>],
-    ) -> Result<Option<(Vec<Solution>, f64)>, HomologicalError> {
-        self.solver.solve_series(anchor, delta, slope, set, rhs)
-    }
-
-    /// The componentwise backward error of a bordered solution at `lambda`.
-    pub(crate) fn backward_error(
-        &self,
-        lambda: C64,
-        set: &[usize],
-        w: &[C64],
-        r: &[C64],
-        rhs: &[C64],
-    ) -> f64 {
-        self.solver.backward_error(lambda, set, w, r, rhs)
     }
 
     /// Whether band solves iterate through one factorization (the model's

@@ -216,7 +216,8 @@ impl ForcedSsm<'_> {
                 let at = anchor_for(anchors, big).expect("every multi-index has its anchor");
                 let slope = C64::new(0.0, multiple * half_width);
                 let Some((series, floor)) =
-                    self.solve_series(at, big - at, slope, &set_res, &rhs)?
+                    self.solver
+                        .solve_series(at, big - at, slope, &set_res, &rhs)?
                 else {
                     return Ok(None);
                 };
@@ -224,7 +225,9 @@ impl ForcedSsm<'_> {
                 // every frequency asked for: its value solves its system
                 for &t in ts {
                     let (wt, rt, bt) = (horner(&w, t), horner(&r, t), horner(&rhs, t));
-                    let error = self.backward_error(big + slope * t, &set_res, &wt, &rt, &bt);
+                    let error =
+                        self.solver
+                            .backward_error(big + slope * t, &set_res, &wt, &rt, &bt);
                     if error.is_nan() || error > series_accept(floor) {
                         return Ok(None);
                     }
