@@ -22,6 +22,11 @@ mod work;
 
 use pyo3::prelude::*;
 
+/// Counts the heap, for the memory the summaries report (the extension's
+/// own allocations; Python's are not counted).
+#[global_allocator]
+static HEAP: ssm_kernel::heap::Counting = ssm_kernel::heap::Counting;
+
 /// The module `ssm._ssm`.
 #[pymodule]
 fn _ssm(m: &Bound<'_, PyModule>) -> PyResult<()> {

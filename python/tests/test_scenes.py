@@ -50,13 +50,13 @@ def test_a_scene_run_writes_what_the_command_line_writes(tmp_path):
     cli = json.loads((tmp_path / "summary.json").read_text())
 
     def figures(value):
-        """The summary without its clocks (keys in seconds or per second)
-        and the plugins' paths."""
+        """The summary without its clocks (keys in seconds or per second),
+        its memory and the plugins' paths."""
         if isinstance(value, dict):
             return {
                 k: figures(v)
                 for k, v in value.items()
-                if not (k.endswith("_s") or k in ("timing_s", "plugins"))
+                if not (k.endswith("_s") or k in ("timing_s", "memory", "plugins"))
             }
         if isinstance(value, list):
             return [figures(v) for v in value]

@@ -51,6 +51,20 @@ pub fn memory_room() -> MemoryRoom {
     )
 }
 
+/// The address space left under `RLIMIT_AS` (`ulimit -v`): the limit minus
+/// `VmSize` of `/proc/self/status`; `None` without such a limit. Unlike the
+/// other two limits it counts reserved pages that were never touched, such
+/// as the per-thread buffers of dense matrix kernels.
+pub fn address_space_room() -> Option<f64> {
+    let limit = address_space_limit()?;
+    let status = std::fs::read_to_string("/proc/self/status").ok();
+    let mapped = status
+        .as_deref()
+        .and_then(|t| kib_field(t, "VmSize:"))
+        .unwrap_or(0.0);
+    Some((limit - mapped).max(0.0))
+}
+
 /// `RLIMIT_AS` in bytes; `None` when unlimited or unreadable.
 fn address_space_limit() -> Option<f64> {
     let mut lim = libc::rlimit {

@@ -21,6 +21,10 @@ use ssm_engine::scene::{ReportSection, SceneFile};
 use ssm_engine::study::{self, StudyFile};
 use ssm_kernel::continuation::Ledger;
 
+/// Counts the heap, for the memory `summary.json` reports.
+#[global_allocator]
+static HEAP: ssm_kernel::heap::Counting = ssm_kernel::heap::Counting;
+
 const SCENE_HELP: &str = concat!(
     "SCENE FORMAT (TOML; unknown keys are rejected, errors name the line and key):\n\n",
     include_str!("scene/format.toml"),

@@ -13,7 +13,11 @@
 //! - [`dopri`]: the Dormand-Prince 5(4) pair on complex states;
 //! - [`number`]: numbers from user input in messages and CSV files;
 //! - [`search`]: the first failing point of a costly test along a scan;
-//! - [`cancel`]: cooperative cancellation of the long loops.
+//! - [`cancel`]: cooperative cancellation of the long loops;
+//! - [`heap`]: live and peak heap bytes, counted by the front end's
+//!   allocator;
+//! - [`workspace`]: the address space of the dense kernels' per-thread
+//!   buffers, taken before the memory gate reads its room.
 
 #![warn(missing_docs)]
 
@@ -21,10 +25,12 @@ pub mod cancel;
 pub mod chebyshev;
 pub mod continuation;
 pub mod dopri;
+pub mod heap;
 pub mod number;
 pub mod poly;
 pub mod search;
 pub mod sparse_lu;
 pub mod stepper;
+pub mod workspace;
 
 pub use num_complex::Complex64 as C64;

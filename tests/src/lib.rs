@@ -191,19 +191,27 @@ pub fn assert_job_summary_valid(job: &ssm_engine::pipeline::JobResult, name: &st
 /// output directory.
 pub fn run_zoo_with(args: &[&str], scene: &str) -> (serde_json::Value, PathBuf) {
     let out = tmp_dir(scene);
+    let args: Vec<&std::ffi::OsStr> = args.iter().map(std::ffi::OsStr::new).collect();
+    let s = run_binary(&args, &repo_root().join("zoo").join(scene), &out);
+    (s, out)
+}
+
+/// Runs the binary on the scene file `scene` into `out` (with `args` before
+/// it, e.g. `--plugin` and a library); returns its summary, checked against
+/// the schema.
+pub fn run_binary(args: &[&std::ffi::OsStr], scene: &Path, out: &Path) -> serde_json::Value {
     let o = std::process::Command::new(engine_binary())
         .args(args)
-        .arg(repo_root().join("zoo").join(scene))
+        .arg(scene)
         .arg("--out")
-        .arg(&out)
+        .arg(out)
         .env("CI", "1")
         .output()
         .expect("ssm-engine runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_summary_valid(&out.join("summary.json"));
-    let s = serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("summary"))
-        .expect("summary is JSON");
-    (s, out)
+    serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("summary"))
+        .expect("summary is JSON")
 }
 
 /// Runs a zoo scene through the binary; returns its summary and output directory.

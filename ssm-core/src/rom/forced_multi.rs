@@ -485,6 +485,7 @@ pub(crate) fn forced_response_multi(
         forcing_on_master: s,
         warnings,
         linear: forced.counts(),
+        factor_bytes: forced.factor_bytes(),
     })
 }
 

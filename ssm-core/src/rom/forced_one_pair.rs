@@ -246,6 +246,7 @@ pub(crate) fn forced_response_one_pair(
         forcing_on_master: vec![s],
         warnings,
         linear: ctx.forced.counts(),
+        factor_bytes: ctx.forced.factor_bytes(),
     })
 }
 

@@ -173,4 +173,7 @@ pub struct ForcedResponse {
     /// leading-order terms at each frequency solved or tabulated, the
     /// non-autonomous terms at their nodes.
     pub linear: crate::ssm::SolveCounts,
+    /// The most heap its sparse factors held at once, in bytes, as the
+    /// allocator counted it (`None` where it does not count).
+    pub factor_bytes: Option<usize>,
 }

@@ -339,6 +339,12 @@ impl<'a> ForcedSsm<'a> {
         self.solver.stats.counts()
     }
 
+    /// The most heap the sparse factors held at once (see
+    /// [`super::SolveStats::factor_bytes`]).
+    pub fn factor_bytes(&self) -> Option<usize> {
+        self.solver.stats.factor_bytes
+    }
+
     /// Forgets cached numeric factorizations.
     pub(crate) fn clear(&mut self) {
         self.solver.clear_numeric();

@@ -101,6 +101,10 @@ pub struct SolveStats {
     pub factor_s: f64,
     /// Seconds in triangular solves and residual checks.
     pub solve_s: f64,
+    /// The most heap the sparse factors held at once, in bytes, as the
+    /// process's allocator counted them ([`ssm_kernel::heap`]); `None`
+    /// where it does not count.
+    pub factor_bytes: Option<usize>,
 }
 
 impl SolveStats {
@@ -159,6 +163,8 @@ struct Residual {
 pub(super) struct Factor {
     lu: Lu<usize, C64>,
     scale: Option<(Vec<f64>, Vec<f64>)>,
+    /// Heap the LU holds (0 where the allocator does not count).
+    bytes: usize,
 }
 
 /// The power of two nearest below `1 / m` (`1` for a zero or non-finite
@@ -250,33 +256,64 @@ const NEAR_FILL: f64 = 40.0;
 /// approximate minimum degree order, per column, is at least [`NEAR_FILL`]
 /// (deterministic, unlike a timing: the same model gives the same digits).
 fn iterates(p: faer::sparse::SymbolicSparseColMatRef<'_, usize>) -> bool {
+    let n = p.nrows();
+    let pattern = (0..n).flat_map(|j| p.row_idx_of_col(j).map(move |i| (i, j)));
+    cholesky_entries(n, pattern).is_some_and(|len| len as f64 / n as f64 >= NEAR_FILL)
+}
+
+/// Entries of the symbolic Cholesky factor of `P + P^T` in approximate
+/// minimum degree order, for the `n x n` pattern `P` of the `(row, column)`
+/// pairs given; `None` for an empty or invalid pattern.
+fn cholesky_entries(n: usize, pattern: impl Iterator<Item = (usize, usize)>) -> Option<usize> {
     use faer::sparse::linalg::cholesky::{
         factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering,
     };
-    let n = p.nrows();
     if n == 0 {
-        return false;
+        return None;
     }
-    let mut triplets = Vec::with_capacity(2 * p.compute_nnz());
-    for j in 0..n {
-        for i in p.row_idx_of_col(j) {
-            triplets.push(faer::sparse::Triplet::new(i, j, 1.0f64));
-            triplets.push(faer::sparse::Triplet::new(j, i, 1.0f64));
-        }
-    }
-    let Ok(sym) = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets) else {
-        return false;
-    };
-    match factorize_symbolic_cholesky(
+    let triplets: Vec<_> = pattern
+        .flat_map(|(i, j)| {
+            [
+                faer::sparse::Triplet::new(i, j, 1.0f64),
+                faer::sparse::Triplet::new(j, i, 1.0f64),
+            ]
+        })
+        .collect();
+    let sym = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets).ok()?;
+    factorize_symbolic_cholesky(
         sym.symbolic(),
         faer::Side::Upper,
         SymmetricOrdering::Amd,
         CholeskySymbolicParams::default(),
-    ) {
-        Ok(chol) => chol.len_val() as f64 / n as f64 >= NEAR_FILL,
-        Err(_) => false,
-    }
+    )
+    .ok()
+    .map(|chol| chol.len_val())
 }
+
+/// Heap bytes the complex sparse LU of one `Lambda B - A` is estimated to
+/// hold, before any factorization: [`LU_BYTES_PER_ENTRY`] per entry of the
+/// symbolic Cholesky factor of the symmetrized pattern of `A` and `B`
+/// (AMD order). `None` for an empty pattern.
+pub fn lu_bytes_estimate(
+    a: SparseColMatRef<'_, usize, f64>,
+    b: SparseColMatRef<'_, usize, f64>,
+) -> Option<f64> {
+    let n = a.nrows();
+    let pattern = [a, b]
+        .into_iter()
+        .flat_map(|m| (0..m.ncols()).flat_map(move |j| m.row_idx_of_col(j).map(move |i| (i, j))));
+    cholesky_entries(n, pattern).map(|len| LU_BYTES_PER_ENTRY * len as f64)
+}
+
+/// Heap of faer's complex supernodal LU (partial pivoting, COLAMD order)
+/// per entry of the symbolic Cholesky factor of the symmetrized pattern in
+/// AMD order. Measured with the counting allocator on the clamped plates:
+/// 73, 70 and 95 bytes an entry at 16 x 16, 32 x 32 and 64 x 64 elements
+/// (2,948 to 48,644 states; the spread is mostly the spare capacity of the
+/// factor's growing arrays); the value is rounded up so that the gate errs
+/// towards refusing (the suite's `plate` tests assert it bounds the measured
+/// factors).
+pub const LU_BYTES_PER_ENTRY: f64 = 128.0;
 
 impl<'a> Homological<'a> {
     /// Prepares the union pattern of `A` and `B` and the border vectors `B v_i`
@@ -393,16 +430,33 @@ impl<'a> Homological<'a> {
             .collect();
         let scale = equilibrate.then(|| equilibrate_in_place(self.symbolic.as_ref(), &mut vals));
         let mat = SparseColMat::new(self.symbolic.clone(), vals);
-        let lu = Lu::try_new_with_symbolic(
-            self.lu_symbolic.clone().expect("computed above"),
-            mat.as_ref(),
-        )
-        .map_err(|e| HomologicalError::Singular {
+        let (lu, bytes) = ssm_kernel::heap::held(|| {
+            Lu::try_new_with_symbolic(
+                self.lu_symbolic.clone().expect("computed above"),
+                mat.as_ref(),
+            )
+        });
+        let lu = lu.map_err(|e| HomologicalError::Singular {
             detail: format!("sparse LU of Lambda B - A at Lambda = {sigma:.4e} failed: {e:?}"),
         })?;
         self.stats.factorizations += 1;
         self.stats.factor_s += t.elapsed().as_secs_f64();
-        Ok(Factor { lu, scale })
+        if let Some(b) = bytes {
+            let held = self.held_factor_bytes() + b;
+            self.stats.factor_bytes = Some(self.stats.factor_bytes.unwrap_or(0).max(held));
+        }
+        Ok(Factor {
+            lu,
+            scale,
+            bytes: bytes.unwrap_or(0),
+        })
+    }
+
+    /// Heap the factors kept now hold (cached values and band anchors), as
+    /// counted when they were made; 0 where the allocator does not count.
+    pub(crate) fn held_factor_bytes(&self) -> usize {
+        self.numeric.values().map(|f| f.bytes).sum::<usize>()
+            + self.anchors.iter().map(|a| a.lu.bytes).sum::<usize>()
     }
 
     /// The value factorized for `lambda` with resonant set `set`: `lambda`

@@ -51,7 +51,9 @@ use crate::model::system::System;
 use crate::spectrum::modes::spmv;
 use crate::spectrum::MasterMode;
 use crate::C64;
-pub use homological::{band_vectors, SolveCounts, SolveStats, SERIES_TERMS};
+pub use homological::{
+    band_vectors, lu_bytes_estimate, SolveCounts, SolveStats, LU_BYTES_PER_ENTRY, SERIES_TERMS,
+};
 use homological::{Homological, HomologicalError};
 use ssm_kernel::poly::{eval_poly, Composition, MultiIndexSet};
 
@@ -149,8 +151,8 @@ pub struct RTerm {
     pub coeff: C64,
 }
 
-/// Time spent, by stage.
-#[derive(Debug, Clone, Copy, Default)]
+/// Time spent, by stage, and the memory of each order.
+#[derive(Debug, Clone, Default)]
 pub struct SsmTiming {
     /// Composition `F(W)` and lower-order terms.
     pub compose_s: f64,
@@ -158,6 +160,29 @@ pub struct SsmTiming {
     pub linear: SolveStats,
     /// Whole computation.
     pub total_s: f64,
+    /// Orders `2..=order`, in order.
+    pub orders: Vec<OrderWork>,
+}
+
+/// The work and memory of one order of the SSM: its coefficients, and the
+/// sparse factors of its homological equations (kept while the order is
+/// solved, dropped before the next one).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct OrderWork {
+    /// The order.
+    pub order: usize,
+    /// Its multi-indices (conjugates included).
+    pub multi_indices: usize,
+    /// Numeric factorizations it made.
+    pub factorizations: usize,
+    /// Bytes of its coefficients of `W` (`16 N` per multi-index).
+    pub coefficient_bytes: usize,
+    /// Heap its factors held, as the allocator counted it
+    /// ([`ssm_kernel::heap`]); `None` where it does not count.
+    pub factor_bytes: Option<usize>,
+    /// Heap of the whole process once the order is solved, its factors
+    /// still held; `None` where the allocator does not count.
+    pub heap_bytes: Option<usize>,
 }
 
 /// A computed SSM: parametrization `W`, reduced dynamics `R`.
@@ -281,6 +306,7 @@ pub fn compute(
         rseries[t.index][t.coord] = t.coeff;
     }
     let mut compose_s = 0.0;
+    let mut orders = Vec::with_capacity(order.saturating_sub(1));
     for k in 2..=order {
         let tc = Instant::now();
         comp.load_leaves(&w, set.of_order(k - 1));
@@ -291,6 +317,7 @@ pub fn compute(
         }
         compose_s += tc.elapsed().as_secs_f64();
         solver.clear_numeric();
+        let factorizations_before = solver.stats.factorizations;
         let mut new_terms = Vec::new();
         for idx in set.of_order(k) {
             let cidx = set.conj(idx);
@@ -400,6 +427,15 @@ pub fn compute(
             rseries[t.index][t.coord] = t.coeff;
         }
         r.extend(new_terms);
+        let counted = ssm_kernel::heap::live();
+        orders.push(OrderWork {
+            order: k,
+            multi_indices: set.of_order(k).len(),
+            factorizations: solver.stats.factorizations - factorizations_before,
+            coefficient_bytes: set.of_order(k).len() * n * std::mem::size_of::<C64>(),
+            factor_bytes: counted.map(|_| solver.held_factor_bytes()),
+            heap_bytes: counted,
+        });
     }
     Ok(SsmExpansion {
         dynamics,
@@ -412,6 +448,7 @@ pub fn compute(
             compose_s,
             linear: solver.stats,
             total_s: t0.elapsed().as_secs_f64(),
+            orders,
         },
     })
 }

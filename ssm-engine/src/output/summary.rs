@@ -158,6 +158,10 @@ pub struct RunSummary {
     pub timing_s: TimingSummary,
     /// Work of the sparse linear algebra of the SSM.
     pub linear_algebra: LinearAlgebraSummary,
+    /// Memory: the SSM's coefficients and sparse factors per order, the
+    /// forced response's factors and the process's peaks (run facts, like
+    /// the timings).
+    pub memory: MemorySummary,
     /// The results of the analyses of `[analysis]`, by name (absent without
     /// analyses).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
@@ -404,6 +408,83 @@ pub struct LinearAlgebraSummary {
     pub stages: BTreeMap<String, LinearWork>,
 }
 
+/// The memory of a run. Heap figures are counted by the engine's allocator
+/// (`ssm_kernel::heap`) and are null where it is not the allocator (a
+/// program that links the library with its own).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MemorySummary {
+    /// The highest heap of the process so far, in bytes, without the dense
+    /// kernels' buffers (`kernel_buffer_bytes`).
+    pub peak_heap_bytes: Option<usize>,
+    /// Heap the dense matrix kernels' per-thread buffers took (twice the L3
+    /// cache per thread, reserved before the run; address space, mostly
+    /// never touched).
+    pub kernel_buffer_bytes: usize,
+    /// The highest resident set of the process so far (`VmHWM`), in bytes.
+    pub peak_resident_bytes: Option<f64>,
+    /// The most heap the SSM's sparse factors held at once, in bytes.
+    pub ssm_factor_bytes: Option<usize>,
+    /// The most heap the forced response's sparse factors held at once, in
+    /// bytes (absent without a forced response).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frc_factor_bytes: Option<usize>,
+    /// Per order of the SSM, `2..=order`.
+    pub ssm_orders: Vec<OrderMemorySummary>,
+}
+
+/// The work and memory of one order of the SSM.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OrderMemorySummary {
+    /// The order.
+    pub order: usize,
+    /// Its multi-indices, conjugates included.
+    pub multi_indices: usize,
+    /// Numeric factorizations it made.
+    pub factorizations: usize,
+    /// Bytes of its coefficients of `W` (16 per state and multi-index).
+    pub coefficient_bytes: usize,
+    /// Heap its sparse factors held, in bytes (dropped before the next
+    /// order).
+    pub factor_bytes: Option<usize>,
+    /// Heap of the process once the order was solved, its factors still
+    /// held, in bytes (without the kernels' buffers).
+    pub heap_bytes: Option<usize>,
+}
+
+impl MemorySummary {
+    fn new(ssm: &ssm_core::ssm::SsmExpansion, frc_factor_bytes: Option<usize>) -> Self {
+        let status = std::fs::read_to_string("/proc/self/status").ok();
+        let peak_resident_bytes = status.as_deref().and_then(|t| {
+            let rest = t.lines().find_map(|l| l.strip_prefix("VmHWM:"))?;
+            let kib: f64 = rest.split_whitespace().next()?.parse().ok()?;
+            Some(kib * 1024.0)
+        });
+        let buffers = ssm_kernel::workspace::reserved_bytes();
+        MemorySummary {
+            peak_heap_bytes: ssm_kernel::heap::peak().map(|b| b.saturating_sub(buffers)),
+            kernel_buffer_bytes: buffers,
+            peak_resident_bytes,
+            ssm_factor_bytes: ssm.timing.linear.factor_bytes,
+            frc_factor_bytes,
+            ssm_orders: ssm
+                .timing
+                .orders
+                .iter()
+                .map(|o| OrderMemorySummary {
+                    order: o.order,
+                    multi_indices: o.multi_indices,
+                    factorizations: o.factorizations,
+                    coefficient_bytes: o.coefficient_bytes,
+                    factor_bytes: o.factor_bytes,
+                    heap_bytes: o.heap_bytes.map(|b| b.saturating_sub(buffers)),
+                })
+                .collect(),
+        }
+    }
+}
+
 impl LinearAlgebraSummary {
     /// The sum of `stages`, with them.
     fn of(stages: BTreeMap<String, LinearWork>) -> Self {
@@ -499,6 +580,7 @@ impl RunSummary {
                     )
                     .collect(),
             ),
+            memory: MemorySummary::new(s.ssm, s.answers.frc.as_ref().and_then(|f| f.factor_bytes)),
             analyses: s.answers.analyses.clone(),
         }
     }

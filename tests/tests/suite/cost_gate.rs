@@ -385,3 +385,44 @@ fn integration_errors_echo_huge_times_in_exponent_form() {
     };
     assert!(e.to_string().contains("at t = -1e300: x"), "{e}");
 }
+
+/// faer's x86 matrix kernels give every thread that runs a large product a
+/// buffer of twice the L3 cache (960 MiB of address space where the CPU
+/// reports 480 MiB). Under an address-space limit that cannot hold one per
+/// thread, the 24-state pendulum chain of Fig. 13 aborted on its first
+/// large product ("memory allocation of 1006632960 bytes failed", exit by
+/// signal 6, at 700 MB). The engine now reserves the buffers before its
+/// memory gate reads the room (`ssm_kernel::workspace`): where they do not
+/// fit, the run is refused with the reason and what to change; with one
+/// pool thread and room for its two buffers, it runs. Where the buffers are
+/// small (an L3 below 256 MiB), the run must simply complete under the same
+/// limit.
+#[test]
+fn an_address_space_limit_below_the_kernels_buffers_is_refused_not_aborted() {
+    let per_thread = ssm_kernel::workspace::reserve().per_thread;
+    let scene = std::fs::read_to_string(repo_root().join("zoo").join("pendulum_chain_fig13.toml"))
+        .expect("zoo scene");
+    // room for two buffers and the run, not for three
+    let kib = (700e6 + 2.2 * per_thread) as u64 / 1024;
+    let (code, err) = run_limited("kernel-buffers", &scene, kib, &[("RAYON_NUM_THREADS", "2")]);
+    if per_thread >= 256.0 * 1024.0 * 1024.0 {
+        assert_eq!(code, Some(1), "a typed refusal, not an abort: {err}");
+        assert!(
+            err.contains("scene.toml:")
+                && err.contains("cannot hold the")
+                && err.contains("for 3 thread(s)")
+                && err.contains("raise ulimit -v by at least")
+                && err.contains("RAYON_NUM_THREADS=1"),
+            "{err}"
+        );
+    } else {
+        assert_eq!(code, Some(0), "small buffers fit: {err}");
+    }
+    let (code, err) = run_limited(
+        "kernel-buffers-1",
+        &scene,
+        kib,
+        &[("RAYON_NUM_THREADS", "1")],
+    );
+    assert_eq!(code, Some(0), "two buffers fit: {err}");
+}

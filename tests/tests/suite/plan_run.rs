@@ -47,20 +47,21 @@ fn execute(plan: &Plan, system: ssm_core::model::system::System) -> Result<JobRe
 }
 
 /// `summary.json` without what differs between two runs of the same
-/// computation (timings, the plugin libraries recorded).
+/// computation (timings, memory, the plugin libraries recorded).
 fn summary_without_run_facts(job: &JobResult) -> serde_json::Value {
     let mut v: serde_json::Value =
         serde_json::from_slice(job.outputs.get("summary.json").expect("a summary")).expect("json");
     let map = v.as_object_mut().expect("an object");
     map.remove("timing_s");
+    map.remove("memory");
     map.remove("plugins");
     v
 }
 
 /// A determinism check of the two doors (the same code takes the same
 /// steps): the plan built in code and the scene's plan give the same
-/// files, byte for byte, and the same summary but for its timings and
-/// plugin record. The answers themselves are checked against closed forms
+/// files, byte for byte, and the same summary but for its timings, memory
+/// and plugin record. The answers themselves are checked against closed forms
 /// and other methods elsewhere (`frc`, `ssm_autonomous`).
 #[test]
 fn a_plan_built_in_code_writes_what_its_scene_writes() {

@@ -251,3 +251,80 @@ fn a_band_over_a_pencil_eigenvalue_is_solved_frequency_by_frequency() {
     let err = worst_difference(&solved, &direct);
     assert!(err <= 1e-10, "{err:e}");
 }
+
+/// The memory `summary.json` reports for the 16 x 16 clamped plate (2,948
+/// states, the default damping), its O(5) SSM of the first pair and its
+/// forced response over 280..380 rad/s, as the engine's counting allocator
+/// measured it: every order's coefficients are `16 N` bytes a multi-index;
+/// each of its factors holds between half and all of the gate's estimate
+/// before the run (`lu_bytes_estimate`: 128 bytes an entry of the symbolic
+/// Cholesky factor of the pattern); the forced response holds at most the
+/// four factors the gate counts (`FRC_FACTORS_HELD`); and the peak heap of
+/// the run stays within twice the most the factors held at once plus all
+/// coefficients (issue 43's bound; 164 MB against 190 MB when measured).
+#[test]
+fn the_memory_of_the_plate_is_counted_per_order_and_bounded_by_its_factors() {
+    let params = "nx = 16\nny = 16";
+    let sys = system("von-karman-plate", "plate", params);
+    let n = sys.n_states();
+    let estimate =
+        ssm_core::ssm::lu_bytes_estimate(sys.a.as_ref(), sys.b.as_ref()).expect("a pattern");
+    let dir = ssm_tests::tmp_dir("plate-memory");
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let scene = dir.join("plate.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[model]\nplugin = \"von-karman-plate\"\nname = \"plate\"\n[model.params]\n{params}\n\
+             [ssm]\nmaster_pairs = [1]\norder = 5\n[outputs]\ncoordinates = [\"w_center\"]\n\
+             [outputs.backbone]\npoints = 11\nrho_max = 0.05\norders = [5]\n\
+             [forcing]\nepsilon = [1.0]\nomega_range = [280.0, 380.0]\norders = [5]\n"
+        ),
+    )
+    .expect("scene written");
+    let plugin = ssm_tests::plugin_path("von-karman-plate");
+    let s = ssm_tests::run_binary(
+        &["--plugin".as_ref(), plugin.as_os_str()],
+        &scene,
+        &dir.join("out"),
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    let m = &s["memory"];
+    let bytes = |v: &serde_json::Value| v.as_f64().expect("a counted figure");
+    let orders = m["ssm_orders"].as_array().expect("orders");
+    assert_eq!(
+        orders
+            .iter()
+            .map(|o| o["order"].as_u64().unwrap())
+            .collect::<Vec<_>>(),
+        [2, 3, 4, 5]
+    );
+    let mut coefficients = 0.0;
+    let mut per_factor = 0.0f64;
+    for o in orders {
+        let k = o["order"].as_u64().unwrap();
+        let count = o["multi_indices"].as_f64().unwrap();
+        assert_eq!(count, (k + 1) as f64, "order {k}: one pair");
+        assert_eq!(bytes(&o["coefficient_bytes"]), 16.0 * n as f64 * count);
+        coefficients += bytes(&o["coefficient_bytes"]);
+        let factors = o["factorizations"].as_f64().unwrap();
+        // one factor per value k . lambda up to conjugation
+        assert_eq!(factors, ((k + 2) / 2) as f64, "order {k}");
+        let each = bytes(&o["factor_bytes"]) / factors;
+        assert!(
+            each <= estimate && each >= 0.5 * estimate,
+            "order {k}: {each:.4e} bytes a factor against the estimate {estimate:.4e}"
+        );
+        per_factor = per_factor.max(each);
+    }
+    let ssm = bytes(&m["ssm_factor_bytes"]);
+    let frc = bytes(&m["frc_factor_bytes"]);
+    assert!(
+        frc <= 4.0 * per_factor * 1.01,
+        "{frc:.4e} > 4 x {per_factor:.4e}"
+    );
+    let peak = bytes(&m["peak_heap_bytes"]);
+    let bound = 2.0 * (ssm.max(frc) + coefficients);
+    assert!(peak <= bound, "peak heap {peak:.4e} > {bound:.4e}");
+    assert!(bytes(&m["peak_resident_bytes"]) > 0.0);
+}

@@ -170,6 +170,11 @@ pub struct FrcSummary {
     /// Its sparse linear algebra with the full system's matrices (also in
     /// the run's `linear_algebra`).
     pub linear_algebra: LinearWork,
+    /// The most heap its sparse factors held at once (bytes; a run fact,
+    /// reported in the run's `memory`, not here).
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub factor_bytes: Option<usize>,
 }
 
 /// A bifurcation located on a reduced forced response curve.
@@ -298,6 +303,7 @@ impl FrcSummary {
             warnings: f.warnings.clone(),
             rho_max: f.rho_max,
             linear_algebra: LinearWork::of(f.linear),
+            factor_bytes: f.factor_bytes,
         }
     }
 }

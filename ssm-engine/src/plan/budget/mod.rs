@@ -23,7 +23,7 @@ use ssm_core::model::system::System;
 use ssm_core::rom::frc::NONAUTONOMOUS_NODES;
 use ssm_core::spec::SsmSpec;
 use ssm_core::spectrum::{MasterMode, Method, DENSE_LIMIT};
-use ssm_core::ssm::{band_vectors, Dynamics, SERIES_TERMS};
+use ssm_core::ssm::{band_vectors, lu_bytes_estimate, Dynamics, SERIES_TERMS};
 
 /// Elementary operations per second assumed by the estimates (complex
 /// multiply-adds and sparse-solve entries on one core of a 2-core machine,
@@ -47,6 +47,11 @@ pub struct Limits {
     pub bytes: f64,
     /// The limit that sets `bytes` (see [`ssm_api::limits::MemoryRoom`]).
     pub memory_source: &'static str,
+    /// The dense kernels' per-thread buffers ([`ssm_kernel::workspace`]);
+    /// when the address-space limit cannot hold them, no computation with
+    /// the model fits ([`check_spectrum`] and every later gate refuse),
+    /// though building it may.
+    pub workspace: ssm_kernel::workspace::Workspace,
 }
 
 impl Limits {
@@ -54,18 +59,21 @@ impl Limits {
     /// memory this process may still allocate: the smallest of the machine's
     /// available memory, the address space left under `ulimit -v` and the
     /// room under the cgroup's memory limit
-    /// ([`ssm_api::limits::memory_room`]).
+    /// ([`ssm_api::limits::memory_room`]), read after the dense kernels'
+    /// per-thread buffers are reserved ([`ssm_kernel::workspace::reserve`]).
     pub fn of_machine() -> Self {
         let minutes = std::env::var(TIME_LIMIT_VAR)
             .ok()
             .and_then(|v| v.trim().parse::<f64>().ok())
             .filter(|m| m.is_finite() && *m > 0.0)
             .unwrap_or(60.0);
+        let workspace = ssm_kernel::workspace::reserve();
         let room = ssm_api::limits::memory_room();
         Self {
             seconds: minutes * 60.0,
             bytes: 0.75 * room.bytes,
             memory_source: room.source,
+            workspace,
         }
     }
 }
@@ -155,6 +163,9 @@ struct Sizes {
     nnz: f64,
     /// Factors of all monomials of `F` (a bound on the composition's nodes).
     factors: f64,
+    /// Heap of one sparse LU of the pencil ([`lu_bytes_estimate`]; 0 until
+    /// [`Sizes::with_factors`] computes it).
+    lu_bytes: f64,
 }
 
 impl Sizes {
@@ -169,6 +180,16 @@ impl Sizes {
             states: system.n_states() as f64,
             nnz: (system.a.compute_nnz() + system.b.compute_nnz()) as f64,
             factors: factors as f64,
+            lu_bytes: 0.0,
+        }
+    }
+
+    /// [`Sizes::of`] with the estimate of one sparse LU's heap (a symbolic
+    /// Cholesky analysis of the pattern).
+    fn with_factors(system: &System) -> Self {
+        Self {
+            lu_bytes: lu_bytes_estimate(system.a.as_ref(), system.b.as_ref()).unwrap_or(0.0),
+            ..Self::of(system)
         }
     }
 
@@ -191,6 +212,15 @@ fn ensure(
         return Ok(());
     }
     let secs = cost.ops / OPS_PER_SECOND;
+    if let Some(note) = workspace_note(limits) {
+        return Err(PlanError::new(
+            key,
+            format!(
+                "{what} needs about {} of memory, but {note}",
+                bytes(cost.bytes)
+            ),
+        ));
+    }
     Err(PlanError::new(
             key,
             format!(
@@ -202,6 +232,32 @@ fn ensure(
                 limits.memory_source,
             ),
         ))
+}
+
+/// Why nothing fits when the address-space limit cannot hold the dense
+/// kernels' buffers, with what to change.
+fn workspace_note(limits: &Limits) -> Option<String> {
+    let w = &limits.workspace;
+    if w.missing <= 0.0 {
+        return None;
+    }
+    // with one pool thread, the caller and that thread reserve
+    let spared = w.per_thread * w.threads.saturating_sub(2) as f64;
+    let single = if spared >= w.missing {
+        "run with RAYON_NUM_THREADS=1".to_owned()
+    } else {
+        format!(
+            "run with RAYON_NUM_THREADS=1 and raise it by {}",
+            bytes(w.missing - spared)
+        )
+    };
+    Some(format!(
+        "the address-space limit (ulimit -v) cannot hold the {} of address space faer's dense matrix kernels reserve for {} thread(s) ({} each: twice the L3 cache this CPU reports): raise ulimit -v by at least {}, or {single}",
+        bytes(w.per_thread * w.threads as f64),
+        w.threads,
+        bytes(w.per_thread),
+        bytes(w.missing),
+    ))
 }
 
 fn duration(s: f64) -> String {
@@ -228,8 +284,13 @@ fn bytes(b: f64) -> String {
     }
 }
 
+/// Whether `cost` fits; nothing does when the address-space limit cannot
+/// hold the dense kernels' buffers (a run could abort at any large
+/// product).
 fn within(cost: &Cost, limits: &Limits) -> bool {
-    cost.ops / OPS_PER_SECOND <= limits.seconds && cost.bytes <= limits.bytes
+    limits.workspace.missing <= 0.0
+        && cost.ops / OPS_PER_SECOND <= limits.seconds
+        && cost.bytes <= limits.bytes
 }
 
 /// Before the spectral stage: the dense spectrum (a QZ iteration on the
@@ -272,25 +333,26 @@ pub(crate) fn order_ceiling(
     pairs: usize,
     limits: &Limits,
 ) -> Result<usize, PlanError> {
+    let sizes = Sizes::with_factors(system);
     if let Some(o) = plan.ssm.order {
-        check_order(plan, system, pairs, o, limits)?;
+        check_order(plan, &sizes, pairs, o, limits)?;
         return Ok(o);
     }
     let floor = plan.highest_named_order().max(3);
     let top = (floor..=SsmSpec::AUTO_MAX_ORDER.max(floor))
         .rev()
         .filter(|o| o % 2 == 1 || *o == floor)
-        .find(|&o| within(&order_cost(plan, system, pairs, o), limits));
+        .find(|&o| within(&order_cost(plan, &sizes, pairs, o), limits));
     match top {
         Some(o) => Ok(o),
-        None => check_order(plan, system, pairs, floor, limits).map(|()| floor),
+        None => check_order(plan, &sizes, pairs, floor, limits).map(|()| floor),
     }
 }
 
 /// The SSM to `order` with `pairs` master pairs, rebuilt by the report.
-fn order_cost(plan: &Plan, system: &System, pairs: usize, order: usize) -> Cost {
+fn order_cost(plan: &Plan, sizes: &Sizes, pairs: usize, order: usize) -> Cost {
     let forced = plan.frc.is_some() || plan.validation.is_some();
-    let mut ssm = ssm_cost(&Sizes::of(system), pairs, order, forced);
+    let mut ssm = ssm_cost(sizes, pairs, order, forced);
     if let Some(r) = &plan.report {
         // the report rebuilds the SSM at each of its orders (at most `order`;
         // a given list counts with its length)
@@ -302,13 +364,12 @@ fn order_cost(plan: &Plan, system: &System, pairs: usize, order: usize) -> Cost 
 /// The SSM order against the limits, with `pairs` master pairs.
 fn check_order(
     plan: &Plan,
-    system: &System,
+    sizes: &Sizes,
     pairs: usize,
     order: usize,
     limits: &Limits,
 ) -> Result<(), PlanError> {
-    let sizes = Sizes::of(system);
-    let ssm = order_cost(plan, system, pairs, order);
+    let ssm = order_cost(plan, sizes, pairs, order);
     ensure(
         "ssm.order",
         format!(
@@ -335,11 +396,17 @@ fn check_order(
 /// coefficients) and solved in bands: as Taylor series in `Omega` (at most
 /// [`SERIES_TERMS`] vectors of the model's size per multi-index, kept with
 /// the nodes' expansions) or, where a series fails, by band solves (at most
-/// [`band_vectors`] such vectors at once).
+/// [`band_vectors`] such vectors at once). The sparse factors count with
+/// the most an order holds at once (one per distinct value of
+/// `Lambda_k = k . lambda` among the order's multi-indices up to
+/// conjugation), and the forced response's with [`FRC_FACTORS_HELD`]
+/// (the SSM's are dropped by then).
 fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
     let nvar = 2 * pairs;
     let n_idx = multi_indices(nvar, order);
     let products = binomial(2 * nvar, order);
+    // multi-indices of the highest order, half of them up to conjugation
+    let held = (binomial(nvar - 1, order) / 2.0).ceil().max(1.0);
     let once = Cost {
         ops: 4.0 * sizes.factors * products + 0.5 * n_idx * sizes.sparse_solve(),
         // the series product table holds one 8-byte entry per product (the
@@ -354,15 +421,25 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
         Cost {
             ops: 2.0 * once.ops,
             bytes: 2.0 * once.bytes
+                + held.max(FRC_FACTORS_HELD) * sizes.lu_bytes
                 + 16.0 * NONAUTONOMOUS_NODES as f64 * n_idx * (sizes.states + nvar as f64)
                 + 16.0
                     * (SERIES_TERMS as f64 * n_idx).max(band_vectors(NONAUTONOMOUS_NODES) as f64)
                     * sizes.states,
         }
     } else {
-        once
+        Cost {
+            ops: once.ops,
+            bytes: once.bytes + held * sizes.lu_bytes,
+        }
     }
 }
+
+/// Sparse factors a forced response holds at once where band solves run
+/// (its leading-order anchor, kept for the whole response, and those of the
+/// non-autonomous table's multi-indices, released one by one; 4 measured
+/// on the clamped plates, asserted in the suite's `plate` tests).
+const FRC_FACTORS_HELD: f64 = 4.0;
 
 /// Checks every request of `scene` against `limits`, once the model and its
 /// master modes are known and before the SSM is computed to `order`.
@@ -373,5 +450,11 @@ pub fn check(
     order: usize,
     limits: &Limits,
 ) -> Result<(), PlanError> {
-    check_order(plan, system, masters.len().max(1), order, limits)
+    check_order(
+        plan,
+        &Sizes::with_factors(system),
+        masters.len().max(1),
+        order,
+        limits,
+    )
 }
