@@ -588,8 +588,19 @@ def run(
             finally:
                 if bar is not None:
                     bar.close()
+            _remove_orphans(store)
     finally:
         if own:
             client.close()
             cluster.close()
     return read(store)
+
+
+def _remove_orphans(store: Path) -> None:
+    """Removes the temporary files of records whose writer died mid-write
+    (a worker killed while writing: Dask ran its point again elsewhere).
+    Called once every point has finished, when no writer of this study is
+    left."""
+    points_dir = store / "points"
+    for p in points_dir.glob(".*.tmp"):
+        p.unlink(missing_ok=True)
