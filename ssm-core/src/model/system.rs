@@ -387,6 +387,15 @@ impl System {
         self.states.len()
     }
 
+    /// The velocities `n .. 2n` of a mechanical model (canonical layout `z =
+    /// (x, x', mu, rest)`), `None` for any other model.
+    pub fn velocities(&self) -> Option<std::ops::Range<usize>> {
+        self.mechanical
+            .as_ref()
+            .filter(|m| m.n_dof > 0 && 2 * m.n_dof <= self.n_states())
+            .map(|m| m.n_dof..2 * m.n_dof)
+    }
+
     /// The state with the given `(state name, value)` pairs set (the others
     /// zero), and the displacements among them (to be kept where the
     /// constraints allow). Names the model lacks are skipped: the scene

@@ -216,7 +216,14 @@ impl<'a> ForcedSsm<'a> {
         }
         let n = sys.n_states();
         let (lambda, right, left) = reduced_modes(masters);
-        let solver = Homological::new(sys.a.as_ref(), sys.b.as_ref(), &lambda, &right, &left);
+        let solver = Homological::new(
+            sys.a.as_ref(),
+            sys.b.as_ref(),
+            sys.velocities(),
+            &lambda,
+            &right,
+            &left,
+        );
         let forcing = sys
             .forcing
             .iter()

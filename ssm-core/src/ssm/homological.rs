@@ -46,7 +46,7 @@
 //!
 //! The forced response needs the same system at a band of nearby values (one
 //! per frequency of its table); where the pattern's factors are expensive
-//! (fill above [`NEAR_FILL`]) [`Homological::solve_band`] solves them all
+//! (fill above [`pattern::NEAR_FILL`]) [`Homological::solve_band`] solves them all
 //! through one factorization at an anchor of the band (module `band`).
 //!
 //! # References
@@ -68,8 +68,12 @@ use crate::spectrum::modes::{spmv, spmv_t};
 use crate::C64;
 
 mod band;
+mod condense;
+mod pattern;
 mod series;
 pub use band::band_vectors;
+use pattern::iterates;
+pub use pattern::{lu_bytes_estimate, FactorBytes, LU_BYTES_PER_ENTRY};
 pub use series::MAX_TERMS as SERIES_TERMS;
 pub(crate) use series::{accept as series_accept, horner};
 
@@ -160,9 +164,14 @@ struct Residual {
 /// N. J. Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed.,
 /// SIAM (2002), Sect. 9.8 (scaling and equilibration); E. Anderson et al.,
 /// *LAPACK Users' Guide*, 3rd ed., SIAM (1999) (`xGEEQU`).
+///
+/// Where the velocities of a mechanical model are eliminated
+/// ([`condense`]), the LU is of the condensed `S(sigma)`, half the size.
 pub(super) struct Factor {
     lu: Lu<usize, C64>,
     scale: Option<(Vec<f64>, Vec<f64>)>,
+    /// The value factorized (what [`condense::Condensed`] expands with).
+    sigma: C64,
     /// Heap the LU holds (0 where the allocator does not count).
     bytes: usize,
 }
@@ -228,6 +237,8 @@ pub(crate) struct Homological<'a> {
     /// Whether [`Homological::solve_band`] iterates (decided once, from the
     /// fill of the pattern: [`iterates`]).
     iterative: Option<bool>,
+    /// The velocities eliminated, where the model is mechanical.
+    condensed: Option<condense::Condensed>,
     /// Work counters.
     pub stats: SolveStats,
 }
@@ -244,84 +255,17 @@ const MAX_REFINE: usize = 6;
 const REFINED: f64 = 4.0 * f64::EPSILON;
 /// Normwise backward error at which iterative refinement stops elsewhere.
 const RESIDUAL_TOL: f64 = 1e-10;
-/// Nonzeros a column of the Cholesky factor of the symmetrized pattern (AMD
-/// order) must reach for [`Homological::solve_band`] to iterate rather
-/// than factorize anew: below it (chains, small models) a factorization
-/// costs a few triangular solves, and the iteration's tens of solves do
-/// not pay.
-const NEAR_FILL: f64 = 40.0;
-
-/// Whether a pattern factorizes dearly enough for [`Homological::solve_band`]
-/// to iterate: the fill of the symbolic Cholesky factor of `P + P^T` in
-/// approximate minimum degree order, per column, is at least [`NEAR_FILL`]
-/// (deterministic, unlike a timing: the same model gives the same digits).
-fn iterates(p: faer::sparse::SymbolicSparseColMatRef<'_, usize>) -> bool {
-    let n = p.nrows();
-    let pattern = (0..n).flat_map(|j| p.row_idx_of_col(j).map(move |i| (i, j)));
-    cholesky_entries(n, pattern).is_some_and(|len| len as f64 / n as f64 >= NEAR_FILL)
-}
-
-/// Entries of the symbolic Cholesky factor of `P + P^T` in approximate
-/// minimum degree order, for the `n x n` pattern `P` of the `(row, column)`
-/// pairs given; `None` for an empty or invalid pattern.
-fn cholesky_entries(n: usize, pattern: impl Iterator<Item = (usize, usize)>) -> Option<usize> {
-    use faer::sparse::linalg::cholesky::{
-        factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering,
-    };
-    if n == 0 {
-        return None;
-    }
-    let triplets: Vec<_> = pattern
-        .flat_map(|(i, j)| {
-            [
-                faer::sparse::Triplet::new(i, j, 1.0f64),
-                faer::sparse::Triplet::new(j, i, 1.0f64),
-            ]
-        })
-        .collect();
-    let sym = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets).ok()?;
-    factorize_symbolic_cholesky(
-        sym.symbolic(),
-        faer::Side::Upper,
-        SymmetricOrdering::Amd,
-        CholeskySymbolicParams::default(),
-    )
-    .ok()
-    .map(|chol| chol.len_val())
-}
-
-/// Heap bytes the complex sparse LU of one `Lambda B - A` is estimated to
-/// hold, before any factorization: [`LU_BYTES_PER_ENTRY`] per entry of the
-/// symbolic Cholesky factor of the symmetrized pattern of `A` and `B`
-/// (AMD order). `None` for an empty pattern.
-pub fn lu_bytes_estimate(
-    a: SparseColMatRef<'_, usize, f64>,
-    b: SparseColMatRef<'_, usize, f64>,
-) -> Option<f64> {
-    let n = a.nrows();
-    let pattern = [a, b]
-        .into_iter()
-        .flat_map(|m| (0..m.ncols()).flat_map(move |j| m.row_idx_of_col(j).map(move |i| (i, j))));
-    cholesky_entries(n, pattern).map(|len| LU_BYTES_PER_ENTRY * len as f64)
-}
-
-/// Heap of faer's complex supernodal LU (partial pivoting, COLAMD order)
-/// per entry of the symbolic Cholesky factor of the symmetrized pattern in
-/// AMD order. Measured with the counting allocator on the clamped plates:
-/// 73, 70 and 95 bytes an entry at 16 x 16, 32 x 32 and 64 x 64 elements
-/// (2,948 to 48,644 states; the spread is mostly the spare capacity of the
-/// factor's growing arrays); the value is rounded up so that the gate errs
-/// towards refusing (the suite's `plate` tests assert it bounds the measured
-/// factors).
-pub const LU_BYTES_PER_ENTRY: f64 = 128.0;
-
 impl<'a> Homological<'a> {
     /// Prepares the union pattern of `A` and `B` and the border vectors `B v_i`
     /// and `u_i^* B` of the master coordinates (`lambda[i]`, `right[i]`,
     /// `left[i]` for reduced coordinate `i`, conjugates included).
+    /// `velocities` are the states of a mechanical model's velocities
+    /// (displacements `0 .. velocities.len()`), eliminated from every solve
+    /// where the pencil has their structure ([`condense`]).
     pub fn new(
         a: SparseColMatRef<'a, usize, f64>,
         b: SparseColMatRef<'a, usize, f64>,
+        velocities: Option<std::ops::Range<usize>>,
         lambda: &[C64],
         right: &[Vec<C64>],
         left: &[Vec<C64>],
@@ -380,6 +324,7 @@ impl<'a> Homological<'a> {
             numeric: HashMap::new(),
             anchors: Vec::new(),
             iterative: None,
+            condensed: velocities.and_then(|v| condense::Condensed::detect(a, b, v)),
             stats: SolveStats::default(),
         }
     }
@@ -413,23 +358,28 @@ impl<'a> Homological<'a> {
     fn fresh_lu(&mut self, sigma: C64) -> Result<Factor, HomologicalError> {
         let equilibrate = self.iterative();
         let t = Instant::now();
+        let pattern = match &self.condensed {
+            Some(c) => c.symbolic.as_ref(),
+            None => self.symbolic.as_ref(),
+        };
         if self.lu_symbolic.is_none() {
-            let sym = SymbolicLu::try_new(self.symbolic.as_ref()).map_err(|e| {
-                HomologicalError::Singular {
-                    detail: format!("symbolic LU failed: {e:?}"),
-                }
+            let sym = SymbolicLu::try_new(pattern).map_err(|e| HomologicalError::Singular {
+                detail: format!("symbolic LU failed: {e:?}"),
             })?;
             self.lu_symbolic = Some(sym);
             self.stats.symbolic += 1;
         }
-        let mut vals: Vec<C64> = self
-            .a_val
-            .iter()
-            .zip(&self.b_val)
-            .map(|(&a, &b)| sigma * b - a)
-            .collect();
-        let scale = equilibrate.then(|| equilibrate_in_place(self.symbolic.as_ref(), &mut vals));
-        let mat = SparseColMat::new(self.symbolic.clone(), vals);
+        let mut vals: Vec<C64> = match &self.condensed {
+            Some(c) => c.values(sigma),
+            None => self
+                .a_val
+                .iter()
+                .zip(&self.b_val)
+                .map(|(&a, &b)| sigma * b - a)
+                .collect(),
+        };
+        let scale = equilibrate.then(|| equilibrate_in_place(pattern, &mut vals));
+        let mat = SparseColMat::new(pattern.to_owned().expect("a valid pattern"), vals);
         let (lu, bytes) = ssm_kernel::heap::held(|| {
             Lu::try_new_with_symbolic(
                 self.lu_symbolic.clone().expect("computed above"),
@@ -448,6 +398,7 @@ impl<'a> Homological<'a> {
         Ok(Factor {
             lu,
             scale,
+            sigma,
             bytes: bytes.unwrap_or(0),
         })
     }
@@ -457,6 +408,7 @@ impl<'a> Homological<'a> {
     pub(crate) fn held_factor_bytes(&self) -> usize {
         self.numeric.values().map(|f| f.bytes).sum::<usize>()
             + self.anchors.iter().map(|a| a.lu.bytes).sum::<usize>()
+            + self.condensed.as_ref().map_or(0, |c| c.mass_bytes)
     }
 
     /// The value factorized for `lambda` with resonant set `set`: `lambda`
@@ -473,18 +425,31 @@ impl<'a> Homological<'a> {
         sigma
     }
 
-    fn lu_solve(f: &Factor, rhs: &[C64]) -> Vec<C64> {
-        match &f.scale {
+    /// `(sigma B - A)^{-1} rhs` through the factor `f` at `sigma`.
+    fn lu_solve(&self, f: &Factor, rhs: &[C64]) -> Vec<C64> {
+        let reduced;
+        let h = match &self.condensed {
+            Some(c) => {
+                reduced = c.reduce(f.sigma, rhs);
+                &reduced[..]
+            }
+            None => rhs,
+        };
+        let x: Vec<C64> = match &f.scale {
             None => {
-                let mut x = Mat::<C64>::from_fn(rhs.len(), 1, |i, _| rhs[i]);
+                let mut x = Mat::<C64>::from_fn(h.len(), 1, |i, _| h[i]);
                 f.lu.solve_in_place(x.as_mut());
-                (0..rhs.len()).map(|i| x[(i, 0)]).collect()
+                (0..h.len()).map(|i| x[(i, 0)]).collect()
             }
             Some((row, col)) => {
-                let mut x = Mat::<C64>::from_fn(rhs.len(), 1, |i, _| rhs[i] * row[i]);
+                let mut x = Mat::<C64>::from_fn(h.len(), 1, |i, _| h[i] * row[i]);
                 f.lu.solve_in_place(x.as_mut());
-                (0..rhs.len()).map(|i| x[(i, 0)] * col[i]).collect()
+                (0..h.len()).map(|i| x[(i, 0)] * col[i]).collect()
             }
+        };
+        match &self.condensed {
+            Some(c) => c.expand(f.sigma, &x, rhs),
+            None => x,
         }
     }
 
@@ -508,7 +473,7 @@ impl<'a> Homological<'a> {
         // Y = M^{-1} B V_I and the Schur complement S = U_I^* B Y
         let y: Vec<Vec<C64>> = set
             .iter()
-            .map(|&i| Self::lu_solve(lu, &self.bv[i]))
+            .map(|&i| self.lu_solve(lu, &self.bv[i]))
             .collect();
         let mut schur = vec![C64::new(0.0, 0.0); r * r];
         for (a, &i) in set.iter().enumerate() {
@@ -517,7 +482,7 @@ impl<'a> Homological<'a> {
             }
         }
         let block_solve = |h: &[C64], g: &[C64]| -> Option<(Vec<C64>, Vec<C64>)> {
-            let w0 = Self::lu_solve(lu, h);
+            let w0 = self.lu_solve(lu, h);
             let mut s_rhs: Vec<C64> = set
                 .iter()
                 .zip(g)

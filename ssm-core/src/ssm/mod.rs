@@ -52,7 +52,8 @@ use crate::spectrum::modes::spmv;
 use crate::spectrum::MasterMode;
 use crate::C64;
 pub use homological::{
-    band_vectors, lu_bytes_estimate, SolveCounts, SolveStats, LU_BYTES_PER_ENTRY, SERIES_TERMS,
+    band_vectors, lu_bytes_estimate, FactorBytes, SolveCounts, SolveStats, LU_BYTES_PER_ENTRY,
+    SERIES_TERMS,
 };
 use homological::{Homological, HomologicalError};
 use ssm_kernel::poly::{eval_poly, Composition, MultiIndexSet};
@@ -162,6 +163,10 @@ pub struct SsmTiming {
     pub total_s: f64,
     /// Orders `2..=order`, in order.
     pub orders: Vec<OrderWork>,
+    /// Heap of the whole process when the computation began (the model,
+    /// its spectrum and whatever the caller holds); `None` where the
+    /// allocator does not count.
+    pub heap_before: Option<usize>,
 }
 
 /// The work and memory of one order of the SSM: its coefficients, and the
@@ -269,6 +274,7 @@ pub fn compute(
     opts: &SsmOptions,
 ) -> Result<SsmExpansion, SsmError> {
     let t0 = Instant::now();
+    let heap_before = ssm_kernel::heap::live();
     let dynamics = Dynamics::from(sys.time);
     if masters.is_empty() {
         return Err(SsmError::Masters("no master mode".into()));
@@ -294,7 +300,14 @@ pub fn compute(
             coeff: lambda[i],
         });
     }
-    let mut solver = Homological::new(sys.a.as_ref(), sys.b.as_ref(), &lambda, &right, &left);
+    let mut solver = Homological::new(
+        sys.a.as_ref(),
+        sys.b.as_ref(),
+        sys.velocities(),
+        &lambda,
+        &right,
+        &left,
+    );
     let mut comp = Composition::new(&sys.nonlinearity, set.len());
     // maps: the monomials R(p)^j, 2 <= |j| < order, composed like F(W)
     let mut rpow = match dynamics {
@@ -449,6 +462,7 @@ pub fn compute(
             linear: solver.stats,
             total_s: t0.elapsed().as_secs_f64(),
             orders,
+            heap_before,
         },
     })
 }

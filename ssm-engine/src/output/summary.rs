@@ -417,6 +417,10 @@ pub struct MemorySummary {
     /// The highest heap of the process so far, in bytes, without the dense
     /// kernels' buffers (`kernel_buffer_bytes`).
     pub peak_heap_bytes: Option<usize>,
+    /// Heap of the process when the SSM began (the model, its spectrum),
+    /// in bytes, without the kernels' buffers: what the peak holds besides
+    /// the computation's own factors and coefficients.
+    pub heap_before_ssm_bytes: Option<usize>,
     /// Heap the dense matrix kernels' per-thread buffers took (twice the L3
     /// cache per thread, reserved before the run; address space, mostly
     /// never touched).
@@ -464,6 +468,7 @@ impl MemorySummary {
         let buffers = ssm_kernel::workspace::reserved_bytes();
         MemorySummary {
             peak_heap_bytes: ssm_kernel::heap::peak().map(|b| b.saturating_sub(buffers)),
+            heap_before_ssm_bytes: ssm.timing.heap_before.map(|b| b.saturating_sub(buffers)),
             kernel_buffer_bytes: buffers,
             peak_resident_bytes,
             ssm_factor_bytes: ssm.timing.linear.factor_bytes,

@@ -372,7 +372,7 @@ impl Homological<'_> {
             let lu = &self.anchors[slot].lu;
             let y: Vec<Vec<C64>> = set
                 .iter()
-                .map(|&i| Self::lu_solve(lu, &self.bv[i]))
+                .map(|&i| self.lu_solve(lu, &self.bv[i]))
                 .collect();
             let r = set.len();
             let mut schur = vec![C64::new(0.0, 0.0); r * r];

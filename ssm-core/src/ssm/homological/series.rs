@@ -99,7 +99,7 @@ impl Homological<'_> {
     ) -> Option<Solution> {
         let anc = &self.anchors[slot];
         let border = anc.border.as_ref().expect("set by anchor_slot");
-        let w0 = Self::lu_solve(&anc.lu, h);
+        let w0 = self.lu_solve(&anc.lu, h);
         let mut s_rhs: Vec<C64> = set
             .iter()
             .zip(g)

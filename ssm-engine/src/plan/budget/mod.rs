@@ -163,9 +163,11 @@ struct Sizes {
     nnz: f64,
     /// Factors of all monomials of `F` (a bound on the composition's nodes).
     factors: f64,
-    /// Heap of one sparse LU of the pencil ([`lu_bytes_estimate`]; 0 until
-    /// [`Sizes::with_factors`] computes it).
+    /// Heap of one sparse LU of the pencil and of the mass matrix's LU held
+    /// with them ([`lu_bytes_estimate`]; 0 until [`Sizes::with_factors`]
+    /// computes it).
     lu_bytes: f64,
+    mass_lu_bytes: f64,
 }
 
 impl Sizes {
@@ -181,14 +183,17 @@ impl Sizes {
             nnz: (system.a.compute_nnz() + system.b.compute_nnz()) as f64,
             factors: factors as f64,
             lu_bytes: 0.0,
+            mass_lu_bytes: 0.0,
         }
     }
 
     /// [`Sizes::of`] with the estimate of one sparse LU's heap (a symbolic
     /// Cholesky analysis of the pattern).
     fn with_factors(system: &System) -> Self {
+        let lu = lu_bytes_estimate(system.a.as_ref(), system.b.as_ref(), system.velocities());
         Self {
-            lu_bytes: lu_bytes_estimate(system.a.as_ref(), system.b.as_ref()).unwrap_or(0.0),
+            lu_bytes: lu.map_or(0.0, |f| f.each),
+            mass_lu_bytes: lu.map_or(0.0, |f| f.shared),
             ..Self::of(system)
         }
     }
@@ -422,6 +427,7 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
             ops: 2.0 * once.ops,
             bytes: 2.0 * once.bytes
                 + held.max(FRC_FACTORS_HELD) * sizes.lu_bytes
+                + sizes.mass_lu_bytes
                 + 16.0 * NONAUTONOMOUS_NODES as f64 * n_idx * (sizes.states + nvar as f64)
                 + 16.0
                     * (SERIES_TERMS as f64 * n_idx).max(band_vectors(NONAUTONOMOUS_NODES) as f64)
@@ -430,7 +436,7 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
     } else {
         Cost {
             ops: once.ops,
-            bytes: once.bytes + held * sizes.lu_bytes,
+            bytes: once.bytes + held * sizes.lu_bytes + sizes.mass_lu_bytes,
         }
     }
 }

@@ -1,0 +1,443 @@
+//! The velocities of a mechanical pencil eliminated: `sigma B - A` solved
+//! through a matrix of half the size.
+//!
+//! A mechanical model's first-order form in the canonical layout `z = (x,
+//! x', mu, rest)` (velocities `V = n .. 2n`, the other states `K`) has
+//!
+//! ```text
+//! B = [ B_KK    E M ]      A = [ A_KK  0 ]
+//!     [ M E^T   0   ],         [ 0     M ],
+//! ```
+//!
+//! with `M` the mass matrix and `E` the embedding of the `n` displacements
+//! among `K` (the displacement rows: `B_KK` holds the damping, `A_KK` the
+//! stiffness and the constraint Jacobians). The velocity rows of
+//! `(sigma B - A) z = h` give `y = sigma E^T x - M^{-1} h_V`; substituted
+//! into the other rows (the `M M^{-1}` cancels):
+//!
+//! `S(sigma) x = h_K + sigma E h_V`, `S(sigma) = sigma B_KK - A_KK + sigma^2
+//! E M E^T`,
+//!
+//! which for an unconstrained model is the quadratic pencil `sigma^2 M +
+//! sigma C + K` of the second-order equations. `S` has `N - n` rows, and a
+//! sparse LU of it holds about a quarter of the entries of one of `sigma B -
+//! A` (the first-order graph doubles every vertex of the second-order one),
+//! for about an eighth of the work; `M` is factorized once, in real
+//! arithmetic, for every `sigma`. The structure is recognized from the
+//! matrices' values, entry by entry: a model that only resembles it (any
+//! other entry in the blocks that must vanish, or velocity couplings unlike
+//! `M`) keeps the solve of the whole pencil.
+//!
+//! # References
+//! F. Tisseur, K. Meerbergen, *The quadratic eigenvalue problem*, SIAM Rev.
+//! 43 (2001) 235-286, Sect. 3.4 (linearizations and their Schur
+//! complements); S. Jain, G. Haller, Nonlinear Dyn. 107 (2022), Sect. 3.2
+//! (the first-order form of second-order finite-element models).
+
+use std::ops::Range;
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
+use faer::Mat;
+
+use crate::C64;
+
+/// The condensed pencil `S(sigma) = sigma B_KK - A_KK + sigma^2 E M E^T`
+/// of a mechanical model and the LU of its mass matrix (see the module).
+pub(crate) struct Condensed {
+    /// Velocities `start .. start + n` of the full state (their displacements
+    /// are `0 .. n`).
+    start: usize,
+    /// Displacements (and velocities).
+    n: usize,
+    /// Size of the full pencil.
+    full: usize,
+    /// Pattern of `S` (`full - n` square, columns sorted).
+    pub(crate) symbolic: SymbolicSparseColMat<usize>,
+    a_val: Vec<f64>,
+    b_val: Vec<f64>,
+    m_val: Vec<f64>,
+    /// `M` itself, for the refinement of its solves.
+    m: SparseColMat<usize, f64>,
+    /// LU of `D M D`, `D` = [`Condensed::mass_scale`].
+    mass: Lu<usize, f64>,
+    /// Powers of two near `|M_ii|^(-1/2)`: a finite-element mass matrix
+    /// couples displacements and slopes whose entries differ by the square
+    /// of the element size, and its LU's solves are componentwise accurate
+    /// only once the diagonal is brought near one.
+    mass_scale: Vec<f64>,
+    /// Heap the LU of `M` holds (0 where the allocator does not count).
+    pub(crate) mass_bytes: usize,
+}
+
+/// The parts [`split`] finds.
+struct Split {
+    /// Pattern of `S`.
+    symbolic: SymbolicSparseColMat<usize>,
+    /// Values of `A_KK`, `B_KK` and `E M E^T` on it.
+    vals: [Vec<f64>; 3],
+    /// `M`.
+    mass: SparseColMat<usize, f64>,
+}
+
+/// The index in `S` of full index `j` outside the velocities.
+fn kept(j: usize, v: &Range<usize>) -> usize {
+    if j < v.start {
+        j
+    } else {
+        j - v.len()
+    }
+}
+
+/// The pattern of `S` and its values split into the parts of `B_KK`,
+/// `A_KK` and `E M E^T`, and `M` itself (`n x n`), when `(A, B)` has the
+/// structure of the module with velocities `v` (their displacements `0 ..
+/// n`); `None` otherwise.
+fn split(
+    a: SparseColMatRef<'_, usize, f64>,
+    b: SparseColMatRef<'_, usize, f64>,
+    v: &Range<usize>,
+) -> Option<Split> {
+    let (full, n) = (a.nrows(), v.len());
+    if n == 0 || v.start < n || v.end > full || b.nrows() != full {
+        return None;
+    }
+    let inv = |j: usize| v.contains(&j);
+    // M = A_VV, and A's velocity rows and columns hold nothing else
+    let mut mass = Vec::new();
+    let mut s_entries: Vec<Vec<(usize, f64, f64, f64)>> = vec![Vec::new(); full - n];
+    for j in 0..full {
+        for (i, &x) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+            match (inv(i), inv(j)) {
+                (true, true) => mass.push((i - v.start, j - v.start, x)),
+                (false, false) => s_entries[kept(j, v)].push((kept(i, v), x, 0.0, 0.0)),
+                _ if x == 0.0 => {}
+                _ => return None,
+            }
+        }
+    }
+    mass.sort_unstable_by_key(|&(i, j, _)| (j, i));
+    // B_VV = 0, B_KV = E M (nothing in the other rows), B_VK = M E^T
+    let mut upper = Vec::new();
+    let mut lower = Vec::new();
+    for j in 0..full {
+        for (i, &x) in b.row_idx_of_col(j).zip(b.val_of_col(j)) {
+            match (inv(i), inv(j)) {
+                (true, true) if x != 0.0 => return None,
+                (true, true) => {}
+                (false, true) if i < n => upper.push((i, j - v.start, x)),
+                (true, false) if j < n => lower.push((i - v.start, j, x)),
+                (false, false) => s_entries[kept(j, v)].push((kept(i, v), 0.0, x, 0.0)),
+                _ if x == 0.0 => {}
+                _ => return None,
+            }
+        }
+    }
+    let scale = mass.iter().fold(0.0f64, |m, e| m.max(e.2.abs()));
+    let copies = scale > 0.0
+        && scale.is_finite()
+        && same(&mut upper, &mass, scale)
+        && same(&mut lower, &mass, scale);
+    if !copies {
+        return None;
+    }
+    for &(i, j, x) in &mass {
+        s_entries[j].push((i, 0.0, 0.0, x));
+    }
+    let mut col_ptr = Vec::with_capacity(full - n + 1);
+    let mut row_idx = Vec::new();
+    let mut vals: [Vec<f64>; 3] = [Vec::new(), Vec::new(), Vec::new()];
+    col_ptr.push(0);
+    for mut col in s_entries {
+        col.sort_unstable_by_key(|e| e.0);
+        let mut last = usize::MAX;
+        for (i, av, bv, mv) in col {
+            if i == last {
+                for (v, x) in vals.iter_mut().zip([av, bv, mv]) {
+                    *v.last_mut().expect("an entry was pushed") += x;
+                }
+            } else {
+                row_idx.push(i);
+                for (v, x) in vals.iter_mut().zip([av, bv, mv]) {
+                    v.push(x);
+                }
+                last = i;
+            }
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let symbolic = SymbolicSparseColMat::new_checked(full - n, full - n, col_ptr, None, row_idx);
+    let triplets: Vec<_> = mass
+        .iter()
+        .map(|&(i, j, x)| Triplet::new(i, j, x))
+        .collect();
+    let m = SparseColMat::try_new_from_triplets(n, n, &triplets).ok()?;
+    Some(Split {
+        symbolic,
+        vals,
+        mass: m,
+    })
+}
+
+/// Whether the entries `e` (any order; sorted here) equal those of `m`
+/// (sorted by column, then row) up to [`ROUNDING`] of `scale`, an entry
+/// missing from either counting as zero: a plugin that assembles the mass
+/// matrix from elements and copies it into three blocks may sum the
+/// duplicates of each copy in another order.
+fn same(e: &mut [(usize, usize, f64)], m: &[(usize, usize, f64)], scale: f64) -> bool {
+    e.sort_unstable_by_key(|&(i, j, _)| (j, i));
+    let tol = ROUNDING * scale;
+    let (mut p, mut q) = (0, 0);
+    while p < e.len() || q < m.len() {
+        let key = |t: &(usize, usize, f64)| (t.1, t.0);
+        let (x, y) = match (e.get(p), m.get(q)) {
+            (Some(a), Some(b)) if key(a) == key(b) => {
+                p += 1;
+                q += 1;
+                (a.2, b.2)
+            }
+            (Some(a), Some(b)) if key(a) < key(b) => {
+                p += 1;
+                (a.2, 0.0)
+            }
+            (Some(a), None) => {
+                p += 1;
+                (a.2, 0.0)
+            }
+            (_, Some(b)) => {
+                q += 1;
+                (0.0, b.2)
+            }
+            (None, None) => unreachable!("the loop's condition"),
+        };
+        if (x - y).abs() > tol || !x.is_finite() {
+            return false;
+        }
+    }
+    true
+}
+
+/// Relative difference (of the largest mass entry) up to which two copies
+/// of the mass matrix count as the same: the rounding of sums of a few
+/// hundred element contributions.
+const ROUNDING: f64 = 1e-13;
+
+impl Condensed {
+    /// The condensation of `(A, B)` with velocities `v` (displacements `0 ..
+    /// v.len()`), when the pencil has the structure of the module and its
+    /// mass matrix factorizes; `None` otherwise (the whole pencil is then
+    /// solved).
+    pub(crate) fn detect(
+        a: SparseColMatRef<'_, usize, f64>,
+        b: SparseColMatRef<'_, usize, f64>,
+        v: Range<usize>,
+    ) -> Option<Self> {
+        let Split {
+            symbolic,
+            vals: [a_val, b_val, m_val],
+            mass: m,
+        } = split(a, b, &v)?;
+        let mass_scale: Vec<f64> = (0..v.len())
+            .map(|j| {
+                let d = m
+                    .row_idx_of_col(j)
+                    .zip(m.val_of_col(j))
+                    .find(|&(i, _)| i == j)
+                    .map_or(0.0, |(_, &x)| x.abs());
+                if d > 0.0 && d.is_finite() {
+                    (-(d.log2() / 2.0).round()).exp2()
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let pattern = m.symbolic();
+        let mut vals = m.val().to_vec();
+        for j in 0..v.len() {
+            for k in pattern.col_range(j) {
+                vals[k] *= mass_scale[pattern.row_idx()[k]] * mass_scale[j];
+            }
+        }
+        let scaled = SparseColMat::new(pattern.to_owned().ok()?, vals);
+        let (mass, bytes) = ssm_kernel::heap::held(|| {
+            let sym = SymbolicLu::try_new(scaled.symbolic()).ok()?;
+            Lu::try_new_with_symbolic(sym, scaled.as_ref()).ok()
+        });
+        let mass = mass?;
+        let out = Self {
+            start: v.start,
+            n: v.len(),
+            full: a.nrows(),
+            symbolic,
+            a_val,
+            b_val,
+            m_val,
+            m,
+            mass,
+            mass_scale,
+            mass_bytes: bytes.unwrap_or(0),
+        };
+        // a singular M factorizes without error but solves to non-finite
+        // values
+        let probe: Vec<C64> = (0..out.n)
+            .map(|i| C64::new(1.0 + (i % 7) as f64, 0.0))
+            .collect();
+        out.mass_solve(&probe)
+            .iter()
+            .all(|x| x.re.is_finite() && x.im.is_finite())
+            .then_some(out)
+    }
+
+    /// The values of `S(sigma)` on [`Condensed::symbolic`].
+    pub(crate) fn values(&self, sigma: C64) -> Vec<C64> {
+        let s2 = sigma * sigma;
+        self.a_val
+            .iter()
+            .zip(&self.b_val)
+            .zip(&self.m_val)
+            .map(|((&a, &b), &m)| sigma * b - a + s2 * m)
+            .collect()
+    }
+
+    /// The right-hand side `h_K + sigma E h_V` of the condensed system.
+    pub(crate) fn reduce(&self, sigma: C64, h: &[C64]) -> Vec<C64> {
+        let v = self.start..self.start + self.n;
+        let mut out: Vec<C64> = h[..v.start].iter().chain(&h[v.end..]).copied().collect();
+        for (o, &hv) in out.iter_mut().zip(&h[v]) {
+            *o += sigma * hv;
+        }
+        out
+    }
+
+    /// The full solution `z = (x, sigma E^T x - M^{-1} h_V)` (velocities in
+    /// place) from the condensed one `x`.
+    pub(crate) fn expand(&self, sigma: C64, x: &[C64], h: &[C64]) -> Vec<C64> {
+        let v = self.start..self.start + self.n;
+        let hv = &h[v.clone()];
+        let mut z = Vec::with_capacity(self.full);
+        z.extend_from_slice(&x[..v.start]);
+        z.extend(x[..self.n].iter().map(|&xi| sigma * xi));
+        z.extend_from_slice(&x[v.start..]);
+        if hv.iter().any(|c| c.re != 0.0 || c.im != 0.0) {
+            for (zv, u) in z[v].iter_mut().zip(self.mass_solve(hv)) {
+                *zv -= u;
+            }
+        }
+        z
+    }
+
+    /// `M^{-1} h` through the LU of the scaled `D M D`, with one step of
+    /// iterative refinement (one step in working precision makes a solve
+    /// componentwise backward stable: Skeel 1980).
+    fn mass_solve(&self, h: &[C64]) -> Vec<C64> {
+        let d = &self.mass_scale;
+        let solve = |r: &[C64]| -> Vec<C64> {
+            let mut x = Mat::<f64>::from_fn(self.n, 2, |i, k| {
+                d[i] * if k == 0 { r[i].re } else { r[i].im }
+            });
+            self.mass.solve_in_place(x.as_mut());
+            (0..self.n)
+                .map(|i| C64::new(x[(i, 0)], x[(i, 1)]) * d[i])
+                .collect()
+        };
+        let mut u = solve(h);
+        let mu = crate::spectrum::modes::spmv(self.m.as_ref(), &u);
+        let r: Vec<C64> = h.iter().zip(&mu).map(|(a, b)| a - b).collect();
+        u.iter_mut().zip(solve(&r)).for_each(|(a, b)| *a += b);
+        u
+    }
+}
+
+/// The patterns of the condensed pencil of `(A, B)` with velocities `v` and
+/// of its mass matrix, when the structure holds; for the estimates made
+/// before a run.
+pub(crate) fn patterns(
+    a: SparseColMatRef<'_, usize, f64>,
+    b: SparseColMatRef<'_, usize, f64>,
+    v: Range<usize>,
+) -> Option<(SymbolicSparseColMat<usize>, SymbolicSparseColMat<usize>)> {
+    let parts = split(a, b, &v)?;
+    Some((parts.symbolic, parts.mass.symbolic().to_owned().ok()?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 2-dof mechanical system with a constraint: `B z' = A z` with `z =
+    /// (x1, x2, v1, v2, mu)`.
+    fn pencil(
+        extra: Option<(usize, usize, f64)>,
+    ) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
+        let m = [[2.0, 0.5], [0.5, 1.0]];
+        let k = [[3.0, -1.0], [-1.0, 2.0]];
+        let c = [[0.1, 0.0], [0.0, 0.2]];
+        let g = [1.0, -2.0];
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for i in 0..2 {
+            for j in 0..2 {
+                a.push(Triplet::new(i, j, -k[i][j]));
+                a.push(Triplet::new(2 + i, 2 + j, m[i][j]));
+                b.push(Triplet::new(i, j, c[i][j]));
+                b.push(Triplet::new(i, 2 + j, m[i][j]));
+                b.push(Triplet::new(2 + i, j, m[i][j]));
+            }
+            a.push(Triplet::new(4, i, g[i]));
+            a.push(Triplet::new(i, 4, -g[i]));
+        }
+        if let Some((i, j, x)) = extra {
+            b.push(Triplet::new(i, j, x));
+        }
+        (
+            SparseColMat::try_new_from_triplets(5, 5, &a).unwrap(),
+            SparseColMat::try_new_from_triplets(5, 5, &b).unwrap(),
+        )
+    }
+
+    #[test]
+    fn the_condensed_solve_solves_the_whole_pencil() {
+        let (a, b) = pencil(None);
+        let c = Condensed::detect(a.as_ref(), b.as_ref(), 2..4).expect("mechanical");
+        let sigma = C64::new(-0.3, 1.7);
+        let h: Vec<C64> = (0..5)
+            .map(|i| C64::new(1.0 + i as f64, 0.5 - i as f64))
+            .collect();
+        // S x = reduce(h), through a dense solve of S
+        let s = c.values(sigma);
+        let ns = c.symbolic.nrows();
+        let mut dense = Mat::<C64>::zeros(ns, ns);
+        for j in 0..ns {
+            for (p, i) in c.symbolic.row_idx_of_col(j).enumerate() {
+                dense[(i, j)] = s[c.symbolic.col_ptr()[j] + p];
+            }
+        }
+        let rhs = c.reduce(sigma, &h);
+        let x = dense
+            .partial_piv_lu()
+            .solve(Mat::from_fn(ns, 1, |i, _| rhs[i]));
+        let x: Vec<C64> = (0..ns).map(|i| x[(i, 0)]).collect();
+        let z = c.expand(sigma, &x, &h);
+        // the residual of (sigma B - A) z = h
+        let (ad, bd) = (a.to_dense(), b.to_dense());
+        for i in 0..5 {
+            let r: C64 = (0..5)
+                .map(|j| (sigma * bd[(i, j)] - ad[(i, j)]) * z[j])
+                .sum::<C64>()
+                - h[i];
+            assert!(r.norm() < 1e-13, "row {i}: residual {r}");
+        }
+    }
+
+    #[test]
+    fn a_pencil_unlike_the_mechanical_one_is_not_condensed() {
+        let (a, b) = pencil(Some((2, 3, 1e-3)));
+        assert!(Condensed::detect(a.as_ref(), b.as_ref(), 2..4).is_none());
+        let (a, b) = pencil(Some((4, 2, 1.0)));
+        assert!(Condensed::detect(a.as_ref(), b.as_ref(), 2..4).is_none());
+        let (a, b) = pencil(Some((0, 3, 0.1)));
+        assert!(Condensed::detect(a.as_ref(), b.as_ref(), 2..4).is_none());
+        let (a, b) = pencil(None);
+        assert!(Condensed::detect(a.as_ref(), b.as_ref(), 1..3).is_none());
+    }
+}
