@@ -560,6 +560,29 @@ impl<'a> Homological<'a> {
         Ok((w, coeffs))
     }
 
+    /// `(Lambda B - A) w` and `(|Lambda| |B| + |A|) |w|`, in one pass over
+    /// the union pattern of `A` and `B`.
+    fn pencil_apply(&self, lambda: C64, w: &[C64]) -> (Vec<C64>, Vec<f64>) {
+        let mut mw = vec![C64::new(0.0, 0.0); self.n];
+        let mut abs = vec![0.0f64; self.n];
+        let l_abs = lambda.norm();
+        let p = self.symbolic.as_ref();
+        let rows = p.row_idx();
+        for (j, &wj) in w.iter().enumerate() {
+            if wj.re == 0.0 && wj.im == 0.0 {
+                continue;
+            }
+            let wj_abs = wj.norm();
+            for k in p.col_range(j) {
+                let (a, b) = (self.a_val[k], self.b_val[k]);
+                let i = rows[k];
+                mw[i] += (lambda * b - a) * wj;
+                abs[i] += (l_abs * b.abs() + a.abs()) * wj_abs;
+            }
+        }
+        (mw, abs)
+    }
+
     /// Residual `(h - M w - B V r, -U^* B w)` of the bordered system with
     /// its normwise and componentwise backward errors.
     ///
@@ -589,18 +612,15 @@ impl<'a> Homological<'a> {
         coeffs: &[C64],
         rhs: &[C64],
     ) -> Residual {
-        let bw = spmv(self.b, w);
-        let aw = spmv(self.a, w);
-        let mut h: Vec<C64> = (0..self.n)
-            .map(|i| rhs[i] - (lambda * bw[i] - aw[i]))
-            .collect();
+        let (mw, mw_abs) = self.pencil_apply(lambda, w);
+        let mut h: Vec<C64> = rhs.iter().zip(&mw).map(|(r, m)| r - m).collect();
         for (t, &c) in set.iter().enumerate() {
             h.iter_mut()
                 .zip(&self.bv[c])
                 .for_each(|(x, v)| *x -= v * coeffs[t]);
         }
         let g: Vec<C64> = set.iter().map(|&c| -dot(&self.ub[c], w)).collect();
-        let (den, scale) = self.bounds(lambda, set, w, coeffs, rhs);
+        let (den, scale) = self.bounds(lambda, set, w, &mw_abs, coeffs, rhs);
         let mut componentwise = 0.0f64;
         let mut norm2 = 0.0;
         for (x, d) in h.iter().chain(&g).zip(&den) {
@@ -629,14 +649,13 @@ impl<'a> Homological<'a> {
         lambda: C64,
         set: &[usize],
         w: &[C64],
+        mw_abs: &[f64],
         coeffs: &[C64],
         rhs: &[C64],
     ) -> (Vec<f64>, f64) {
         let w_abs: Vec<f64> = w.iter().map(|c| c.norm()).collect();
         let w_inf = w_abs.iter().fold(0.0f64, |m, &x| m.max(x));
         let w_norm = w_abs.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let bw_abs = abs_spmv(self.b, &w_abs);
-        let aw_abs = abs_spmv(self.a, &w_abs);
         let guard = 1000.0 * self.n as f64 * f64::EPSILON;
         let guarded = |bound: f64, row_inf: f64, rhs_abs: f64| {
             let cap = row_inf * w_inf;
@@ -649,7 +668,7 @@ impl<'a> Homological<'a> {
         let mut scale2 = 0.0;
         let mut den: Vec<f64> = (0..self.n)
             .map(|i| {
-                let mut bound = lambda.norm() * bw_abs[i] + aw_abs[i];
+                let mut bound = mw_abs[i];
                 for (t, &c) in set.iter().enumerate() {
                     bound += (self.bv[c][i] * coeffs[t]).norm();
                 }
@@ -674,7 +693,6 @@ impl<'a> Homological<'a> {
     }
 }
 
-/// `|M| x` for a non-negative `x`.
 /// `max_j |m_ij|` per row.
 fn row_max(m: SparseColMatRef<'_, usize, f64>) -> Vec<f64> {
     let mut out = vec![0.0f64; m.nrows()];
@@ -684,16 +702,6 @@ fn row_max(m: SparseColMatRef<'_, usize, f64>) -> Vec<f64> {
         }
     }
     out
-}
-
-fn abs_spmv(m: SparseColMatRef<'_, usize, f64>, x: &[f64]) -> Vec<f64> {
-    let mut y = vec![0.0; m.nrows()];
-    for (j, &xj) in x.iter().enumerate() {
-        for (i, v) in m.row_idx_of_col(j).zip(m.val_of_col(j)) {
-            y[i] += v.abs() * xj;
-        }
-    }
-    y
 }
 
 /// `sum_i a_i b_i` (no conjugation: `ub` rows already hold `conj(u)^T B`).
