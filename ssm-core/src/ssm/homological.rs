@@ -63,12 +63,12 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
 use faer::Mat;
 
+use crate::model::condense;
 use crate::spectrum::modes::{spmv, spmv_t};
 
 use crate::C64;
 
 mod band;
-mod condense;
 mod pattern;
 mod series;
 pub use band::band_vectors;

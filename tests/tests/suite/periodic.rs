@@ -303,14 +303,20 @@ fn duffing_multipliers_agree_with_the_integrated_monodromy() {
 
 /// Reference: the O(13) SSM forced response of the spatial oscillator with
 /// the cubic constraint (an index-3 DAE), eps = 0.02, with the
-/// non-autonomous terms the engine chooses for the 1 % target. Derived
-/// tolerance: the two curves differ by the SSM's error plus the reference's
-/// truncation; the SSM curve's own error estimate (reported beside it,
-/// about 0.9 % here) bounds the first, the relative amplitude of the highest
-/// harmonic (below 1e-4) the second. So the amplitudes of `x1` must agree at
-/// every reference frequency to the estimate plus the tail, and the peak
-/// frequency to the range's sampling (half the largest frequency gap of
-/// either curve near the peak).
+/// non-autonomous terms the engine chooses for the 1 % target, against
+/// harmonic balance (9 harmonics, relative amplitude of the highest below
+/// 1e-4, the reference's truncation `tail`). The curve's estimate (the
+/// larger of the modal residual and the change of the curve from the
+/// non-autonomous order two below: of its peak and of its amplitude at every
+/// frequency where both are single-valued) brackets the largest relative
+/// amplitude gap at the reference frequencies within a factor 2 (plus the
+/// tail), and the peaks agree within the estimate in amplitude and to the
+/// range's sampling in frequency (half the largest frequency gap of either
+/// curve near the peak). Here the orders k = 6, 8, 10, 12 alternate about
+/// the reference: the peak's frequency moves by up to 7.5e-4 relative, and
+/// with it the amplitude on the steep flanks by up to 3 % (at k = 8, whose
+/// peak alone changed by under 1 %). No order meets the 1 % target on the
+/// flanks, and the curve is flagged.
 #[test]
 fn spatial_oscillator_reference_agrees_with_the_ssm_within_its_estimate() {
     let text = r#"
@@ -342,7 +348,7 @@ orders = [5, 13]
     let tail = b.orbits.iter().map(|o| o.tail).fold(0.0, f64::max);
     assert!(tail < 1e-4, "tail {tail}");
     let estimate = frc.curves[0].error_estimate();
-    assert!(estimate < 0.01, "the SSM meets the 1 % target: {estimate}");
+    assert_eq!(frc.curves[0].untrusted, estimate > 0.01, "{estimate}");
     let rom: Vec<(f64, f64)> = frc.rows.iter().map(|o| (o.omega, o.linf[0])).collect();
     assert!(
         rom.windows(2).all(|w| w[1].0 > w[0].0),
@@ -368,8 +374,8 @@ orders = [5, 13]
     );
     assert!(compared >= 100, "only {compared} orbits compared");
     assert!(
-        worst < estimate + tail,
-        "largest relative difference {worst:e} above estimate {estimate:e} + tail {tail:e}"
+        worst <= 2.0 * estimate + tail && estimate <= 2.0 * worst + tail,
+        "largest relative difference {worst:e} against estimate {estimate:e} + tail {tail:e}"
     );
     let peak = |pts: &[(f64, f64)]| {
         pts.iter()

@@ -5,7 +5,7 @@
 
 use faer::sparse::{SparseColMat, SparseColMatRef};
 
-use super::condense;
+use crate::model::condense;
 
 /// Nonzeros a column of the Cholesky factor of the symmetrized pattern (AMD
 /// order) must reach for [`Homological::solve_band`] to iterate rather

@@ -342,8 +342,12 @@ impl Condensed {
                 .collect()
         };
         let mut u = solve(h);
-        let mu = crate::spectrum::modes::spmv(self.m.as_ref(), &u);
-        let r: Vec<C64> = h.iter().zip(&mu).map(|(a, b)| a - b).collect();
+        let mut r = h.to_vec();
+        for (j, uj) in u.iter().enumerate() {
+            for (i, m) in self.m.row_idx_of_col(j).zip(self.m.val_of_col(j)) {
+                r[i] -= uj * m;
+            }
+        }
         u.iter_mut().zip(solve(&r)).for_each(|(a, b)| *a += b);
         u
     }
@@ -359,6 +363,17 @@ pub(crate) fn patterns(
 ) -> Option<(SymbolicSparseColMat<usize>, SymbolicSparseColMat<usize>)> {
     let parts = split(a, b, &v)?;
     Some((parts.symbolic, parts.mass.symbolic().to_owned().ok()?))
+}
+
+/// Whether `(A, B)` has the mechanical structure of the module with
+/// velocities `v`: then every eigenvector has velocities `v_V = lambda v_x`
+/// and every left eigenvector `u_V = conj(lambda) u_x`.
+pub(crate) fn is_mechanical(
+    a: SparseColMatRef<'_, usize, f64>,
+    b: SparseColMatRef<'_, usize, f64>,
+    v: Range<usize>,
+) -> bool {
+    split(a, b, &v).is_some()
 }
 
 #[cfg(test)]
