@@ -533,6 +533,7 @@ impl Model {
                 modes: modes.unwrap_or(12),
                 shift: 0.0,
                 normalization: Default::default(),
+                velocities: system.velocities(),
             };
             spectrum::compute(system.a.as_ref(), system.b.as_ref(), &options)
                 .map(|s| s.eigenvalues)

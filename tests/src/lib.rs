@@ -284,6 +284,7 @@ pub fn spectrum_options(method: Option<Method>, modes: usize) -> SpectrumOptions
         modes,
         shift: 0.0,
         normalization: Normalization::Unit,
+        velocities: None,
     }
 }
 

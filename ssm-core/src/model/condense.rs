@@ -365,15 +365,83 @@ pub(crate) fn patterns(
     Some((parts.symbolic, parts.mass.symbolic().to_owned().ok()?))
 }
 
-/// Whether `(A, B)` has the mechanical structure of the module with
-/// velocities `v`: then every eigenvector has velocities `v_V = lambda v_x`
-/// and every left eigenvector `u_V = conj(lambda) u_x`.
-pub(crate) fn is_mechanical(
-    a: SparseColMatRef<'_, usize, f64>,
-    b: SparseColMatRef<'_, usize, f64>,
+/// The shift-invert operator `(A - sigma B)^{-1} B` of a mechanical pencil
+/// through `S(sigma)`, without a solve with the mass matrix: for `y = B z`,
+/// `y_V = M z_x`, so the velocities of `w = (A - sigma B)^{-1} y` are `w_V =
+/// sigma w_x + z_x`, and `S(sigma) w_K = -(y_K + sigma E y_V)` (the module's
+/// elimination with `h = -y`). Its adjoint, `(A - sigma B)^{-H} B^T`, is the
+/// same with `S(sigma)^H`, `B^T` and `conj(sigma)`, since `(B^T u)_V = M^T
+/// u_x`. Krylov iterations and inverse iteration on the spectrum apply it
+/// through an LU of `S`, half the size of `A - sigma B`.
+pub(crate) struct ShiftInvert {
+    /// The velocities (their displacements `0 .. v.len()`).
     v: Range<usize>,
-) -> bool {
-    split(a, b, &v).is_some()
+    symbolic: SymbolicSparseColMat<usize>,
+    /// Values of `A_KK`, `B_KK` and `E M E^T` on `symbolic`.
+    vals: [Vec<f64>; 3],
+}
+
+impl ShiftInvert {
+    /// The operator of `(A, B)` with velocities `v`, when the pencil has the
+    /// structure of the module.
+    pub(crate) fn detect(
+        a: SparseColMatRef<'_, usize, f64>,
+        b: SparseColMatRef<'_, usize, f64>,
+        v: Range<usize>,
+    ) -> Option<Self> {
+        let Split { symbolic, vals, .. } = split(a, b, &v)?;
+        Some(Self { v, symbolic, vals })
+    }
+
+    /// `S(sigma)` for a real shift.
+    pub(crate) fn real(&self, sigma: f64) -> SparseColMat<usize, f64> {
+        let [a, b, m] = &self.vals;
+        let vals = (0..a.len())
+            .map(|k| sigma * b[k] - a[k] + sigma * sigma * m[k])
+            .collect();
+        SparseColMat::new(self.symbolic.clone(), vals)
+    }
+
+    /// `S(sigma)` for a complex shift.
+    pub(crate) fn complex(&self, sigma: C64) -> SparseColMat<usize, C64> {
+        let [a, b, m] = &self.vals;
+        let vals = (0..a.len())
+            .map(|k| sigma * b[k] - a[k] + sigma * sigma * m[k])
+            .collect();
+        SparseColMat::new(self.symbolic.clone(), vals)
+    }
+
+    /// The condensed right-hand side `-(y_K + s E y_V)` of `y = B z` (or
+    /// `B^T u`, with `s = conj(sigma)`).
+    pub(crate) fn rhs<T>(&self, y: &[T], s: T) -> Vec<T>
+    where
+        T: Copy + std::ops::Add<Output = T> + std::ops::Mul<Output = T> + std::ops::Neg<Output = T>,
+    {
+        let v = &self.v;
+        let mut out: Vec<T> = y[..v.start]
+            .iter()
+            .chain(&y[v.end..])
+            .map(|&x| -x)
+            .collect();
+        for (o, &yv) in out.iter_mut().zip(&y[v.clone()]) {
+            *o = *o + -(s * yv);
+        }
+        out
+    }
+
+    /// `w` from the condensed solution `x` and the vector `z` the operator
+    /// was applied to: `w_V = s x_disp + z_x`.
+    pub(crate) fn expand<T>(&self, x: &[T], z: &[T], s: T) -> Vec<T>
+    where
+        T: Copy + std::ops::Add<Output = T> + std::ops::Mul<Output = T>,
+    {
+        let v = &self.v;
+        let mut w = Vec::with_capacity(x.len() + v.len());
+        w.extend_from_slice(&x[..v.start]);
+        w.extend((0..v.len()).map(|k| s * x[k] + z[k]));
+        w.extend_from_slice(&x[v.start..]);
+        w
+    }
 }
 
 #[cfg(test)]

@@ -174,6 +174,12 @@ pub struct SpectrumOptions {
     pub shift: f64,
     /// Eigenvector scaling of master modes.
     pub normalization: Normalization,
+    /// The velocities of a mechanical model ([`System::velocities`]): where
+    /// the pencil has their structure, the sparse path factorizes the
+    /// condensed pencil, half the size. `None` factorizes `A - sigma B`.
+    ///
+    /// [`System::velocities`]: crate::model::system::System::velocities
+    pub velocities: Option<std::ops::Range<usize>>,
 }
 
 /// Computes the finite spectrum of `(A, B)`.
@@ -190,7 +196,9 @@ pub fn compute(
     });
     let found = match method {
         Method::Dense => dense::finite_eigenvalues(a, b, opts.shift),
-        Method::Sparse => sparse::eigenvalues_near_shift(a, b, opts.shift, opts.modes),
+        Method::Sparse => {
+            sparse::eigenvalues_near_shift(a, b, opts.velocities.clone(), opts.shift, opts.modes)
+        }
     };
     let mut eigenvalues = match found {
         Err(SpectrumError::SingularShift { shift, detail, .. }) => {

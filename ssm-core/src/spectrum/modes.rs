@@ -6,6 +6,9 @@
 //! `lambda` serves both inverse iterations:
 //! `v <- (A - sigma B)^{-1} B v` (right) and `u <- (A - sigma B)^{-H} B^H u` (left),
 //! followed by the two-sided Rayleigh quotient `lambda = u^* A v / u^* B v`.
+//! A mechanical pencil is factorized through its condensed `S(sigma)`, half
+//! the size (`crate::model::condense`), and the velocities of `v` and `u`
+//! are then set from the velocity rows.
 //!
 //! Normalization (scene `[ssm] normalization`):
 //! - `unit`: `||v||_2 = 1`;
@@ -23,7 +26,7 @@ use faer::Mat;
 use super::sparse::pseudo_random;
 use super::Normalization;
 use super::{pair_starts, Spectrum, SpectrumError};
-use crate::model::condense::is_mechanical;
+use crate::model::condense::ShiftInvert;
 use crate::model::system::System;
 use crate::C64;
 
@@ -148,9 +151,32 @@ fn refine(
         detail,
     };
     let sigma = lambda0 + C64::new(1.0, 1.0) * (1e-10 * lambda0.norm().max(1e-300));
-    let lu = shifted(sys, sigma)
-        .sp_lu()
-        .map_err(|e| fail(format!("sparse LU of A - lambda B failed: {e:?}")))?;
+    // a mechanical pencil: the LU of the condensed S(sigma), half the size
+    let condensed = sys.velocities().and_then(|r| ShiftInvert::detect(a, b, r));
+    let lu = match &condensed {
+        Some(c) => c.complex(sigma).sp_lu(),
+        None => shifted(sys, sigma).sp_lu(),
+    }
+    .map_err(|e| fail(format!("sparse LU of A - lambda B failed: {e:?}")))?;
+    // (A - sigma B)^{-1} y, or (A - sigma B)^{-H} y, for y = B z (B^T z)
+    let solve = |y: Vec<C64>, z: &[C64], adjoint: bool| -> Vec<C64> {
+        let s = if adjoint { sigma.conj() } else { sigma };
+        let r = match &condensed {
+            Some(c) => c.rhs(&y, s),
+            None => y,
+        };
+        let mut m = Mat::<C64>::from_fn(r.len(), 1, |i, _| r[i]);
+        if adjoint {
+            lu.solve_adjoint_in_place(m.as_mut());
+        } else {
+            lu.solve_in_place(m.as_mut());
+        }
+        let x: Vec<C64> = (0..r.len()).map(|i| m[(i, 0)]).collect();
+        match &condensed {
+            Some(c) => c.expand(&x, z, s),
+            None => x,
+        }
+    };
     let mut v: Vec<C64> = (0..n)
         .map(|i| C64::new(pseudo_random(i), pseudo_random(i + n)))
         .collect();
@@ -158,10 +184,7 @@ fn refine(
         .map(|i| C64::new(pseudo_random(i + 2 * n), pseudo_random(i + 3 * n)))
         .collect();
     for _ in 0..3 {
-        let bv = spmv(b, &v);
-        let mut rhs = Mat::<C64>::from_fn(n, 1, |i, _| bv[i]);
-        lu.solve_in_place(rhs.as_mut());
-        v = (0..n).map(|i| rhs[(i, 0)]).collect();
+        v = solve(spmv(b, &v), &v, false);
         let s = norm2(&v);
         if !(s.is_finite() && s > 0.0) {
             return Err(fail(
@@ -170,10 +193,7 @@ fn refine(
         }
         v.iter_mut().for_each(|c| *c /= s);
 
-        let btu = spmv_t(b, &u);
-        let mut rhs = Mat::<C64>::from_fn(n, 1, |i, _| btu[i]);
-        lu.solve_adjoint_in_place(rhs.as_mut());
-        u = (0..n).map(|i| rhs[(i, 0)]).collect();
+        u = solve(spmv_t(b, &u), &u, true);
         let s = norm2(&u);
         if !(s.is_finite() && s > 0.0) {
             return Err(fail(
@@ -198,7 +218,7 @@ fn refine(
     // it leaves to rounding: a change of `lambda0` in its 12th digit moved
     // the 8 x 8 plate's unit-norm `v` by 5e-5 along such a direction, and
     // with it the reduced coordinates' scale
-    if let Some(vel) = sys.velocities().filter(|r| is_mechanical(a, b, r.clone())) {
+    if let Some(vel) = sys.velocities().filter(|_| condensed.is_some()) {
         let n_dof = vel.len();
         for k in 0..n_dof {
             v[vel.start + k] = lambda * v[k];

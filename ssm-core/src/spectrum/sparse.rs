@@ -2,7 +2,9 @@
 //!
 //! The finite eigenvalues `lambda` of `(A, B)` nearest a real shift `sigma` are
 //! the largest-magnitude eigenvalues `theta = 1 / (lambda - sigma)` of
-//! `T = (A - sigma B)^{-1} B`. Infinite eigenvalues map to `theta = 0`, so they
+//! `T = (A - sigma B)^{-1} B` (of a mechanical pencil, through the LU of its
+//! condensed `S(sigma)`, half the size: `crate::model::condense`). Infinite
+//! eigenvalues map to `theta = 0`, so they
 //! are never among the wanted ones; the start vector is purified by applying `T`
 //! twice so that Krylov vectors carry no constraint-mode components. `T` is
 //! applied through one sparse LU of `A - sigma B` (symbolic and numeric phase
@@ -15,22 +17,35 @@
 //! transformation Lanczos method*, Math. Comp. 35 (1980) 1251-1268 (shift-invert
 //! and purification for singular `B`).
 
+use std::ops::Range;
+
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::solvers::Solve;
 use faer::matrix_free::LinOp;
-use faer::reborrow::ReborrowMut;
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
 use faer::{Accum, Col, Mat, MatMut, MatRef, Par};
 
 use super::{krylov, SpectrumError};
+use crate::model::condense;
 use crate::C64;
 
-/// The operator `(A - sigma B)^{-1} B`.
-#[derive(Debug)]
+/// The operator `(A - sigma B)^{-1} B`: through the LU of `A - sigma B`,
+/// or of a mechanical pencil's condensed `S(sigma)` (half the size).
 struct ShiftInvert<'a> {
     lu: Lu<usize, f64>,
     b: SparseColMatRef<'a, usize, f64>,
+    condensed: Option<(condense::ShiftInvert, f64)>,
+}
+
+impl std::fmt::Debug for ShiftInvert<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ShiftInvert")
+            .field("n", &self.b.nrows())
+            .field("condensed", &self.condensed.is_some())
+            .finish()
+    }
 }
 
 impl LinOp<f64> for ShiftInvert<'_> {
@@ -58,7 +73,28 @@ impl LinOp<f64> for ShiftInvert<'_> {
             1.0,
             par,
         );
-        self.lu.solve_in_place(out);
+        let Some((c, sigma)) = &self.condensed else {
+            self.lu.solve_in_place(out);
+            return;
+        };
+        let cols: Vec<Vec<f64>> = (0..out.ncols())
+            .map(|j| c.rhs(&out.rb().col(j).iter().copied().collect::<Vec<_>>(), *sigma))
+            .collect();
+        let rows = cols.first().map_or(0, Vec::len);
+        let mut x = Mat::<f64>::from_fn(rows, cols.len(), |i, j| cols[j][i]);
+        self.lu.solve_in_place(x.as_mut());
+        for j in 0..out.ncols() {
+            let xj: Vec<f64> = x.col(j).iter().copied().collect();
+            let zj: Vec<f64> = rhs.col(j).iter().copied().collect();
+            for (o, w) in out
+                .rb_mut()
+                .col_mut(j)
+                .iter_mut()
+                .zip(c.expand(&xj, &zj, *sigma))
+            {
+                *o = w;
+            }
+        }
     }
     fn conj_apply(
         &self,
@@ -94,17 +130,27 @@ pub(crate) fn combine(
 pub(crate) fn eigenvalues_near_shift(
     a: SparseColMatRef<'_, usize, f64>,
     b: SparseColMatRef<'_, usize, f64>,
+    velocities: Option<Range<usize>>,
     shift: f64,
     modes: usize,
 ) -> Result<Vec<C64>, SpectrumError> {
     let n = a.nrows();
-    let shifted = combine(a, b, -shift);
+    let condensed = velocities.and_then(|v| condense::ShiftInvert::detect(a, b, v));
+    let shifted = match &condensed {
+        Some(c) => c.real(shift),
+        None => combine(a, b, -shift),
+    };
     let lu = shifted.sp_lu().map_err(|e| SpectrumError::SingularShift {
         shift,
         detail: lu_failure(&e),
         suggestion: None,
     })?;
-    let op = ShiftInvert { lu, b };
+    drop(shifted);
+    let op = ShiftInvert {
+        lu,
+        b,
+        condensed: condensed.map(|c| (c, shift)),
+    };
     // purified, deterministic start vector: T^2 x with x a fixed pseudo-random vector
     let mut x = Mat::<f64>::from_fn(n, 1, |i, _| pseudo_random(i));
     let mut y = Mat::<f64>::zeros(n, 1);

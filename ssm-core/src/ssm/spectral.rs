@@ -60,6 +60,7 @@ pub fn spectral(
         modes: spec.modes.unwrap_or(2 * max_pair + 10).max(2 * max_pair),
         shift: spec.shift,
         normalization: ssm.normalization,
+        velocities: system.velocities(),
     };
     let dynamics = Dynamics::from(system.time);
     let (pencil_a, pencil_b) = system.spectral_pencil();
