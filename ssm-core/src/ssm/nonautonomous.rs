@@ -61,11 +61,11 @@ pub struct NonAutonomous {
 /// `sum_v sum_j j_v y_j f_v[k - j + e_v]`: the `p^k` coefficient (`ek`) of
 /// `DY(p) f(p)` for a vector series `y` over `jset` (indices `1..jlen`, `None`
 /// where absent) and scalar series `f_v` given by exponents.
-fn derivative_apply(
+fn derivative_apply<'y>(
     jset: &MultiIndexSet,
     jlen: usize,
     ek: &[u16],
-    y: &dyn Fn(usize) -> Option<Vec<C64>>,
+    y: &dyn Fn(usize) -> Option<&'y [C64]>,
     f: &dyn Fn(usize, &[u16]) -> C64,
     n: usize,
 ) -> Vec<C64> {
@@ -74,7 +74,7 @@ fn derivative_apply(
     let mut m = vec![0u16; nvar];
     for j in 1..jlen {
         let ej = jset.exponents(j);
-        let mut yj: Option<Vec<C64>> = None;
+        let mut yj: Option<&[C64]> = None;
         for v in 0..nvar {
             if ej[v] == 0 {
                 continue;
@@ -99,7 +99,7 @@ fn derivative_apply(
             if yj.is_none() {
                 yj = y(j);
             }
-            if let Some(yv) = &yj {
+            if let Some(yv) = yj {
                 for (o, yy) in out.iter_mut().zip(yv) {
                     *o += c * yy;
                 }
@@ -272,7 +272,7 @@ pub(super) struct Rhs<'s> {
     pub sys: &'s System,
     pub set: MultiIndexSet,
     pub wset: MultiIndexSet,
-    pub jac: Vec<(usize, usize, Vec<C64>)>,
+    pub jac: JacobianSeries,
 }
 
 /// `k . lambda` of multi-index `k` (exponents `e`).
@@ -314,12 +314,14 @@ impl<'s> Rhs<'s> {
         let zero = C64::new(0.0, 0.0);
         let k: u16 = e.iter().sum();
         let mut rhs = forcing.map_or_else(|| vec![zero; n], <[C64]>::to_vec);
-        // [DF(W) X]_k
-        for (eq, var, series) in &self.jac {
-            for &(j, t) in below {
-                if let Some(xv) = x[j].get(*var) {
-                    rhs[*eq] += series[t] * xv;
-                }
+        // [DF(W) X]_k = sum over (j, t) of J_t x_j
+        for &(j, t) in below {
+            let xj = x[j];
+            if xj.is_empty() {
+                continue;
+            }
+            for &(eq, var, v) in &self.jac.terms[t] {
+                rhs[eq] += v * xj[var];
             }
         }
         // - B [DX R_nl + DW_nl S]_k
@@ -327,7 +329,7 @@ impl<'s> Rhs<'s> {
             set,
             done,
             e,
-            &|j| (!x[j].is_empty()).then(|| x[j].to_vec()),
+            &|j| (!x[j].is_empty()).then_some(x[j]),
             &|v, m| r_nl(ssm, v, m),
             n,
         );
@@ -341,7 +343,7 @@ impl<'s> Rhs<'s> {
                 if o < 2 {
                     return None;
                 }
-                ssm.set.index(ej).map(|si| ssm.w[si].clone())
+                ssm.set.index(ej).map(|si| ssm.w[si].as_slice())
             },
             &|v, m| {
                 set.index(m)
@@ -359,15 +361,23 @@ impl<'s> Rhs<'s> {
     }
 }
 
-/// The Jacobian series `DF(W(p))` to the order of `set`: per term and factor
-/// of the nonlinearity, `(equation, variable, series)` (orders >= 1).
+/// The Jacobian series `DF(W(p)) = sum_t J_t p^t` to the order of a
+/// multi-index set, as the entries `(equation, variable, value)` of each
+/// `J_t` (`t` a multi-index of the set), the contributions of every term
+/// and factor of the nonlinearity to one entry summed, sorted by equation:
+/// applying `J_t` is one pass over its entries.
+pub(super) struct JacobianSeries {
+    terms: Vec<Vec<(usize, usize, C64)>>,
+}
+
+/// The Jacobian series `DF(W(p))` to the order of `set` (orders >= 1).
 pub(super) fn jacobian_series(
     ssm: &SsmExpansion,
     sys: &System,
     set: &MultiIndexSet,
-) -> Vec<(usize, usize, Vec<C64>)> {
+) -> JacobianSeries {
     let zero = C64::new(0.0, 0.0);
-    let mut jac: Vec<(usize, usize, Vec<C64>)> = Vec::new();
+    let mut terms: Vec<Vec<(usize, usize, C64)>> = vec![Vec::new(); set.len()];
     for t in sys.nonlinearity.terms.iter() {
         for (fi, fv) in t.factors.iter().enumerate() {
             let mut series = vec![zero; set.len()];
@@ -386,10 +396,25 @@ pub(super) fn jacobian_series(
                     });
                 }
             }
-            jac.push((t.eq as usize, fv.var as usize, series));
+            for (entries, v) in terms.iter_mut().zip(series) {
+                if v != zero {
+                    entries.push((t.eq as usize, fv.var as usize, v));
+                }
+            }
         }
     }
-    jac
+    for entries in &mut terms {
+        entries.sort_unstable_by_key(|&(eq, var, _)| (eq, var));
+        entries.dedup_by(|later, kept| {
+            let same = (later.0, later.1) == (kept.0, kept.1);
+            if same {
+                kept.2 += later.2;
+            }
+            same
+        });
+        entries.shrink_to_fit();
+    }
+    JacobianSeries { terms }
 }
 
 impl NonAutonomous {
