@@ -377,23 +377,40 @@ pub(super) fn jacobian_series(
     set: &MultiIndexSet,
 ) -> JacobianSeries {
     let zero = C64::new(0.0, 0.0);
-    let mut terms: Vec<Vec<(usize, usize, C64)>> = vec![Vec::new(); set.len()];
+    let len = set.len();
+    // the products of the set's monomials, and where each sits in the SSM's
+    // set, found once for every term and factor
+    let product: Vec<Option<usize>> = (0..len * len)
+        .map(|ij| {
+            let (ei, ej) = (set.exponents(ij / len), set.exponents(ij % len));
+            let sum: Vec<u16> = ei.iter().zip(ej).map(|(x, y)| x + y).collect();
+            set.index(&sum)
+        })
+        .collect();
+    let in_ssm: Vec<Option<usize>> = (0..len)
+        .map(|idx| {
+            (idx > 0)
+                .then(|| ssm.set.index(set.exponents(idx)))
+                .flatten()
+        })
+        .collect();
+    let mut factor = vec![zero; len];
+    let mut terms: Vec<Vec<(usize, usize, C64)>> = vec![Vec::new(); len];
     for t in sys.nonlinearity.terms.iter() {
         for (fi, fv) in t.factors.iter().enumerate() {
-            let mut series = vec![zero; set.len()];
+            let mut series = vec![zero; len];
             series[0] = C64::new(t.coeff * f64::from(fv.power), 0.0);
             for (gi, gv) in t.factors.iter().enumerate() {
                 let pw = if gi == fi { gv.power - 1 } else { gv.power };
+                if pw == 0 {
+                    continue;
+                }
+                // the series of W's component gv.var (no constant term)
+                for (f, si) in factor.iter_mut().zip(&in_ssm) {
+                    *f = si.map_or(zero, |si| ssm.w[si][gv.var as usize]);
+                }
                 for _ in 0..pw {
-                    series = mul_series(set, &series, &|idx| {
-                        ssm.set.index(set.exponents(idx)).map_or(zero, |si| {
-                            if idx == 0 {
-                                zero
-                            } else {
-                                ssm.w[si][gv.var as usize]
-                            }
-                        })
-                    });
+                    series = mul_series(&product, &series, &factor);
                 }
             }
             for (entries, v) in terms.iter_mut().zip(series) {
@@ -603,22 +620,15 @@ pub(super) fn sub_index(set: &MultiIndexSet, e: &[u16], f: &[u16]) -> Option<usi
     set.index(&d)
 }
 
-/// `a * b` truncated to the set, with `b` given by index.
-fn mul_series(set: &MultiIndexSet, a: &[C64], b: &dyn Fn(usize) -> C64) -> Vec<C64> {
-    let mut out = vec![C64::new(0.0, 0.0); set.len()];
-    let bv: Vec<C64> = (0..set.len()).map(b).collect();
-    for (i, ai) in a.iter().enumerate() {
-        if *ai == C64::new(0.0, 0.0) {
-            continue;
-        }
-        for (j, bj) in bv.iter().enumerate() {
-            if *bj == C64::new(0.0, 0.0) {
-                continue;
-            }
-            let ei = set.exponents(i);
-            let ej = set.exponents(j);
-            let sum: Vec<u16> = ei.iter().zip(ej).map(|(x, y)| x + y).collect();
-            if let Some(t) = set.index(&sum) {
+/// `a * b` truncated to a multi-index set of `a.len()` monomials, where
+/// `product[i * len + j]` is the index of monomial `i` times monomial `j`.
+fn mul_series(product: &[Option<usize>], a: &[C64], b: &[C64]) -> Vec<C64> {
+    let zero = C64::new(0.0, 0.0);
+    let len = a.len();
+    let mut out = vec![zero; len];
+    for (i, ai) in a.iter().enumerate().filter(|(_, x)| **x != zero) {
+        for (j, bj) in b.iter().enumerate().filter(|(_, x)| **x != zero) {
+            if let Some(t) = product[i * len + j] {
                 out[t] += ai * bj;
             }
         }
