@@ -116,12 +116,11 @@ fn worst_difference(
     worst
 }
 
-/// The 8 x 8 plate (708 states, factors dear enough for band solves), its
-/// O(5) SSM of the first pair and its forced SSM.
-fn plate_forced() -> (
+/// The 8 x 8 clamped plate (light damping) and its 6 eigenvalues nearest
+/// the origin by the sparse path.
+fn plate_8x8() -> (
     ssm_core::model::system::System,
-    Vec<ssm_core::spectrum::MasterMode>,
-    ssm_core::ssm::SsmExpansion,
+    ssm_core::spectrum::Spectrum,
 ) {
     let sys = system("von-karman-plate", "plate", "nx = 8\nny = 8\nbeta = 2e-5");
     let sp = spectrum::compute(
@@ -130,6 +129,17 @@ fn plate_forced() -> (
         &spectrum_options(Some(Method::Sparse), 6),
     )
     .expect("plate spectrum");
+    (sys, sp)
+}
+
+/// The 8 x 8 plate (708 states, factors dear enough for band solves), its
+/// O(5) SSM of the first pair and its forced SSM.
+fn plate_forced() -> (
+    ssm_core::model::system::System,
+    Vec<ssm_core::spectrum::MasterMode>,
+    ssm_core::ssm::SsmExpansion,
+) {
+    let (sys, sp) = plate_8x8();
     let norm = Normalization::default();
     let masters = spectrum::master_modes(&sys, &sp, &[1], norm).expect("master pair");
     let ssm = ssm_of(&sys, &sp, &[1], 5, norm);
@@ -416,13 +426,7 @@ fn the_spectrum_through_the_condensed_pencil_is_the_whole_pencils() {
 /// of the gauge and not of the iteration.
 #[test]
 fn the_master_mode_does_not_depend_on_the_starting_eigenvalue() {
-    let sys = system("von-karman-plate", "plate", "nx = 8\nny = 8\nbeta = 2e-5");
-    let sp = spectrum::compute(
-        sys.a.as_ref(),
-        sys.b.as_ref(),
-        &spectrum_options(Some(Method::Sparse), 6),
-    )
-    .expect("plate spectrum");
+    let (sys, sp) = plate_8x8();
     let norm = Normalization::default();
     let drift = |sys: &ssm_core::model::system::System, shift: f64| -> f64 {
         let base = spectrum::master_modes(sys, &sp, &[1], norm).expect("master pair");
