@@ -2,6 +2,9 @@
 //! 1 to 8 cylinders, inline or V) modeled redundantly in 3-D natural
 //! coordinates, the public stand-in for the V8 crank drive of Stadlmayr,
 //! Witteveen & Steiner (2017), Sect. 4.1, whose FreeDyn model is not public.
+//! Two models: `crank-drive` (below, the crankshaft on a fixed axis) and
+//! `crank-drive-housing` (the same drive in a housing on spring-damper
+//! mounts, described in `housing.rs`).
 //!
 //! # Model
 //! - **Crankshaft**: rotates about the fixed `z` axis; its coordinates are the
@@ -49,6 +52,8 @@ use ssm_api::{
 };
 use ssm_plugin_kit::{Constraints, MechanicalSystem, ParamSpec, Params};
 
+mod housing;
+
 const MODEL: &str = "crank-drive";
 
 fn specs() -> Vec<ParamSpec> {
@@ -92,12 +97,26 @@ fn specs() -> Vec<ParamSpec> {
     ]
 }
 
+/// The parameters of the housing model: the crank drive's and the housing's.
+fn housing_specs() -> Vec<ParamSpec> {
+    let mut s = specs();
+    s.extend(housing::specs());
+    s
+}
+
 fn models() -> Vec<ModelInfo> {
-    vec![ModelInfo {
-        name: MODEL.into(),
-        description: "crank drive, 1-8 cylinders inline or V, redundant 3-D natural coordinates (Stadlmayr et al. 2017, Sect. 4.1 stand-in)".into(),
-        params: specs().iter().map(ParamSpec::info).collect(),
-    }]
+    vec![
+        ModelInfo {
+            name: MODEL.into(),
+            description: "crank drive, 1-8 cylinders inline or V, redundant 3-D natural coordinates (Stadlmayr et al. 2017, Sect. 4.1 stand-in)".into(),
+            params: specs().iter().map(ParamSpec::info).collect(),
+        },
+        ModelInfo {
+            name: housing::MODEL.into(),
+            description: "the crank drive in an engine housing on nine spring-damper mounts, seven degrees of freedom (Stadlmayr et al. 2017, Sect. 4.1)".into(),
+            params: housing_specs().iter().map(ParamSpec::info).collect(),
+        },
+    ]
 }
 
 fn invalid(name: &str, message: &str) -> PluginError {
@@ -200,11 +219,14 @@ fn cylinders(p: &Params) -> Result<Vec<Cylinder>, PluginError> {
 }
 
 fn build(name: &str, params: &str) -> Result<Model, PluginError> {
+    if name == housing::MODEL {
+        return housing::build(&Params::parse(params, &housing_specs())?);
+    }
     if !name.is_empty() && name != MODEL {
         return Err(PluginError::new(
             ErrorKind::UnknownModel,
             name,
-            &format!("this plugin offers only '{MODEL}'"),
+            &format!("this plugin offers '{MODEL}' and '{}'", housing::MODEL),
         ));
     }
     let p = Params::parse(params, &specs())?;

@@ -56,7 +56,8 @@ pub enum PodStudyError {
     },
 }
 
-/// One load case: `eps Fext(Omega t)` from rest or from a given start.
+/// One load case: `eps Fext(Omega t)`, possibly switched in steps, from
+/// rest or from a given start.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoadCase {
     /// `train` or `test <k>`.
@@ -69,6 +70,8 @@ pub struct LoadCase {
     pub t_end: f64,
     /// Given displacements and velocities by state name (empty: from rest).
     pub start: Vec<(String, f64)>,
+    /// Load steps `(t_k, a_k)` ([`DaeProblem::with_steps`]; empty: none).
+    pub steps: Vec<(f64, f64)>,
     /// Whether the POD models were trained on it.
     pub trained: bool,
 }
@@ -212,7 +215,7 @@ pub fn full_run(
         case: case.label.clone(),
         source: Box::new(source),
     };
-    let p = DaeProblem::new(sys, case.epsilon, case.omega);
+    let p = DaeProblem::new(sys, case.epsilon, case.omega).with_steps(&case.steps);
     let z0 = given_start(&p, &case.start).map_err(fail)?;
     let t = Instant::now();
     let solution = integrate(
@@ -342,7 +345,7 @@ pub fn pod_case_run(
         Some(rc) => rc.lift(&y0),
         None => y0,
     };
-    let p = DaeProblem::new(rsys, case.epsilon, case.omega);
+    let p = DaeProblem::new(rsys, case.epsilon, case.omega).with_steps(&case.steps);
     let t = Instant::now();
     let run = integrate(
         &p,

@@ -42,6 +42,12 @@ pub fn ssm_case_run(
         start_distance: distance,
         failure: Some(e),
     };
+    if !case.steps.is_empty() {
+        return fail(
+            "the SSM's forced terms hold for one constant load amplitude; this load is switched in steps".into(),
+            f64::NAN,
+        );
+    }
     let eps = case.epsilon;
     let forced = if eps != 0.0 && !sys.forcing.is_empty() {
         let ratios = auto_ratios(&rom.masters, case.omega);

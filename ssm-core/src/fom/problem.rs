@@ -48,6 +48,7 @@ pub struct DaeProblem<'a> {
     b_vals: Vec<f64>,
     f: PreparedPoly,
     forcing: Vec<PreparedHarmonic>,
+    steps: Vec<(f64, f64)>,
     index: Vec<u8>,
 }
 
@@ -138,7 +139,29 @@ impl<'a> DaeProblem<'a> {
             b_vals,
             f,
             forcing,
+            steps: Vec::new(),
             index: differentiation_index(sys),
+        }
+    }
+
+    /// The same problem with its load switched in steps `(t_k, a_k)` (times
+    /// rising): from `t_k` on the amplitude is `a_k eps`, before the first
+    /// step zero. No steps: `eps` throughout.
+    #[must_use]
+    pub fn with_steps(mut self, steps: &[(f64, f64)]) -> Self {
+        self.steps = steps.to_vec();
+        self
+    }
+
+    /// The load factor at `t`: 1 without steps, else the factor of the last
+    /// step at or before `t` (0 before the first).
+    fn load_factor(&self, t: f64) -> f64 {
+        if self.steps.is_empty() {
+            return 1.0;
+        }
+        match self.steps.partition_point(|s| s.0 <= t) {
+            0 => 0.0,
+            k => self.steps[k - 1].1,
         }
     }
 
@@ -181,22 +204,24 @@ impl<'a> DaeProblem<'a> {
             }
         }
         eval_into(&self.f.poly, z, 1.0, out);
+        let eps = self.epsilon * self.load_factor(t);
         for h in &self.forcing {
             let (s, c) = (h.multiple * self.omega * t).sin_cos();
-            eval_into(&h.cos.poly, z, self.epsilon * c, out);
-            eval_into(&h.sin.poly, z, self.epsilon * s, out);
+            eval_into(&h.cos.poly, z, eps * c, out);
+            eval_into(&h.sin.poly, z, eps * s, out);
         }
     }
 
-    /// The forcing `Fext(z, Omega t)` alone (per unit amplitude): the
-    /// derivative of [`DaeProblem::rhs`] in `eps`. Empty (zero) for a problem
-    /// prepared with `epsilon = 0`.
+    /// The forcing `Fext(z, Omega t)` alone (per unit amplitude, times the
+    /// load factor of any steps): the derivative of [`DaeProblem::rhs`] in
+    /// `eps`. Empty (zero) for a problem prepared with `epsilon = 0`.
     pub(crate) fn forcing_rhs(&self, t: f64, z: &[f64], out: &mut [f64]) {
         out.iter_mut().for_each(|o| *o = 0.0);
+        let a = self.load_factor(t);
         for h in &self.forcing {
             let (s, c) = (h.multiple * self.omega * t).sin_cos();
-            eval_into(&h.cos.poly, z, c, out);
-            eval_into(&h.sin.poly, z, s, out);
+            eval_into(&h.cos.poly, z, a * c, out);
+            eval_into(&h.sin.poly, z, a * s, out);
         }
     }
 
@@ -216,10 +241,11 @@ impl<'a> DaeProblem<'a> {
     pub(crate) fn jacobian(&self, t: f64, z: &[f64], vals: &mut [f64]) {
         vals.copy_from_slice(&self.a_vals);
         jac_into(&self.f, z, 1.0, vals);
+        let eps = self.epsilon * self.load_factor(t);
         for h in &self.forcing {
             let (s, c) = (h.multiple * self.omega * t).sin_cos();
-            jac_into(&h.cos, z, self.epsilon * c, vals);
-            jac_into(&h.sin, z, self.epsilon * s, vals);
+            jac_into(&h.cos, z, eps * c, vals);
+            jac_into(&h.sin, z, eps * s, vals);
         }
     }
 

@@ -259,3 +259,31 @@ pub fn reduce_constraints(
         basis: Mat::from_fn(m, l, |i, j| u[(i, j)]),
     })
 }
+
+/// The constraints that the earlier reduction of Stadlmayr, Witteveen &
+/// Steiner (2015), the paper's reference \[27\], removes: those whose row of
+/// the projected Jacobian `C_q U` vanishes (norm at most `rank_tol` times
+/// the largest singular value), i.e. constraints that act along directions
+/// the subspace never moves in. They are a subset of what
+/// [`reduce_constraints`] removes (a zero row is a zero singular value's
+/// left singular vector); constraints whose directions tumble with the
+/// motion never vanish, however redundant they are (the paper's Sect. 4.1).
+///
+/// # References
+/// D. Stadlmayr, W. Witteveen, W. Steiner, *Reduction of physical and
+/// constraint DOF of redundant formulated multibody systems*, J. Comput.
+/// Nonlinear Dyn. 11(3), 031010 (2015); M. Stadlmayr, W. Witteveen,
+/// W. Steiner (2017), Sects. 3.3-3.4.
+pub fn vanishing_constraints(cq_u: MatRef<'_, f64>, rank_tol: f64) -> Vec<usize> {
+    let largest = cq_u
+        .singular_values()
+        .ok()
+        .and_then(|s| s.first().copied())
+        .unwrap_or(0.0);
+    (0..cq_u.nrows())
+        .filter(|&i| {
+            let row: f64 = (0..cq_u.ncols()).map(|j| cq_u[(i, j)].powi(2)).sum();
+            row.sqrt() <= rank_tol * largest
+        })
+        .collect()
+}

@@ -20,7 +20,8 @@ use faer::Mat;
 use ssm_api::{Lift, Model, MotionKind};
 
 use super::galerkin::{project_mechanical, GalerkinError, ReducedCoordinates};
-use super::pod::{global_projection, pod, reduce_constraints, ConstraintReduction, PodBasis};
+use super::pod::{global_projection, pod, reduce_constraints, vanishing_constraints};
+use super::pod::{ConstraintReduction, PodBasis};
 use super::pod::{PodError, Truncation};
 use crate::fom::DaeProblem;
 use crate::model::system::System;
@@ -95,6 +96,10 @@ pub struct PodReduction {
     pub u: Mat<f64>,
     /// The constraint reduction (`L^i`, singular values).
     pub constraints: ConstraintReduction,
+    /// The constraints whose projected Jacobian rows vanish along the whole
+    /// run: what the reduction along fixed axes of the paper's reference
+    /// \[27\] removes ([`vanishing_constraints`]), for comparison.
+    pub vanishing: Vec<usize>,
     /// The reduced model `(q_r, q_r', mu_l)`.
     pub model: Model,
     /// `z = V y`, `V = blkdiag(U, U, L)`.
@@ -207,6 +212,7 @@ pub fn pod_reduce(
     }
     let stack = stacked_constraint_jacobian(sys, run, &u, settings.jacobian_samples);
     let mut constraints = reduce_constraints(stack.as_ref(), settings.rank_tol)?;
+    let vanishing = vanishing_constraints(stack.as_ref(), settings.rank_tol);
     let instantaneous = instantaneous_rank(&stack, r, settings.rank_tol)?;
     let origin = vec![0.0; sys.states.len()];
     let at_origin = constraint_jacobian(sys, &origin) * &u;
@@ -253,6 +259,7 @@ pub fn pod_reduce(
         kinds,
         u,
         constraints,
+        vanishing,
         model,
         lift,
         initial_residual,

@@ -526,7 +526,8 @@ impl PodSpec {
     /// Truncations, tolerances, step and `alpha` within their ranges, the
     /// SSM models' pair sets and order, at most [`MAX_POD_ROMS`] models and
     /// [`MAX_POD_TESTS`] tests, and runs of positive length with finite
-    /// loads and starts that the fixed step resolves.
+    /// loads and starts that the fixed step resolves, and load steps at
+    /// rising times inside the run.
     pub fn check(&self) -> Checked {
         let n_pod = match &self.truncations {
             PodTruncations::Energy(v) => {
@@ -625,7 +626,57 @@ impl PodSpec {
             if let Some(name) = non_finite(&r.start) {
                 return bad(format!("'{name}' must be a finite number"));
             }
+            load_steps(&r.steps, r.t_end).map_err(|m| SpecError::new(format!("{key}.steps"), m))?;
+            if !r.steps.is_empty() && !self.ssm_pairs.is_empty() {
+                return Err(SpecError::at(
+                    "pod.ssm_pairs",
+                    format!("{key}.steps"),
+                    "the SSM models' forced terms hold for one constant load amplitude, and a run with load steps changes it: leave out ssm_pairs or the steps".into(),
+                ));
+            }
         }
         Ok(())
     }
+}
+
+/// Most load steps of one POD run.
+pub const MAX_LOAD_STEPS: usize = 1000;
+
+/// Load steps `(t_k, a_k)`: at most [`MAX_LOAD_STEPS`], finite factors, and
+/// times rising strictly within `[0, t_end)`.
+fn load_steps(steps: &[(f64, f64)], t_end: f64) -> Result<(), String> {
+    if steps.len() > MAX_LOAD_STEPS {
+        return Err(format!(
+            "{} load steps; at most {MAX_LOAD_STEPS}",
+            steps.len()
+        ));
+    }
+    let mut last = f64::NEG_INFINITY;
+    for (k, &(t, a)) in steps.iter().enumerate() {
+        if !(t.is_finite() && t >= 0.0 && t < t_end) {
+            return Err(format!(
+                "step {}: its time {} must lie in [0, t_end = {})",
+                k + 1,
+                short(t),
+                short(t_end)
+            ));
+        }
+        if t <= last {
+            return Err(format!(
+                "step {}: its time {} does not follow the previous step's {}; give the steps in rising time",
+                k + 1,
+                short(t),
+                short(last)
+            ));
+        }
+        if !a.is_finite() {
+            return Err(format!(
+                "step {}: its load factor must be a finite number, found {}",
+                k + 1,
+                short(a)
+            ));
+        }
+        last = t;
+    }
+    Ok(())
 }

@@ -315,8 +315,9 @@ impl PodTruncations {
     }
 }
 
-/// One run of the POD study: a harmonic load `eps Fext(Omega t)` (or none)
-/// from rest or from given displacements and velocities.
+/// One run of the POD study: a harmonic load `eps Fext(Omega t)` (or none),
+/// possibly switched in steps, from rest or from given displacements and
+/// velocities.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PodRunSpec {
@@ -332,6 +333,11 @@ pub struct PodRunSpec {
     /// zero (default: rest).
     #[serde(default)]
     pub start: Vec<(String, f64)>,
+    /// A piecewise-constant load in time, steps `(t_k, a_k)` with rising
+    /// `t_k`: from `t_k` on the load is `a_k eps Fext(Omega t)`, before the
+    /// first step there is none (default: no steps, `eps Fext` throughout).
+    #[serde(default)]
+    pub steps: Vec<(f64, f64)>,
 }
 
 /// POD with generalized constraint reduction of the model, from a training

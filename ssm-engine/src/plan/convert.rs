@@ -127,6 +127,7 @@ fn pod(sec: &PodSection) -> PodSpec {
         omega: *r.omega.get_ref(),
         t_end: r.t_end,
         start: r.given_start(),
+        steps: r.steps.clone(),
     };
     PodSpec {
         truncations: match (&sec.energy, &sec.drop) {

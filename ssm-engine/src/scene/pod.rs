@@ -53,8 +53,8 @@ pub struct PodSection {
     pub test: Spanned<Vec<PodRun>>,
 }
 
-/// One run: a harmonic load `eps Fext(Omega t)` (or none) from rest or
-/// from given displacements and velocities.
+/// One run: a harmonic load `eps Fext(Omega t)` (or none), possibly
+/// switched in steps, from rest or from given displacements and velocities.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PodRun {
@@ -72,6 +72,10 @@ pub struct PodRun {
     /// Given velocities.
     #[serde(default)]
     pub v0: Option<toml::Table>,
+    /// Load steps `[[t_k, a_k], ...]`: from `t_k` on the load is
+    /// `a_k eps Fext`, before the first step none.
+    #[serde(default)]
+    pub steps: Vec<(f64, f64)>,
 }
 
 impl PodRun {

@@ -7,6 +7,7 @@ mod accuracy;
 mod continuation;
 mod cost_gate;
 mod crank_drive;
+mod crank_housing;
 mod damping;
 mod divider;
 mod docs;

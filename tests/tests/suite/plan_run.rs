@@ -229,6 +229,7 @@ fn hand_built_plans_are_checked_like_scenes() {
         omega: 0.0,
         t_end: 1.0,
         start: Vec::new(),
+        steps: Vec::new(),
     };
     let pod: PodSpec =
         serde_json::from_str(r#"{"step": 0.01, "train": {"t_end": 1.0}}"#).expect("a pod spec");
@@ -339,6 +340,29 @@ fn hand_built_plans_are_checked_like_scenes() {
                     t_end: f64::INFINITY,
                     ..pod_run.clone()
                 }],
+                ..pod.clone()
+            });
+            p
+        }),
+        ("pod.test[1].steps", {
+            let mut p = base();
+            p.pod = Some(PodSpec {
+                tests: vec![PodRunSpec {
+                    steps: vec![(0.5, 1.0), (0.2, 2.0)],
+                    ..pod_run.clone()
+                }],
+                ..pod.clone()
+            });
+            p
+        }),
+        ("pod.ssm_pairs", {
+            let mut p = base();
+            p.pod = Some(PodSpec {
+                train: PodRunSpec {
+                    steps: vec![(0.5, 2.0)],
+                    ..pod_run.clone()
+                },
+                ssm_pairs: vec![vec![1]],
                 ..pod.clone()
             });
             p

@@ -28,6 +28,7 @@ fn load_case(run: &PodRunSpec, label: String, trained: bool) -> LoadCase {
         omega: run.omega,
         t_end: run.t_end,
         start: run.start.clone(),
+        steps: run.steps.clone(),
         trained,
     }
 }

@@ -273,16 +273,33 @@ pub(crate) fn report_md(model: &str, study: &PodStudy) -> String {
             fmt_s(i.offline_s)
         ));
     }
+    for (k, r) in study.pod.iter().enumerate() {
+        let c = &r.reduction.constraints;
+        if c.basis.nrows() > 0 {
+            s.push_str(&format!(
+                "{}pod{}: of {} constraints the generalized reduction keeps {} combinations \
+                 (removes {}); {} vanish on the subspace along the whole run, all that a \
+                 reduction along fixed axes (the paper's reference [27]) would remove.\n",
+                if k == 0 { "\n" } else { "" },
+                k + 1,
+                c.basis.nrows(),
+                c.basis.ncols(),
+                c.removed(),
+                r.reduction.vanishing.len()
+            ));
+        }
+    }
     for case in &study.cases {
         let c = &case.case;
         s.push_str(&format!(
-            "\n## {}: eps = {}, Omega = {}, {} s{}{}\n\nFull model: {} ({} steps).\n\n\
+            "\n## {}: eps = {}, Omega = {}, {} s{}{}{}\n\nFull model: {} ({} steps).\n\n\
              | Model | Online | Speed-up | Error | Late error | Reaction gap | In the subspace |\n|---|---|---|---|---|---|---|\n",
             c.label,
             short(c.epsilon),
             short(c.omega),
             short(c.t_end),
             if c.start.is_empty() { ", from rest" } else { ", from a given start" },
+            load_steps(&c.steps),
             if c.trained { " (POD trained on it)" } else { "" },
             fmt_s(case.full_s),
             case.full_steps,
@@ -377,6 +394,10 @@ pub struct PodModelSummary {
     pub constraints_kept: usize,
     /// Constraints removed.
     pub constraints_removed: usize,
+    /// Constraints whose projected Jacobian rows vanish along the training
+    /// run: all that the earlier reduction along fixed axes (the paper's
+    /// reference \[27\]) would remove.
+    pub constraints_vanishing: usize,
     /// Singular values of the projected constraint Jacobians.
     pub singular_values: Vec<f64>,
     /// Residuals of the reduced model's initial state (position, velocity).
@@ -417,6 +438,9 @@ pub struct PodCaseSummary {
     pub omega: f64,
     /// End time.
     pub t_end: f64,
+    /// Load steps `[t_k, a_k]`: from `t_k` on the amplitude is `a_k
+    /// epsilon`, before the first step zero (empty: `epsilon` throughout).
+    pub steps: Vec<(f64, f64)>,
     /// Seconds of the full run.
     pub full_s: f64,
     /// Steps of the full run.
@@ -487,6 +511,7 @@ impl PodSummary {
                     constraints: r.reduction.constraints.basis.nrows(),
                     constraints_kept: r.reduction.constraints.basis.ncols(),
                     constraints_removed: r.reduction.constraints.removed(),
+                    constraints_vanishing: r.reduction.vanishing.len(),
                     singular_values: r.reduction.constraints.singular_values.clone(),
                     initial_residual: r.reduction.initial_residual,
                     states: r.system.n_states(),
@@ -514,6 +539,7 @@ impl PodSummary {
                     epsilon: c.case.epsilon,
                     omega: c.case.omega,
                     t_end: c.case.t_end,
+                    steps: c.case.steps.clone(),
                     full_s: c.full_s,
                     full_steps: c.full_steps,
                     runs: infos
@@ -535,4 +561,16 @@ impl PodSummary {
                 .collect(),
         }
     }
+}
+
+/// `, load steps 0 -> 1 eps at t = 0.2, -> 5 eps at t = 1.5` (empty without steps).
+fn load_steps(steps: &[(f64, f64)]) -> String {
+    if steps.is_empty() {
+        return String::new();
+    }
+    let parts: Vec<String> = steps
+        .iter()
+        .map(|&(t, a)| format!("{} eps at t = {}", short(a), short(t)))
+        .collect();
+    format!(", load steps to {}", parts.join(", then "))
 }
