@@ -51,10 +51,10 @@
 //! 4.1; J. García de Jalón, E. Bayo, *Kinematic and Dynamic Simulation of
 //! Multibody Systems*, Springer (1994), Ch. 2-3.
 
-use ssm_api::{ErrorKind, Harmonic, Model, MotionKind, PluginError, PolyVector, SparseMatrix};
+use ssm_api::{ErrorKind, Model, MotionKind, PluginError, PolyVector, SparseMatrix};
 use ssm_plugin_kit::{Constraints, MechanicalSystem, ParamSpec, Params};
 
-use crate::{cylinders, invalid, Cylinder};
+use crate::{cylinders, invalid, strokes, torque_harmonics, Cylinder};
 
 /// The model's name.
 pub(crate) const MODEL: &str = "crank-drive-housing";
@@ -353,29 +353,8 @@ fn system(p: &Params) -> Result<MechanicalSystem, PluginError> {
         }
         cos
     };
-    s.forcing = vec![Harmonic {
-        multiple: 0.0,
-        cos: torque(p.float("tau_mean")),
-        sin: PolyVector::zeros(nd, 2 * nd),
-    }];
-    if p.float("tau_amp") != 0.0 {
-        s.forcing.push(Harmonic {
-            multiple: 1.0,
-            cos: torque(p.float("tau_amp")),
-            sin: PolyVector::zeros(nd, 2 * nd),
-        });
-    }
-    s.extra_outputs = cyl
-        .iter()
-        .zip(&pistons)
-        .enumerate()
-        .map(|(i, (c, b))| {
-            (
-                format!("stroke{}", i + 1),
-                vec![(b.first, c.axis[0]), (b.first + 1, c.axis[1])],
-            )
-        })
-        .collect();
+    s.forcing = torque_harmonics(p, nd, torque);
+    s.extra_outputs = strokes(&cyl, |i| pistons[i].first);
     // small rotations of the housing about the global axes
     for (name, vector, component) in [("rot_x", 1, 2), ("rot_y", 2, 0), ("rot_z", 0, 1)] {
         s.extra_outputs
@@ -448,6 +427,23 @@ mod tests {
             .collect()
     }
 
+    /// The six unit rigid motions of the whole engine: translations along
+    /// and rotations about the global axes.
+    fn unit_rigid_motions(p: &Params) -> Vec<Vec<f64>> {
+        (0..6)
+            .map(|k| {
+                let mut v = [0.0; 3];
+                let mut omega = [0.0; 3];
+                if k < 3 {
+                    v[k] = 1.0;
+                } else {
+                    omega[k - 3] = 1.0;
+                }
+                rigid(p, v, omega)
+            })
+            .collect()
+    }
+
     /// The linear part of the constraints, `C_q(0)` (`n_c` rows).
     fn jacobian(s: &MechanicalSystem) -> Vec<Vec<f64>> {
         let g = &s.constraints.as_ref().unwrap().g;
@@ -498,17 +494,9 @@ mod tests {
             assert_eq!(s.n_dof(), 18 + 3 * n_cyl);
             assert_eq!(c.len(), 11 + 3 * n_cyl);
             assert_eq!(rank(&c), c.len(), "{text}");
-            for k in 0..6 {
-                let mut v = [0.0; 3];
-                let mut omega = [0.0; 3];
-                if k < 3 {
-                    v[k] = 1.0;
-                } else {
-                    omega[k - 3] = 1.0;
-                }
-                let q = rigid(&p, v, omega);
+            for (k, q) in unit_rigid_motions(&p).iter().enumerate() {
                 for (i, row) in c.iter().enumerate() {
-                    let r: f64 = row.iter().zip(&q).map(|(a, b)| a * b).sum();
+                    let r: f64 = row.iter().zip(q).map(|(a, b)| a * b).sum();
                     assert!(r.abs() < 1e-14, "{text}: motion {k}, constraint {i}: {r:e}");
                 }
             }
@@ -613,16 +601,8 @@ mod tests {
         for t in f.terms.iter().filter(|t| t.degree() == 0) {
             q0[t.eq as usize] += t.coeff;
         }
-        for k in 0..6 {
-            let mut v = [0.0; 3];
-            let mut omega = [0.0; 3];
-            if k < 3 {
-                v[k] = 1.0;
-            } else {
-                omega[k - 3] = 1.0;
-            }
-            let q = rigid(&p, v, omega);
-            let power: f64 = q0.iter().zip(&q).map(|(a, b)| a * b).sum();
+        for (k, q) in unit_rigid_motions(&p).iter().enumerate() {
+            let power: f64 = q0.iter().zip(q).map(|(a, b)| a * b).sum();
             assert!(power.abs() < 1e-14, "motion {k}: {power}");
         }
         // the crank's spin at theta' = 1: u' = w, w' = -u

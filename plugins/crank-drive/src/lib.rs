@@ -320,30 +320,43 @@ fn build(name: &str, params: &str) -> Result<Model, PluginError> {
         cos.push(1, tau, &[(0, 1)]);
         cos
     };
-    s.forcing = vec![Harmonic {
+    s.forcing = torque_harmonics(&p, nd, torque);
+    s.extra_outputs = strokes(&cyl, |i| 3 + 3 * i);
+    Ok(s.into_model()?)
+}
+
+/// The torque's harmonics: `eps tau_mean` (multiple 0) and, when given,
+/// `eps tau_amp cos(Omega t)`, each the generalized force `torque(tau)`
+/// (`nd` equations in `2 nd` variables).
+fn torque_harmonics(p: &Params, nd: usize, torque: impl Fn(f64) -> PolyVector) -> Vec<Harmonic> {
+    let mut h = vec![Harmonic {
         multiple: 0.0,
         cos: torque(p.float("tau_mean")),
         sin: PolyVector::zeros(nd, 2 * nd),
     }];
     if p.float("tau_amp") != 0.0 {
-        s.forcing.push(Harmonic {
+        h.push(Harmonic {
             multiple: 1.0,
             cos: torque(p.float("tau_amp")),
             sin: PolyVector::zeros(nd, 2 * nd),
         });
     }
-    s.extra_outputs = cyl
-        .iter()
+    h
+}
+
+/// The outputs `stroke<i>`: piston `i`'s displacement along its cylinder's
+/// reference axis, its coordinates starting at `first(i)`.
+fn strokes(cyl: &[Cylinder], first: impl Fn(usize) -> usize) -> Vec<(String, Vec<(usize, f64)>)> {
+    cyl.iter()
         .enumerate()
         .map(|(i, c)| {
-            let o = 3 + 3 * i;
+            let o = first(i);
             (
                 format!("stroke{}", i + 1),
                 vec![(o, c.axis[0]), (o + 1, c.axis[1])],
             )
         })
-        .collect();
-    Ok(s.into_model()?)
+        .collect()
 }
 
 ssm_api::declare_plugin! {

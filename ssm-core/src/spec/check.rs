@@ -680,3 +680,30 @@ fn load_steps(steps: &[(f64, f64)], t_end: f64) -> Result<(), String> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod load_step_tests {
+    use super::load_steps;
+
+    /// Load steps must rise strictly inside `[0, t_end)`, with finite
+    /// factors and at most `MAX_LOAD_STEPS` of them; each refusal names the
+    /// step.
+    #[test]
+    fn bad_load_steps_are_refused() {
+        assert!(load_steps(&[], 1.0).is_ok());
+        assert!(load_steps(&[(0.0, 1.0), (0.5, -2.0)], 1.0).is_ok());
+        for (steps, word) in [
+            (vec![(0.5, f64::NAN)], "step 1"),
+            (vec![(0.2, 1.0), (0.2, 2.0)], "step 2"),
+            (vec![(0.5, 1.0), (0.2, 2.0)], "rising"),
+            (vec![(1.0, 1.0)], "t_end"),
+            (vec![(-0.1, 1.0)], "[0, t_end"),
+            (vec![(f64::INFINITY, 1.0)], "step 1"),
+        ] {
+            let e = load_steps(&steps, 1.0).unwrap_err();
+            assert!(e.contains(word), "{steps:?}: {e}");
+        }
+        let many: Vec<(f64, f64)> = (0..1001).map(|k| (k as f64 * 1e-4, 1.0)).collect();
+        assert!(load_steps(&many, 1.0).unwrap_err().contains("at most"));
+    }
+}
