@@ -17,10 +17,12 @@ use std::time::Instant;
 use faer::Mat;
 
 use crate::fom::hht::{integrate, HhtOptions, HhtSolution};
+use crate::fom::lifted::LiftedPoly;
 use crate::fom::{given_start, DaeProblem, SimError};
 use crate::model::system::{ModelError, OutputMap, System};
+use crate::reduce::hyper::{deim, lifted_exact, HyperError, HyperInfo, Sample};
 use crate::reduce::pod::Truncation;
-use crate::reduce::pod_model::{pod_reduce, PodReduceError, PodReduction, PodSettings, Reactions};
+use crate::reduce::pod_model::{reduce, PodReduceError, PodReduction, PodSettings, Reactions};
 use crate::spectrum::MasterMode;
 use crate::ssm::SsmExpansion;
 
@@ -45,6 +47,14 @@ pub enum PodStudyError {
         rom: String,
         /// Cause.
         source: Box<PodReduceError>,
+    },
+    /// A hyper-reduction could not be trained.
+    #[error("{rom}: {source}")]
+    Hyper {
+        /// The reduced model.
+        rom: String,
+        /// Cause.
+        source: HyperError,
     },
     /// A reduced model does not validate.
     #[error("{rom}: the reduced model is inconsistent: {source}")]
@@ -111,7 +121,13 @@ pub struct PodRom {
     pub reduction: PodReduction,
     /// The reduced model, validated (recast where it has `sin`, ...).
     pub system: System,
-    /// Seconds of POD, constraint reduction and projection.
+    /// Its nonlinearity evaluated through the lift (the full model's
+    /// polynomial rows, exactly or hyper-reduced); `None` where the full
+    /// model is recast (auxiliaries): the expanded polynomial is run.
+    pub lifted: Option<LiftedPoly>,
+    /// The hyper-reduction's training, for a hyper-reduced model.
+    pub hyper: Option<HyperInfo>,
+    /// Seconds of POD, constraint reduction, projection (and DEIM training).
     pub offline_s: f64,
 }
 
@@ -239,45 +255,103 @@ pub fn full_run(
     })
 }
 
-/// One POD reduced model per truncation from the training run `train`.
+/// The POD reduced models of the training run `train`: per truncation, the
+/// POD model, then one hyper-reduced model per entry of `hyper` (labelled
+/// `<truncation> deim <tol>`). Where the full model is polynomial in its
+/// own states (no recast auxiliaries), every model evaluates its
+/// nonlinearity through the lift ([`crate::reduce::hyper`]).
 pub fn pod_roms(
     full_model: &ssm_api::Model,
     sys: &System,
     train: &HhtSolution,
     truncations: &[(String, Truncation)],
+    hyper: &[Sample],
     settings: &StudySettings,
 ) -> Result<Vec<PodRom>, PodStudyError> {
-    truncations
-        .iter()
-        .map(|(label, truncation)| {
-            let t = Instant::now();
-            let pod_settings = PodSettings {
-                truncation: *truncation,
-                rank_tol: settings.rank_tol,
-                jacobian_samples: settings.jacobian_samples,
-            };
-            let reduction =
-                pod_reduce(full_model, sys, &train.states, &pod_settings).map_err(|source| {
-                    PodStudyError::Reduce {
-                        rom: label.clone(),
-                        source: Box::new(source),
-                    }
+    let mut roms = Vec::new();
+    for (label, truncation) in truncations {
+        let t = Instant::now();
+        let pod_settings = PodSettings {
+            truncation: *truncation,
+            rank_tol: settings.rank_tol,
+            jacobian_samples: settings.jacobian_samples,
+        };
+        let liftable_full = sys
+            .recast
+            .as_ref()
+            .is_none_or(|r| r.n_original == sys.n_states());
+        let reduction = reduce(
+            full_model,
+            sys,
+            &train.states,
+            &pod_settings,
+            !liftable_full,
+        )
+        .map_err(|source| PodStudyError::Reduce {
+            rom: label.clone(),
+            source: Box::new(source),
+        })?;
+        let system =
+            System::from_model(&format!("{} via pod", sys.plugin), reduction.model.clone())
+                .map_err(|source| PodStudyError::ReducedModel {
+                    rom: label.clone(),
+                    source: Box::new(source),
                 })?;
-            let system =
-                System::from_model(&format!("{} via pod", sys.plugin), reduction.model.clone())
-                    .map_err(|source| PodStudyError::ReducedModel {
-                        rom: label.clone(),
-                        source: Box::new(source),
-                    })?;
-            Ok(PodRom {
-                label: label.clone(),
+        let liftable = liftable_full
+            && system
+                .recast
+                .as_ref()
+                .is_none_or(|r| r.n_original == system.n_states());
+        let nr = system.n_states();
+        let v_rows = basis_rows(&reduction.lift.basis, sys.n_states());
+        let lifted = liftable.then(|| lifted_exact(&sys.nonlinearity, &v_rows, nr));
+        let offline_s = t.elapsed().as_secs_f64();
+        let n = reduction.u.nrows();
+        let mut extra = Vec::new();
+        for &sample in hyper.iter().filter(|_| liftable) {
+            let h = deim(&sys.nonlinearity, &v_rows, nr, n, &train.states, sample).map_err(
+                |source| PodStudyError::Hyper {
+                    rom: label.clone(),
+                    source,
+                },
+            )?;
+            let what = match sample {
+                Sample::Tolerance(tol) => format!("deim {tol:e}"),
+                Sample::Points(m) => format!("deim {m} rows"),
+            };
+            extra.push(PodRom {
+                label: format!("{label} {what}"),
                 truncation: *truncation,
-                reduction,
-                system,
-                offline_s: t.elapsed().as_secs_f64(),
-            })
-        })
-        .collect()
+                reduction: reduction.clone(),
+                system: system.clone(),
+                offline_s: offline_s + h.info.seconds,
+                lifted: Some(h.lifted),
+                hyper: Some(h.info),
+            });
+        }
+        roms.push(PodRom {
+            label: label.clone(),
+            truncation: *truncation,
+            reduction,
+            system,
+            lifted,
+            hyper: None,
+            offline_s,
+        });
+        roms.extend(extra);
+    }
+    Ok(roms)
+}
+
+/// The rows of a sparse `V` (`n_full x nr`) as `(reduced state, weight)`.
+fn basis_rows(v: &ssm_api::SparseMatrix, n_full: usize) -> Vec<Vec<(u32, f64)>> {
+    let mut rows = vec![Vec::new(); n_full];
+    for (i, j, w) in v.iter() {
+        if w != 0.0 && i < n_full {
+            rows[i].push((j as u32, w));
+        }
+    }
+    rows
 }
 
 /// `(U^T q, U^T q', L^T mu)` of the shifted full state `z`, and the part of
@@ -345,7 +419,11 @@ pub fn pod_case_run(
         Some(rc) => rc.lift(&y0),
         None => y0,
     };
-    let p = DaeProblem::new(rsys, case.epsilon, case.omega).with_steps(&case.steps);
+    let p = match &rom.lifted {
+        Some(l) => DaeProblem::lifted(rsys, case.epsilon, case.omega, l),
+        None => DaeProblem::new(rsys, case.epsilon, case.omega),
+    }
+    .with_steps(&case.steps);
     let t = Instant::now();
     let run = integrate(
         &p,

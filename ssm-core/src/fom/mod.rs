@@ -57,6 +57,7 @@
 
 pub mod consistent;
 pub mod hht;
+pub mod lifted;
 pub mod periodic;
 pub(crate) mod problem;
 pub mod radau;

@@ -4,6 +4,7 @@
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use ssm_api::{PolyVector, StateKind};
 
+use super::lifted::{LiftedPoly, PreparedLifted};
 use crate::model::system::System;
 
 /// One monomial derivative `d F_eq / d z_var`, accumulated into `slot`.
@@ -50,12 +51,35 @@ pub struct DaeProblem<'a> {
     forcing: Vec<PreparedHarmonic>,
     steps: Vec<(f64, f64)>,
     index: Vec<u8>,
+    /// The nonlinearity evaluated through a lift instead of `sys`'s, and
+    /// the pattern slot of each reduced `(row, column)` (row-major).
+    lifted: Option<(PreparedLifted<'a>, Vec<u32>)>,
 }
 
 impl<'a> DaeProblem<'a> {
     /// Prepares `sys` forced with `epsilon cos(Omega t)`-type harmonics
     /// (`epsilon = 0` for the autonomous system).
     pub fn new(sys: &'a System, epsilon: f64, omega: f64) -> Self {
+        Self::build(sys, epsilon, omega, None)
+    }
+
+    /// Prepares `sys` with its nonlinearity `F` replaced by `lifted`, the
+    /// same polynomial (or its hyper-reduction) evaluated through the lift
+    /// to a full model ([`crate::reduce::hyper`]); `A`, `B` and the forcing
+    /// stay `sys`'s.
+    ///
+    /// # Panics
+    /// If `lifted` is not written in `sys`'s states.
+    pub fn lifted(sys: &'a System, epsilon: f64, omega: f64, lifted: &'a LiftedPoly) -> Self {
+        assert_eq!(
+            lifted.n_reduced(),
+            sys.n_states(),
+            "a lifted nonlinearity in the system's states"
+        );
+        Self::build(sys, epsilon, omega, Some(lifted))
+    }
+
+    fn build(sys: &'a System, epsilon: f64, omega: f64, lifted: Option<&'a LiftedPoly>) -> Self {
         let n = sys.n_states();
         let mut entries: Vec<(usize, usize)> = Vec::new();
         for m in [sys.a.as_ref(), sys.b.as_ref()] {
@@ -63,7 +87,17 @@ impl<'a> DaeProblem<'a> {
                 entries.extend(m.row_idx_of_col(j).map(|i| (j, i)));
             }
         }
-        let mut polys: Vec<&PolyVector> = vec![&sys.nonlinearity];
+        let empty = PolyVector::zeros(n, n);
+        let own = if lifted.is_some() {
+            &empty
+        } else {
+            &sys.nonlinearity
+        };
+        let lifted = lifted.map(PreparedLifted::new);
+        if let Some((_, cells)) = &lifted {
+            entries.extend(cells.iter().copied());
+        }
+        let mut polys: Vec<&PolyVector> = vec![own];
         if epsilon != 0.0 {
             for h in &sys.forcing {
                 polys.push(&h.cos);
@@ -117,7 +151,17 @@ impl<'a> DaeProblem<'a> {
                 })
                 .collect(),
         };
-        let f = prepare(&sys.nonlinearity);
+        let f = prepare(own);
+        let lifted = lifted.map(|(prep, _)| {
+            let mut slots = vec![u32::MAX; n * n];
+            for j in 0..n {
+                let range = pattern.col_range(j);
+                for (k, &i) in pattern.row_idx()[range.clone()].iter().enumerate() {
+                    slots[i * n + j] = (range.start + k) as u32;
+                }
+            }
+            (prep, slots)
+        });
         let forcing = if epsilon != 0.0 {
             sys.forcing
                 .iter()
@@ -141,6 +185,7 @@ impl<'a> DaeProblem<'a> {
             forcing,
             steps: Vec::new(),
             index: differentiation_index(sys),
+            lifted,
         }
     }
 
@@ -204,6 +249,9 @@ impl<'a> DaeProblem<'a> {
             }
         }
         eval_into(&self.f.poly, z, 1.0, out);
+        if let Some((l, _)) = &self.lifted {
+            l.eval_into(z, 1.0, out);
+        }
         let eps = self.epsilon * self.load_factor(t);
         for h in &self.forcing {
             let (s, c) = (h.multiple * self.omega * t).sin_cos();
@@ -235,12 +283,19 @@ impl<'a> DaeProblem<'a> {
             }
         }
         eval_into(&self.f.poly, z, 1.0, out);
+        if let Some((l, _)) = &self.lifted {
+            l.eval_into(z, 1.0, out);
+        }
     }
 
     /// `J = A + DF(z) + eps DFext(z, Omega t)` in the pattern's order.
     pub(crate) fn jacobian(&self, t: f64, z: &[f64], vals: &mut [f64]) {
         vals.copy_from_slice(&self.a_vals);
         jac_into(&self.f, z, 1.0, vals);
+        if let Some((l, slots)) = &self.lifted {
+            let n = self.n();
+            l.jac_into(z, 1.0, vals, |p, q| slots[p * n + q] as usize);
+        }
         let eps = self.epsilon * self.load_factor(t);
         for h in &self.forcing {
             let (s, c) = (h.multiple * self.omega * t).sin_cos();

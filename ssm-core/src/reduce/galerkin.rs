@@ -113,6 +113,21 @@ pub fn project_mechanical(
     l: MatRef<'_, f64>,
     coords: &ReducedCoordinates,
 ) -> Result<(Model, Lift), GalerkinError> {
+    project(full, u, l, coords, true)
+}
+
+/// [`project_mechanical`], or with `expand` false and a full model that is
+/// polynomial about `z = 0` (no expressions, no equilibrium offset), the
+/// reduced model without its nonlinearity: the terms of degree two and more
+/// are left out, for a run that evaluates them through the lift
+/// ([`super::hyper::lifted_exact`]); its name says so.
+pub(crate) fn project(
+    full: &Model,
+    u: MatRef<'_, f64>,
+    l: MatRef<'_, f64>,
+    coords: &ReducedCoordinates,
+    expand: bool,
+) -> Result<(Model, Lift), GalerkinError> {
     let (n, nc) = supported(full)?;
     // every index of the model in range, every value finite: the
     // substitution below indexes by them
@@ -188,7 +203,26 @@ pub fn project_mechanical(
         }
     }
     let mut nonlinearity = PolyVector::zeros(nr, nr);
-    for (eq, mono, c) in affine.substitute(&full.nonlinearity) {
+    let skip = !expand && full.expressions.terms.is_empty() && z_eq.iter().all(|&v| v == 0.0);
+    let kept;
+    let expanded = if skip {
+        let mut low = PolyVector::zeros(full.nonlinearity.n_eq as usize, big_n);
+        for t in full.nonlinearity.terms.iter() {
+            if t.factors.iter().map(|f| f.power).sum::<u32>() < 2 {
+                let f: Vec<(usize, u32)> = t
+                    .factors
+                    .iter()
+                    .map(|f| (f.var as usize, f.power))
+                    .collect();
+                low.push(t.eq as usize, t.coeff, &f);
+            }
+        }
+        kept = low;
+        &kept
+    } else {
+        &full.nonlinearity
+    };
+    for (eq, mono, c) in affine.substitute(expanded) {
         match mono.len() {
             0 => constant[eq] += c,
             1 => a[eq * nr + mono[0] as usize] += c,
@@ -243,9 +277,13 @@ pub fn project_mechanical(
         })
         .collect();
     let model = Model {
-        name: format!("{} (POD, r = {r}, l = {nl})", full.name)
-            .as_str()
-            .into(),
+        name: format!(
+            "{} (POD, r = {r}, l = {nl}{})",
+            full.name,
+            if skip { ", nonlinearity lifted" } else { "" }
+        )
+        .as_str()
+        .into(),
         a: dense_to_sparse(&a, nr, nr),
         b: dense_to_sparse(&congruence(&full.b, &v_rows, nr), nr, nr),
         nonlinearity: nonlinearity.canonical(),

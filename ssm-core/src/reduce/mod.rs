@@ -3,6 +3,7 @@
 //! through the lift `z ~ V y + z0` from the full model's.
 
 pub mod galerkin;
+pub mod hyper;
 pub mod pod;
 pub mod pod_model;
 

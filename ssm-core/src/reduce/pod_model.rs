@@ -19,7 +19,7 @@
 use faer::Mat;
 use ssm_api::{Lift, Model, MotionKind};
 
-use super::galerkin::{project_mechanical, GalerkinError, ReducedCoordinates};
+use super::galerkin::{project, GalerkinError, ReducedCoordinates};
 use super::pod::{global_projection, pod, reduce_constraints, vanishing_constraints};
 use super::pod::{ConstraintReduction, PodBasis};
 use super::pod::{PodError, Truncation};
@@ -131,6 +131,19 @@ pub fn pod_reduce(
     run: &[Vec<f64>],
     settings: &PodSettings,
 ) -> Result<PodReduction, PodReduceError> {
+    reduce(full, sys, run, settings, true)
+}
+
+/// [`pod_reduce`]; with `expand` false the reduced model's nonlinearity is
+/// left to a lifted evaluation where the full model allows it
+/// ([`super::galerkin::project`]).
+pub(crate) fn reduce(
+    full: &Model,
+    sys: &System,
+    run: &[Vec<f64>],
+    settings: &PodSettings,
+    expand: bool,
+) -> Result<PodReduction, PodReduceError> {
     let (n, nc) = super::galerkin::supported(full)?;
     let original = sys
         .recast
@@ -241,7 +254,13 @@ pub fn pod_reduce(
                 .join(", "),
         });
     }
-    let (model, lift) = project_mechanical(full, u.as_ref(), constraints.basis.as_ref(), &coords)?;
+    let (model, lift) = project(
+        full,
+        u.as_ref(),
+        constraints.basis.as_ref(),
+        &coords,
+        expand,
+    )?;
     let peak = |off: usize| {
         run.iter()
             .map(|z| norm(&z[off..off + n]))

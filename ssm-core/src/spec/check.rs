@@ -561,6 +561,12 @@ impl PodSpec {
                 format!("must be 1 to 10000, found {js}"),
             ));
         }
+        if let Some(t) = self.hyper.iter().find(|t| !(**t > 0.0 && **t < 1.0)) {
+            return Err(SpecError::new(
+                "pod.hyper",
+                format!("give DEIM training tolerances in (0, 1), found {t}"),
+            ));
+        }
         positive(self.step, "pod.step")?;
         hht_alpha(self.hht_alpha, "pod.hht_alpha")?;
         named(self.outputs.as_ref(), "pod.outputs")?;
@@ -575,7 +581,7 @@ impl PodSpec {
                 ));
             }
         }
-        let models = n_pod + self.ssm_pairs.len();
+        let models = n_pod * (1 + self.hyper.len()) + self.ssm_pairs.len();
         if models > MAX_POD_ROMS {
             return Err(SpecError::at(
                 "pod",

@@ -357,6 +357,10 @@ pub struct PodSpec {
     /// (default 64).
     #[serde(default = "PodSpec::default_jacobian_samples")]
     pub jacobian_samples: usize,
+    /// Training tolerances of DEIM hyper-reductions: one more model per
+    /// truncation and tolerance (default: none).
+    #[serde(default)]
+    pub hyper: Vec<f64>,
     /// Fixed HHT step of every run.
     pub step: f64,
     /// HHT `alpha` in `[-1/3, 0]` (default -0.1).

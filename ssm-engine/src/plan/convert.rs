@@ -137,6 +137,10 @@ fn pod(sec: &PodSection) -> PodSpec {
         },
         rank_tol: *sec.rank_tol.get_ref(),
         jacobian_samples: *sec.jacobian_samples.get_ref(),
+        hyper: sec
+            .hyper
+            .as_ref()
+            .map_or_else(Vec::new, |h| h.get_ref().clone()),
         step: *sec.step.get_ref(),
         hht_alpha: *sec.hht_alpha.get_ref(),
         outputs: sec.outputs.as_ref().map(|o| o.get_ref().clone()),

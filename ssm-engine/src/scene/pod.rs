@@ -32,6 +32,9 @@ pub struct PodSection {
     /// Snapshots at which `C_q(q) U` is stacked.
     #[serde(default = "default_jacobian_samples")]
     pub jacobian_samples: Spanned<usize>,
+    /// Training tolerances of DEIM hyper-reductions of each POD model.
+    #[serde(default)]
+    pub hyper: Option<Spanned<Vec<f64>>>,
     /// Fixed HHT step of every run.
     pub step: Spanned<f64>,
     /// HHT `alpha` in `[-1/3, 0]`.

@@ -35,6 +35,7 @@ mod plate;
 mod plugin_boundary;
 mod pod;
 mod pod_chain;
+mod pod_hyper;
 mod pod_report;
 mod recast;
 mod reducers;

@@ -2,6 +2,7 @@
 //! the sparse iteration matrix on the unknowns `(a, mu, w_hat)` with its
 //! reusable symbolic LU, and the momentum force.
 
+use faer::linalg::solvers::PartialPivLu;
 use faer::prelude::Solve;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Par};
@@ -128,13 +129,25 @@ struct Scatter {
     row: Row,
 }
 
+/// Largest iteration matrix factorized densely.
+const DENSE_MAX: usize = 2000;
+
+/// The LU of the iteration matrix: sparse, or dense where the pattern is
+/// at least a quarter full (a reduced model with modes that mix every
+/// coordinate: there the sparse LU's symbolic work per column is wasted).
+enum Factor {
+    /// On one thread (see [`SparseLu`]): the steps are sequential, and
+    /// independent integrations share the cores.
+    Sparse(Box<SparseLu<f64>>),
+    /// Partial pivoting, once factorized.
+    Dense(Option<PartialPivLu<f64>>),
+}
+
 /// The sparse iteration matrix on the unknowns `(a, mu)` and its LU.
 pub(super) struct Iteration {
     pattern: SymbolicSparseColMat<usize>,
     scatter: Vec<Scatter>,
-    /// On one thread (see [`SparseLu`]): the steps are sequential, and
-    /// independent integrations share the cores.
-    lu: SparseLu<f64>,
+    lu: Factor,
 }
 
 impl Iteration {
@@ -185,13 +198,19 @@ impl Iteration {
                 row,
             })
             .collect();
-        let lu = SparseLu::analyze(pattern.as_ref(), Par::Seq).map_err(|e| {
-            SimError::SingularIteration {
-                t: 0.0,
-                h: 0.0,
-                detail: format!("symbolic LU of the HHT iteration matrix failed: {e:?}"),
-            }
-        })?;
+        let lu = if size <= DENSE_MAX && 4 * cells.len() >= size * size {
+            Factor::Dense(None)
+        } else {
+            Factor::Sparse(Box::new(
+                SparseLu::analyze(pattern.as_ref(), Par::Seq).map_err(|e| {
+                    SimError::SingularIteration {
+                        t: 0.0,
+                        h: 0.0,
+                        detail: format!("symbolic LU of the HHT iteration matrix failed: {e:?}"),
+                    }
+                })?,
+            ))
+        };
         Ok(Self {
             pattern,
             scatter,
@@ -232,18 +251,43 @@ impl Iteration {
             };
         }
         let m = SparseColMat::new(self.pattern.clone(), vals);
-        self.lu
-            .factor(m.as_ref())
-            .map_err(|e| SimError::SingularIteration {
-                t,
-                h,
-                detail: format!("LU of the HHT iteration matrix failed: {e:?}"),
-            })
+        match &mut self.lu {
+            Factor::Sparse(lu) => lu
+                .factor(m.as_ref())
+                .map_err(|e| SimError::SingularIteration {
+                    t,
+                    h,
+                    detail: format!("LU of the HHT iteration matrix failed: {e:?}"),
+                }),
+            Factor::Dense(lu) => {
+                let f = m.to_dense().partial_piv_lu();
+                let u = f.U();
+                if let Some(k) =
+                    (0..u.nrows()).find(|&k| !(u[(k, k)] != 0.0 && u[(k, k)].is_finite()))
+                {
+                    *lu = None;
+                    return Err(SimError::SingularIteration {
+                        t,
+                        h,
+                        detail: format!(
+                            "LU of the HHT iteration matrix failed: pivot {k} is {}",
+                            u[(k, k)]
+                        ),
+                    });
+                }
+                *lu = Some(f);
+                Ok(())
+            }
+        }
     }
 
     pub(super) fn solve(&mut self, rhs: &mut [f64]) {
         let mut x = Mat::<f64>::from_fn(rhs.len(), 1, |i, _| rhs[i]);
-        self.lu.solve_in_place(x.as_mut());
+        match &mut self.lu {
+            Factor::Sparse(lu) => lu.solve_in_place(x.as_mut()),
+            Factor::Dense(Some(lu)) => lu.solve_in_place(x.as_mut()),
+            Factor::Dense(None) => x.fill(f64::NAN),
+        }
         for (i, r) in rhs.iter_mut().enumerate() {
             *r = x[(i, 0)];
         }

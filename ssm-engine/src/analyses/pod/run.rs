@@ -14,6 +14,7 @@ use ssm_core::compare::ssm_run::ssm_case_run;
 use ssm_core::fom::hht::load_sampling;
 use ssm_core::model::system::OutputMap;
 use ssm_core::model::system::System;
+use ssm_core::reduce::hyper::Sample;
 use ssm_core::reduce::pod::Truncation;
 use ssm_core::spec::SpectrumSpec;
 use ssm_core::spec::{PodRunSpec, PodSpec, PodTruncations, SsmSpec};
@@ -124,6 +125,10 @@ pub(super) fn pod_stage(
         sys,
         &training.solution,
         &truncations(sec),
+        &sec.hyper
+            .iter()
+            .map(|&t| Sample::Tolerance(t))
+            .collect::<Vec<_>>(),
         &settings,
     )?;
     if !sec.ssm_pairs.is_empty() {

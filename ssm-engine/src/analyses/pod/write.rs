@@ -289,6 +289,22 @@ pub(crate) fn report_md(model: &str, study: &PodStudy) -> String {
             ));
         }
     }
+    for (k, r) in study.pod.iter().enumerate() {
+        if let Some(h) = &r.hyper {
+            s.push_str(&format!(
+                "pod{}: DEIM hyper-reduction (Chaturantabut & Sorensen 2010) of the internal forces: \
+                 {} of {} force rows sampled{}, training error {:.2e} over {} snapshots, \
+                 trained in {}; constraints and reactions lifted exactly.\n",
+                k + 1,
+                h.sampled.len(),
+                h.force_rows,
+                if h.all_rows { " (all: exact)" } else { "" },
+                h.training_error,
+                h.snapshots,
+                fmt_s(h.seconds)
+            ));
+        }
+    }
     for case in &study.cases {
         let c = &case.case;
         s.push_str(&format!(

@@ -144,7 +144,9 @@ pub(crate) fn check_pod(plan: &Plan, system: &System, limits: &Limits) -> Result
     let steps: Vec<f64> = runs.iter().map(|r| r.t_end / step + 1.0).collect();
     let all: f64 = steps.iter().sum();
     let longest_test = steps[1..].iter().copied().fold(0.0, f64::max);
-    let pod_models = p.truncations.len() as f64;
+    let truncations = p.truncations.len() as f64;
+    let hyper = truncations * p.hyper.len() as f64;
+    let pod_models = truncations + hyper;
     let sets = &p.ssm_pairs;
     let outputs = p.outputs.as_ref().unwrap_or(&plan.coordinates).len() as f64;
     let models = pod_models + sets.len() as f64;
@@ -174,7 +176,24 @@ pub(crate) fn check_pod(plan: &Plan, system: &System, limits: &Limits) -> Result
         step,
         t_end: runs[0].t_end,
         jacobian_samples: p.jacobian_samples as f64,
-        truncations: pod_models,
+        truncations,
+    };
+    // each DEIM training: the force snapshots (at most 400 of the training
+    // run's, rows up to 2n), their thin SVD, and a few trial samples of up
+    // to that many rows (doubling, then bisection)
+    let ks = steps[0].min(400.0);
+    let nf = 2.0 * n;
+    let trials = 2.0 * (nf.min(ks).log2().ceil() + 1.0);
+    let deim = Part {
+        cost: Cost {
+            ops: hyper
+                * (4.0 * nf * ks * nf.min(ks)
+                    + trials * (nf.min(ks).powi(3) + 2.0 * nf.min(ks) * ks * 2.0 * r)),
+            bytes: 8.0 * (3.0 * nf * ks + (nf + ks) * nf.min(ks)),
+        },
+        key: "pod.hyper".to_owned(),
+        at: "pod.hyper".to_owned(),
+        advice: "give fewer hyper tolerances or lengthen the step (fewer snapshots)",
     };
     let [svd, stack] = reduction_parts(system, &training, step_key, "pod.jacobian_samples");
     let order = p.ssm_order(plan.ssm.order);
@@ -204,6 +223,7 @@ pub(crate) fn check_pod(plan: &Plan, system: &System, limits: &Limits) -> Result
         reduced,
         svd,
         stack,
+        deim,
         Part {
             cost: ssm,
             key: ssm_key.to_owned(),

@@ -1,0 +1,549 @@
+//! The reduced polynomial of a POD model evaluated through the lift, and
+//! its hyper-reduction by the discrete empirical interpolation method.
+//!
+//! The Galerkin projection `V^T F(V y)` ([`super::galerkin`]) expanded in
+//! the reduced states is dense: with POD modes that mix every coordinate, a
+//! bilinear constraint becomes `r (r + 1) / 2` monomials per reduced
+//! equation and a cubic force `O(r^3)`. Evaluated through the lift instead,
+//!
+//! ```text
+//! z_S = V_S y,   f_S = F_S(z_S),   F_r(y) = P f_S,
+//! ```
+//!
+//! a step costs what the rows `S` of the full polynomial and their variables
+//! cost: the lift of the variables those rows use (`r` per variable), the
+//! full model's own sparse terms, and the projection `P` (`nr` per row).
+//! With every row of `F` and `P = V^T` this is exactly the projected model
+//! (to round-off).
+//!
+//! The hyper-reduction samples the internal forces, the momentum-row terms
+//! free of multipliers, by DEIM: the force snapshots `F_int(z_k)` of the
+//! training run give orthonormal modes `U_f` (`n_f x m`, an SVD), the greedy
+//! DEIM selection picks `m` rows `S` (Chaturantabut & Sorensen 2010,
+//! Algorithm 1), and
+//!
+//! ```text
+//! V^T F_int(z) ~ V_F^T U_f (S^T U_f)^{-1} S^T F_int(z)      (eq. 2.2 there)
+//! ```
+//!
+//! needs the `m` sampled rows only. The constraint rows and the reaction
+//! terms `C_q^T mu` are kept exactly (lifted, not sampled): an interpolated
+//! reaction would no longer be the transpose of the reduced constraint
+//! Jacobian, and the iteration matrix of the index-3 DAE relies on it.
+//! The error control is the training error of the reduced force,
+//! `max_k |V_F^T (F_k - D F_k)| / max_k |V_F^T F_k|` over the snapshots
+//! (`D` the DEIM interpolation), and `m` is the smallest sample meeting the
+//! tolerance; with every force row sampled the interpolation is the
+//! identity and the model is exact.
+//!
+//! # References
+//! S. Chaturantabut, D. C. Sorensen, *Nonlinear model reduction via discrete
+//! empirical interpolation*, SIAM J. Sci. Comput. 32 (2010) 2737-2764,
+//! eq. (2.2), Algorithm 1, Lemma 3.2; M. Stadlmayr, W. Witteveen, W. Steiner,
+//! *A generalized constraint reduction method for reduced order MBS models*,
+//! Multibody Syst. Dyn. (2017), eq. (14) (the lifted evaluation the paper
+//! names the method's bottleneck).
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use faer::Mat;
+use ssm_api::PolyVector;
+
+use crate::fom::lifted::{LiftedPoly, Placed};
+
+/// Singular values of the force snapshots below this fraction of the
+/// largest count as zero (no DEIM mode is made of them).
+const RANK_TOL: f64 = 1e-13;
+
+/// Most force snapshots used for the DEIM training (evenly spread).
+const MAX_SNAPSHOTS: usize = 400;
+
+/// Whether the term of `full` is a constraint or reaction term of the
+/// canonical layout `(q, q', mu)` with `n` coordinates: in a constraint row,
+/// or with a multiplier (or a later state) among its variables.
+fn is_constraint_term(full: &PolyVector, term: usize, n: usize) -> bool {
+    let t = &full.terms[term];
+    t.eq as usize >= 2 * n || t.factors.iter().any(|f| f.var as usize >= 2 * n)
+}
+
+/// Whether the term has degree two or more: constants and linear terms of a
+/// model's polynomial go into the projected model's constant and linear
+/// part ([`super::galerkin::project_mechanical`]), not into its nonlinearity.
+fn nonlinear(full: &PolyVector, term: usize) -> bool {
+    full.terms[term]
+        .factors
+        .iter()
+        .map(|f| f.power)
+        .sum::<u32>()
+        >= 2
+}
+
+/// `V^T F(V y)` evaluated through the lift, every row of `F` kept: the
+/// projected polynomial's nonlinear part exactly. `v_rows[i]` is row `i` of `V`
+/// (`(reduced state, weight)`), `n_reduced` its columns.
+pub fn lifted_exact(full: &PolyVector, v_rows: &[Vec<(u32, f64)>], n_reduced: usize) -> LiftedPoly {
+    let mut local_row: HashMap<u32, usize> = HashMap::new();
+    let mut rows = Vec::new();
+    let mut placed = Vec::new();
+    for (k, t) in full.terms.iter().enumerate() {
+        if v_rows[t.eq as usize].is_empty() || !nonlinear(full, k) {
+            continue;
+        }
+        let row = *local_row.entry(t.eq).or_insert_with(|| {
+            rows.push((t.eq, v_rows[t.eq as usize].clone()));
+            rows.len() - 1
+        });
+        placed.push(Placed { term: k, row });
+    }
+    LiftedPoly::assemble(full, &placed, rows, v_rows, n_reduced)
+}
+
+/// How many rows the DEIM samples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Sample {
+    /// The fewest rows whose training error is at most this.
+    Tolerance(f64),
+    /// This many rows (all force rows when it reaches their number).
+    Points(usize),
+}
+
+/// What the DEIM training found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HyperInfo {
+    /// Full rows carrying internal forces (the candidates).
+    pub force_rows: usize,
+    /// The sampled full rows, in the order DEIM picked them.
+    pub sampled: Vec<usize>,
+    /// `true` when every force row is sampled (the identity: exact).
+    pub all_rows: bool,
+    /// Singular values of the force snapshots.
+    pub singular_values: Vec<f64>,
+    /// Training error of the reduced internal force (see the module).
+    pub training_error: f64,
+    /// Snapshots used.
+    pub snapshots: usize,
+    /// Seconds of the training.
+    pub seconds: f64,
+}
+
+/// Why a hyper-reduction could not be trained.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum HyperError {
+    /// The sample size or tolerance is unusable.
+    #[error("hyper-reduction: {0}")]
+    Sample(String),
+    /// The SVD of the force snapshots failed.
+    #[error("hyper-reduction: the SVD of the force snapshots did not converge")]
+    Svd,
+}
+
+/// A hyper-reduced polynomial: constraint rows and reactions lifted exactly,
+/// the internal forces interpolated at DEIM rows.
+#[derive(Debug, Clone)]
+pub struct Hyper {
+    /// The polynomial to evaluate.
+    pub lifted: LiftedPoly,
+    /// The training's figures.
+    pub info: HyperInfo,
+}
+
+/// The DEIM hyper-reduction of `V^T F(V y)` for the canonical mechanical
+/// layout with `n` coordinates, trained on the full states `snapshots`
+/// (shifted like `F`).
+pub fn deim(
+    full: &PolyVector,
+    v_rows: &[Vec<(u32, f64)>],
+    n_reduced: usize,
+    n: usize,
+    snapshots: &[Vec<f64>],
+    sample: Sample,
+) -> Result<Hyper, HyperError> {
+    let clock = Instant::now();
+    match sample {
+        Sample::Tolerance(t) if !(t > 0.0 && t < 1.0) => {
+            return Err(HyperError::Sample(format!(
+                "the tolerance {t} must lie in (0, 1)"
+            )))
+        }
+        Sample::Points(0) => {
+            return Err(HyperError::Sample(
+                "the sample must have at least one row".into(),
+            ))
+        }
+        _ => {}
+    }
+    let force_terms: Vec<usize> = (0..full.terms.len())
+        .filter(|&k| nonlinear(full, k) && !is_constraint_term(full, k, n))
+        .filter(|&k| !v_rows[full.terms[k].eq as usize].is_empty())
+        .collect();
+    let mut force_rows: Vec<u32> = force_terms.iter().map(|&k| full.terms[k].eq).collect();
+    force_rows.sort_unstable();
+    force_rows.dedup();
+    let nf = force_rows.len();
+    let stride = snapshots.len().div_ceil(MAX_SNAPSHOTS).max(1);
+    let picks: Vec<&Vec<f64>> = snapshots.iter().step_by(stride).collect();
+    // F_int at the snapshots, rows = force rows
+    let row_of: HashMap<u32, usize> = force_rows
+        .iter()
+        .enumerate()
+        .map(|(i, &r)| (r, i))
+        .collect();
+    let mut g = Mat::<f64>::zeros(nf, picks.len());
+    for (s, z) in picks.iter().enumerate() {
+        for &k in &force_terms {
+            let t = &full.terms[k];
+            let v = t.factors.iter().fold(t.coeff, |acc, f| {
+                acc * z[f.var as usize].powi(f.power as i32)
+            });
+            g[(row_of[&t.eq], s)] += v;
+        }
+    }
+    // V_F (nf x nr) and the reduced force snapshots V_F^T g
+    let vf = Mat::from_fn(nf, n_reduced, |i, j| {
+        v_rows[force_rows[i] as usize]
+            .iter()
+            .find(|e| e.0 as usize == j)
+            .map_or(0.0, |e| e.1)
+    });
+    let reduced = vf.transpose() * &g;
+    let peak = column_peak(&reduced);
+    let (values, modes) = if nf == 0 || picks.is_empty() {
+        (Vec::new(), Mat::zeros(nf, 0))
+    } else {
+        let svd = g.thin_svd().map_err(|_| HyperError::Svd)?;
+        let values: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+        let largest = values.first().copied().unwrap_or(0.0);
+        let rank = values
+            .iter()
+            .take_while(|&&v| v > RANK_TOL * largest && v > 0.0)
+            .count();
+        let u = svd.U();
+        (values, Mat::from_fn(nf, rank, |i, j| u[(i, j)]))
+    };
+    let rank = modes.ncols();
+    let points = greedy_points(&modes);
+    // the DEIM of m points: P = V_F^T U_m (S^T U_m)^{-1}, its training error
+    let trial = |m: usize| -> Option<(Mat<f64>, f64)> {
+        let um = modes.subcols(0, m);
+        let stu = Mat::from_fn(m, m, |i, j| um[(points[i], j)]);
+        let lu = stu.partial_piv_lu();
+        // (S^T U)^{-1} as the solve of its transpose: P^T = (S^T U)^{-T} U^T V_F
+        let ut_vf = um.transpose() * &vf;
+        let pt = faer::linalg::solvers::Solve::solve_transpose(&lu, &ut_vf);
+        if pt
+            .col_iter()
+            .flat_map(|c| c.iter().copied().collect::<Vec<_>>())
+            .any(|v| !v.is_finite())
+        {
+            return None;
+        }
+        let sampled = Mat::from_fn(m, g.ncols(), |i, s| g[(points[i], s)]);
+        let approx = pt.transpose() * &sampled;
+        let err = column_peak(&(&reduced - &approx)) / peak.max(f64::MIN_POSITIVE);
+        Some((pt.transpose().to_owned(), err))
+    };
+    let chosen: Option<(usize, Mat<f64>, f64)> = match sample {
+        Sample::Points(m) if m >= nf => None,
+        Sample::Points(m) if m > rank => {
+            return Err(HyperError::Sample(format!(
+                "{m} rows need {m} force modes, the {} training snapshots give {rank} of the {nf} force rows: sample at most {rank}, or all {nf}",
+                picks.len()
+            )))
+        }
+        Sample::Points(m) => trial(m).map(|(p, e)| (m, p, e)),
+        Sample::Tolerance(tol) => {
+            // the smallest sample meeting tol, by doubling then bisection
+            // (the training error falls with the sample, Lemma 3.2's bound
+            // with the neglected singular values; a few trials, not one per m)
+            let top = rank.min(nf.saturating_sub(1));
+            let meets = |m: usize| trial(m).filter(|(_, e)| *e <= tol);
+            let mut hi = 1;
+            while hi < top && meets(hi).is_none() {
+                hi = (2 * hi).min(top);
+            }
+            match meets(hi) {
+                None => None,
+                Some(found) => {
+                    let (mut lo, mut best) = (hi / 2, (hi, found));
+                    let mut up = hi;
+                    while up - lo > 1 {
+                        let mid = (lo + up) / 2;
+                        match meets(mid) {
+                            Some(f) => {
+                                up = mid;
+                                best = (mid, f);
+                            }
+                            None => lo = mid,
+                        }
+                    }
+                    Some((best.0, (best.1).0, (best.1).1))
+                }
+            }
+        }
+    };
+    let mut local_row: HashMap<u32, usize> = HashMap::new();
+    let mut rows = Vec::new();
+    let mut placed = Vec::new();
+    for (k, t) in full.terms.iter().enumerate() {
+        if nonlinear(full, k) && is_constraint_term(full, k, n) && !v_rows[t.eq as usize].is_empty()
+        {
+            let row = *local_row.entry(t.eq).or_insert_with(|| {
+                rows.push((t.eq, v_rows[t.eq as usize].clone()));
+                rows.len() - 1
+            });
+            placed.push(Placed { term: k, row });
+        }
+    }
+    let (sampled, all_rows, training_error) = match chosen {
+        Some((m, p, err)) => {
+            // the sampled rows, projected by the columns of P
+            let mut deim_row: HashMap<u32, usize> = HashMap::new();
+            for (i, &pt) in points[..m].iter().enumerate() {
+                let full_row = force_rows[pt];
+                let weights: Vec<(u32, f64)> = (0..n_reduced)
+                    .filter(|&j| p[(j, i)] != 0.0)
+                    .map(|j| (j as u32, p[(j, i)]))
+                    .collect();
+                rows.push((full_row, weights));
+                deim_row.insert(full_row, rows.len() - 1);
+            }
+            for &k in &force_terms {
+                if let Some(&row) = deim_row.get(&full.terms[k].eq) {
+                    placed.push(Placed { term: k, row });
+                }
+            }
+            let sampled = points[..m]
+                .iter()
+                .map(|&i| force_rows[i] as usize)
+                .collect();
+            (sampled, false, err)
+        }
+        None => {
+            let mut exact_row: HashMap<u32, usize> = HashMap::new();
+            for &r in &force_rows {
+                rows.push((r, v_rows[r as usize].clone()));
+                exact_row.insert(r, rows.len() - 1);
+            }
+            for &k in &force_terms {
+                placed.push(Placed {
+                    term: k,
+                    row: exact_row[&full.terms[k].eq],
+                });
+            }
+            (force_rows.iter().map(|&r| r as usize).collect(), true, 0.0)
+        }
+    };
+    let lifted = LiftedPoly::assemble(full, &placed, rows, v_rows, n_reduced);
+    Ok(Hyper {
+        lifted,
+        info: HyperInfo {
+            force_rows: nf,
+            sampled,
+            all_rows,
+            singular_values: values,
+            training_error,
+            snapshots: picks.len(),
+            seconds: clock.elapsed().as_secs_f64(),
+        },
+    })
+}
+
+/// The largest column norm of `m`.
+fn column_peak(m: &Mat<f64>) -> f64 {
+    m.col_iter()
+        .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt())
+        .fold(0.0, f64::max)
+}
+
+/// The greedy DEIM points of the orthonormal modes `u` (Chaturantabut &
+/// Sorensen 2010, Algorithm 1): the first where the first mode is largest,
+/// each next where the next mode's interpolation error at the points chosen
+/// so far is largest. Nested: the first `m` points serve `m` modes.
+fn greedy_points(u: &Mat<f64>) -> Vec<usize> {
+    let (nf, m) = (u.nrows(), u.ncols());
+    let mut points: Vec<usize> = Vec::with_capacity(m);
+    for l in 0..m {
+        let residual: Vec<f64> = if l == 0 {
+            (0..nf).map(|i| u[(i, 0)]).collect()
+        } else {
+            let a = Mat::from_fn(l, l, |i, j| u[(points[i], j)]);
+            let b = Mat::from_fn(l, 1, |i, _| u[(points[i], l)]);
+            let c = faer::linalg::solvers::Solve::solve(&a.partial_piv_lu(), &b);
+            (0..nf)
+                .map(|i| u[(i, l)] - (0..l).map(|j| u[(i, j)] * c[(j, 0)]).sum::<f64>())
+                .collect()
+        };
+        let best = (0..nf)
+            .filter(|i| !points.contains(i))
+            .max_by(|&a, &b| residual[a].abs().total_cmp(&residual[b].abs()))
+            .expect("fewer points than rows");
+        points.push(best);
+    }
+    points
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fom::lifted::PreparedLifted;
+
+    /// A cubic polynomial in 6 full states (`n = 2` coordinates, velocities,
+    /// two multipliers) with force terms in rows 0 and 1, reaction terms
+    /// `q mu` and a constraint row, and a `V` (6 x 4) that mixes them.
+    /// `V` by its rows: `(reduced state, weight)`.
+    type Rows = Vec<Vec<(u32, f64)>>;
+
+    fn sample() -> (PolyVector, Rows, Mat<f64>) {
+        let mut f = PolyVector::zeros(6, 6);
+        f.push(0, 1.5, &[(0, 3)]);
+        f.push(0, -0.7, &[(0, 1), (1, 1)]);
+        f.push(1, 0.4, &[(1, 2), (2, 1)]);
+        f.push(1, 2.0, &[(0, 2)]);
+        f.push(0, 0.3, &[(0, 1), (4, 1)]);
+        f.push(1, -0.2, &[(1, 1), (5, 1)]);
+        f.push(4, 1.1, &[(0, 1), (1, 1)]);
+        f.push(5, 0.9, &[(1, 2)]);
+        f.push(0, 5.0, &[(1, 1)]); // linear: left to the projection's A
+        let v = Mat::from_fn(6, 4, |i, j| match (i, j) {
+            (0 | 1, 0) => 0.6 + 0.1 * i as f64,
+            (0 | 1, 1) => -0.4 + 0.3 * i as f64,
+            (2 | 3, 2) => 0.8 - 0.2 * i as f64,
+            (4, 3) => 1.0,
+            (5, 3) => -0.5,
+            _ => 0.0,
+        });
+        let rows = (0..6)
+            .map(|i| {
+                (0..4)
+                    .filter(|&j| v[(i, j)] != 0.0)
+                    .map(|j| (j as u32, v[(i, j)]))
+                    .collect()
+            })
+            .collect();
+        (f, rows, v)
+    }
+
+    /// `V^T F_nl(V y)` by lifting every state and evaluating every term of
+    /// degree two or more.
+    fn direct(f: &PolyVector, v: &Mat<f64>, y: &[f64]) -> Vec<f64> {
+        let z: Vec<f64> = (0..v.nrows())
+            .map(|i| (0..v.ncols()).map(|j| v[(i, j)] * y[j]).sum())
+            .collect();
+        let mut full = vec![0.0; v.nrows()];
+        for t in f.terms.iter() {
+            if t.factors.iter().map(|x| x.power).sum::<u32>() >= 2 {
+                full[t.eq as usize] += t
+                    .factors
+                    .iter()
+                    .fold(t.coeff, |a, x| a * z[x.var as usize].powi(x.power as i32));
+            }
+        }
+        (0..v.ncols())
+            .map(|j| (0..v.nrows()).map(|i| v[(i, j)] * full[i]).sum())
+            .collect()
+    }
+
+    fn eval(lp: &LiftedPoly, y: &[f64]) -> Vec<f64> {
+        let (prep, _) = PreparedLifted::new(lp);
+        let mut out = vec![0.0; lp.n_reduced()];
+        prep.eval_into(y, 1.0, &mut out);
+        out
+    }
+
+    #[test]
+    fn lifted_exact_is_the_projection_and_its_jacobian_the_derivative() {
+        let (f, rows, v) = sample();
+        let lp = lifted_exact(&f, &rows, 4);
+        let y = [0.3, -0.2, 0.5, 1.2];
+        let (got, want) = (eval(&lp, &y), direct(&f, &v, &y));
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() < 1e-14 * (1.0 + w.abs()), "{got:?} {want:?}");
+        }
+        // the Jacobian against central differences (cubic: h^2 error)
+        let (prep, cells) = PreparedLifted::new(&lp);
+        let mut vals = vec![0.0; cells.len()];
+        prep.jac_into(&y, 1.0, &mut vals, |p, q| {
+            cells.iter().position(|&c| c == (q, p)).expect("cell")
+        });
+        let h = 1e-5;
+        for q in 0..4 {
+            let mut yp = y;
+            let mut ym = y;
+            yp[q] += h;
+            ym[q] -= h;
+            let (fp, fm) = (direct(&f, &v, &yp), direct(&f, &v, &ym));
+            for p in 0..4 {
+                let fd = (fp[p] - fm[p]) / (2.0 * h);
+                let an = cells
+                    .iter()
+                    .position(|&c| c == (q, p))
+                    .map_or(0.0, |k| vals[k]);
+                assert!((fd - an).abs() < 1e-8, "d{p}/d{q}: {an} vs {fd}");
+            }
+        }
+    }
+
+    #[test]
+    fn deim_with_every_force_row_is_exact_and_reactions_stay_exact() {
+        let (f, rows, v) = sample();
+        let snaps: Vec<Vec<f64>> = (0..20)
+            .map(|k| {
+                let t = k as f64 * 0.3;
+                vec![t.sin(), (1.3 * t).cos(), 0.1 * t, 0.2, 0.5 * t.cos(), -0.1]
+            })
+            .collect();
+        let all = deim(&f, &rows, 4, 2, &snaps, Sample::Points(2)).expect("trains");
+        assert!(all.info.all_rows && all.info.force_rows == 2);
+        let y = [0.3, -0.2, 0.5, 1.2];
+        let (got, want) = (eval(&all.lifted, &y), direct(&f, &v, &y));
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() < 1e-14 * (1.0 + w.abs()));
+        }
+        // one row: the force is interpolated, the multiplier rows (reduced
+        // equation 3: the constraint rows 4, 5) are not touched
+        let one = deim(&f, &rows, 4, 2, &snaps, Sample::Points(1)).expect("trains");
+        assert_eq!(one.info.sampled.len(), 1);
+        let got = eval(&one.lifted, &y);
+        assert!((got[3] - want[3]).abs() < 1e-14 * (1.0 + want[3].abs()));
+        assert!(
+            (0..2).any(|p| (got[p] - want[p]).abs() > 1e-6),
+            "one row cannot carry two independent rows"
+        );
+    }
+
+    #[test]
+    fn deim_interpolates_a_force_in_the_span_of_its_modes_exactly() {
+        // three force rows, every snapshot (and the test state) with row 2 =
+        // row 0 + row 1 at z = (a, b, .): a two-mode force, two points exact
+        let mut f = PolyVector::zeros(3, 3);
+        f.push(0, 1.0, &[(0, 2)]);
+        f.push(1, 1.0, &[(1, 2)]);
+        f.push(2, 1.0, &[(0, 2)]);
+        f.push(2, 1.0, &[(1, 2)]);
+        let rows: Vec<Vec<(u32, f64)>> = (0..3)
+            .map(|i| vec![(0, 0.5 + 0.1 * i as f64), (1, (i as f64) - 1.0)])
+            .collect();
+        let snaps: Vec<Vec<f64>> = (0..10)
+            .map(|k| vec![(k as f64).sin(), (0.7 * k as f64).cos(), 0.0])
+            .collect();
+        // n = 3 here: a first-order model without constraints or velocities
+        let h = deim(&f, &rows, 2, 3, &snaps, Sample::Tolerance(1e-12)).expect("trains");
+        assert_eq!(h.info.sampled.len(), 2, "{:?}", h.info);
+        assert!(!h.info.all_rows && h.info.training_error < 1e-12);
+        let v = Mat::from_fn(3, 2, |i, j| rows[i][j].1);
+        let y = [0.4, -1.3];
+        let (got, want) = (eval(&h.lifted, &y), direct(&f, &v, &y));
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() < 1e-12 * (1.0 + w.abs()), "{got:?} {want:?}");
+        }
+        assert!(matches!(
+            deim(&f, &rows, 2, 3, &snaps, Sample::Tolerance(0.0)),
+            Err(HyperError::Sample(_))
+        ));
+        assert!(matches!(
+            deim(&f, &rows, 2, 3, &snaps, Sample::Points(0)),
+            Err(HyperError::Sample(_))
+        ));
+    }
+}
