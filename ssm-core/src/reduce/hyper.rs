@@ -262,7 +262,9 @@ pub fn deim(
             while hi < top && meets(hi).is_none() {
                 hi = (2 * hi).min(top);
             }
-            match meets(hi) {
+            // no force mode short of every row (no force rows, or forces
+            // that vanish on the run): every row
+            match (top > 0).then(|| meets(hi)).flatten() {
                 None => None,
                 Some(found) => {
                     let (mut lo, mut best) = (hi / 2, (hi, found));
@@ -545,5 +547,34 @@ mod tests {
             deim(&f, &rows, 2, 3, &snaps, Sample::Points(0)),
             Err(HyperError::Sample(_))
         ));
+    }
+
+    #[test]
+    fn a_model_without_internal_forces_samples_every_row_of_none() {
+        // only reaction and constraint terms (a rigid natural-coordinate
+        // model): nothing to sample, the lifted model is exact
+        let (mut f, rows, v) = sample();
+        f.terms = f
+            .terms
+            .iter()
+            .filter(|t| t.eq >= 4 || t.factors.iter().any(|x| x.var >= 4))
+            .cloned()
+            .collect();
+        let snaps = vec![vec![0.1; 6]; 5];
+        for s in [Sample::Tolerance(1e-3), Sample::Points(3)] {
+            let h = deim(&f, &rows, 4, 2, &snaps, s).expect("trains");
+            assert_eq!((h.info.force_rows, h.info.sampled.len()), (0, 0));
+            assert!(h.info.all_rows);
+            let y = [0.3, -0.2, 0.5, 1.2];
+            let (got, want) = (eval(&h.lifted, &y), direct(&f, &v, &y));
+            for (g, w) in got.iter().zip(&want) {
+                assert!((g - w).abs() < 1e-14 * (1.0 + w.abs()));
+            }
+        }
+        // a zero snapshot set: no mode, every row
+        let zero = vec![vec![0.0; 6]; 5];
+        let (g, _, _) = sample();
+        let h = deim(&g, &rows, 4, 2, &zero, Sample::Tolerance(1e-3)).expect("trains");
+        assert!(h.info.all_rows && h.info.sampled.len() == 2);
     }
 }
