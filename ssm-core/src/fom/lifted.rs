@@ -116,9 +116,9 @@ impl LiftedPoly {
     }
 }
 
-/// `x^p` for the small powers of polynomial terms.
+/// `x^p` with the common small powers as plain products (`powi` is a call).
 #[inline]
-fn pow(x: f64, p: u32) -> f64 {
+pub(super) fn pow(x: f64, p: u32) -> f64 {
     match p {
         0 => 1.0,
         1 => x,

@@ -4,7 +4,7 @@
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use ssm_api::{PolyVector, StateKind};
 
-use super::lifted::{LiftedPoly, PreparedLifted};
+use super::lifted::{pow, LiftedPoly, PreparedLifted};
 use crate::model::system::System;
 
 /// One monomial derivative `d F_eq / d z_var`, accumulated into `slot`.
@@ -328,18 +328,6 @@ pub(crate) fn square_pattern(n: usize, cells: &[(usize, usize)]) -> SymbolicSpar
     }
     let row_idx: Vec<usize> = cells.iter().map(|&(_, r)| r).collect();
     SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)
-}
-
-/// `x^p` with the common small powers as plain products (`powi` is a call).
-#[inline]
-fn pow(x: f64, p: u32) -> f64 {
-    match p {
-        0 => 1.0,
-        1 => x,
-        2 => x * x,
-        3 => x * x * x,
-        _ => x.powi(p as i32),
-    }
 }
 
 fn eval_into(p: &PolyVector, z: &[f64], scale: f64, out: &mut [f64]) {
