@@ -46,6 +46,19 @@ impl MultiIndexSet {
     /// Enumerates the multi-indices and their splits. `nvar` must be even
     /// (conjugate pairs) for [`Self::conj`] to be meaningful.
     pub fn new(nvar: usize, max_order: usize) -> Self {
+        Self::build(nvar, max_order, false).expect("not cancellable")
+    }
+
+    /// [`Self::new`] that stops when the work running on this thread is asked
+    /// to ([`crate::cancel`]): `None` then. The split table of a high order
+    /// over several pairs takes seconds to enumerate (at O(31) over two
+    /// pairs, a sixth of the SSM), so a long computation builds its set with
+    /// this one.
+    pub fn cancellable(nvar: usize, max_order: usize) -> Option<Self> {
+        Self::build(nvar, max_order, true)
+    }
+
+    fn build(nvar: usize, max_order: usize, cancellable: bool) -> Option<Self> {
         let mut exps: Vec<u16> = Vec::new();
         let mut order_start = vec![0];
         let mut cur = vec![0u16; nvar];
@@ -90,12 +103,18 @@ impl MultiIndexSet {
                 set.rank(&e)
             })
             .collect();
-        set.build_splits();
-        set.build_lower();
-        set
+        set.build_splits(cancellable)?;
+        set.build_lower(cancellable)?;
+        Some(set)
     }
 
-    fn build_splits(&mut self) {
+    /// Whether a cancellable build should stop at multi-index `idx` (asked
+    /// every 256 indices).
+    fn stop(cancellable: bool, idx: usize) -> bool {
+        cancellable && idx.is_multiple_of(256) && crate::cancel::requested()
+    }
+
+    fn build_splits(&mut self, cancellable: bool) -> Option<()> {
         let nvar = self.nvar;
         let mut split_start = Vec::with_capacity(self.len() + 1);
         // sized exactly (the pairs `0 <= a <= m` less the two trivial ones),
@@ -115,6 +134,9 @@ impl MultiIndexSet {
         let mut a = vec![0u16; nvar];
         let mut b = vec![0u16; nvar];
         for idx in 0..self.len() {
+            if Self::stop(cancellable, idx) {
+                return None;
+            }
             split_start.push(splits.len());
             let m = self.exponents(idx).to_vec();
             let k: usize = m.iter().map(|&x| x as usize).sum();
@@ -148,12 +170,16 @@ impl MultiIndexSet {
         split_start.push(splits.len());
         self.split_start = split_start;
         self.splits = splits;
+        Some(())
     }
 
-    fn build_lower(&mut self) {
+    fn build_lower(&mut self, cancellable: bool) -> Option<()> {
         let mut lower = vec![u32::MAX; self.len() * self.nvar];
         let mut e = vec![0u16; self.nvar];
         for idx in 0..self.len() {
+            if Self::stop(cancellable, idx) {
+                return None;
+            }
             for v in 0..self.nvar {
                 e.copy_from_slice(self.exponents(idx));
                 if e[v] > 0 {
@@ -163,6 +189,7 @@ impl MultiIndexSet {
             }
         }
         self.lower = lower;
+        Some(())
     }
 
     /// Index of `k - e_v` (`None` when `k_v = 0`).
@@ -463,6 +490,21 @@ mod tests {
 
     fn binom(n: usize, k: usize) -> usize {
         (0..k).fold(1, |acc, i| acc * (n - i) / (i + 1))
+    }
+
+    #[test]
+    fn a_cancellable_set_stops_when_asked_and_equals_the_plain_one_otherwise() {
+        let plain = MultiIndexSet::new(4, 9);
+        let built = MultiIndexSet::cancellable(4, 9).expect("no flag: not interrupted");
+        assert_eq!(built.exps, plain.exps);
+        assert_eq!(built.splits, plain.splits);
+        assert_eq!(built.lower, plain.lower);
+        let flag = crate::cancel::Flag::new();
+        flag.raise();
+        crate::cancel::within(Some(&flag), || {
+            assert!(MultiIndexSet::cancellable(4, 9).is_none());
+            assert_eq!(MultiIndexSet::new(4, 9).splits, plain.splits);
+        });
     }
 
     #[test]

@@ -283,7 +283,7 @@ pub fn compute(
     let (lambda, right, left) = reduced_modes(masters);
     let nvar = lambda.len();
     let order = opts.order;
-    let set = MultiIndexSet::new(nvar, order);
+    let set = MultiIndexSet::cancellable(nvar, order).ok_or(SsmError::Interrupted { order: 1 })?;
     let zero = vec![C64::new(0.0, 0.0); n];
     let mut w: Vec<Vec<C64>> = vec![Vec::new(); set.len()];
     w[0] = zero.clone();
