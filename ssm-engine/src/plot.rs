@@ -39,6 +39,20 @@ pub enum Scale {
     Linear,
     /// Logarithmic x and y axes (non-positive values are skipped).
     LogLog,
+    /// Linear x axis, logarithmic y axis (non-positive values of y are
+    /// skipped), e.g. an error over time.
+    LogY,
+}
+
+impl Scale {
+    /// Whether the x and the y axes are logarithmic.
+    fn logs(self) -> (bool, bool) {
+        match self {
+            Scale::Linear => (false, false),
+            Scale::LogLog => (true, true),
+            Scale::LogY => (false, true),
+        }
+    }
 }
 
 fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
@@ -194,20 +208,21 @@ fn draw_panel(
         title: title.to_owned(),
         message: e.to_string(),
     };
-    let log = scale == Scale::LogLog;
-    let keep =
-        |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite() && (!log || (p.0 > 0.0 && p.1 > 0.0));
+    let (log_x, log_y) = scale.logs();
+    let keep = |p: &&(f64, f64)| {
+        p.0.is_finite() && p.1.is_finite() && (!log_x || p.0 > 0.0) && (!log_y || p.1 > 0.0)
+    };
     let xs = range(
         curves
             .iter()
             .flat_map(|c| c.points.iter().chain(&c.markers).filter(keep).map(|p| p.0)),
-        log,
+        log_x,
     );
     let ys = range(
         curves
             .iter()
             .flat_map(|c| c.points.iter().chain(&c.markers).filter(keep).map(|p| p.1)),
-        log,
+        log_y,
     );
     {
         let mut builder = ChartBuilder::on(root);
@@ -262,9 +277,13 @@ fn draw_panel(
                 }
             }};
         }
-        if log {
+        if log_x {
             draw!(builder
                 .build_cartesian_2d((xs.0..xs.1).log_scale(), (ys.0..ys.1).log_scale())
+                .map_err(|e| fail(&e))?);
+        } else if log_y {
+            draw!(builder
+                .build_cartesian_2d(xs.0..xs.1, (ys.0..ys.1).log_scale())
                 .map_err(|e| fail(&e))?);
         } else {
             draw!(builder

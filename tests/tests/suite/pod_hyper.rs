@@ -184,3 +184,64 @@ fn bad_hyper_tolerances_are_refused() {
         assert!(message.contains("pod.hyper"), "{bad}: {message}");
     }
 }
+
+/// A `[pod]` scene with `hyper` through the binary (the divider of 4 + 6
+/// elements, 0.2 s of the training load): a hyper-reduced model beside each
+/// truncation, reported in `summary.json` (checked against its schema) with
+/// its DEIM rows, distinct force rows of the 30 coordinates, and a training
+/// error within the asked tolerance (the fewest rows meeting it, not all of
+/// them); `pod_report.md` names the same count; `pod_errors.svg` draws every
+/// model's error of `pod_case_1.csv`. Reference: the figures of the study's
+/// own tables, which the summary and the plot must repeat.
+#[test]
+fn a_hyper_scene_reports_its_rows_and_draws_the_errors() {
+    let dir = ssm_tests::tmp_dir("pod-hyper-scene");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let scene = dir.join("divider_hyper.toml");
+    std::fs::write(
+        &scene,
+        "[model]\nplugin = \"divider\"\n[model.params]\nn1 = 4\nn2 = 6\n\
+         [outputs]\ncoordinates = [\"w_hori_mid\", \"w_vert_mid\"]\n\
+         [pod]\nstep = 2e-3\nhyper = [1e-3]\n\
+         [pod.train]\nepsilon = 0.1\nomega = 30.0\nt_end = 0.2\n",
+    )
+    .expect("scene");
+    let out = dir.join("out");
+    let summary = ssm_tests::run_binary(&[], &scene, &out);
+    let pods = summary["pod"]["pod_models"].as_array().expect("models");
+    assert_eq!(pods.len(), 2);
+    assert!(pods[0]["hyper"].is_null());
+    let h = &pods[1]["hyper"];
+    let rows: Vec<u64> = h["sampled_rows"]
+        .as_array()
+        .expect("rows")
+        .iter()
+        .map(|r| r.as_u64().expect("row"))
+        .collect();
+    let force_rows = h["force_rows"].as_u64().expect("force rows");
+    let mut distinct = rows.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    assert!(!rows.is_empty() && distinct.len() == rows.len(), "{rows:?}");
+    assert!(rows.iter().all(|&r| r < 30) && force_rows <= 30, "{h}");
+    assert_eq!(h["all_rows"], rows.len() as u64 == force_rows);
+    assert!(h["training_error"].as_f64().expect("error") <= 1e-3, "{h}");
+    assert!(h["snapshots"].as_u64().expect("snapshots") > rows.len() as u64);
+    let report = std::fs::read_to_string(out.join("pod_report.md")).expect("report");
+    assert!(
+        report.contains(&format!(
+            "{} of {force_rows} force rows sampled",
+            rows.len()
+        )),
+        "{report}"
+    );
+    let svg = std::fs::read_to_string(out.join("pod_errors.svg")).expect("errors plot");
+    let case = std::fs::read_to_string(out.join("pod_case_1.csv")).expect("case");
+    let head = case.lines().next().expect("header");
+    for id in ["pod1", "pod2"] {
+        assert!(head.contains(&format!("error@{id}")), "{head}");
+        assert!(svg.contains(&format!("{id} (")), "{id} not in the legend");
+    }
+    assert!(svg.contains("output error relative to the full model"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

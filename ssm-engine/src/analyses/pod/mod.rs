@@ -14,7 +14,7 @@
 //!
 //! Its results are the key `pod` of `summary.json` ([`write::PodSummary`]);
 //! files `pod_comparison.csv`, `pod_report.md`, `pod_povs.csv`/`.svg`,
-//! `pod_constraints.csv` and `pod_case_<k>.csv`.
+//! `pod_errors.svg`, `pod_constraints.csv` and `pod_case_<k>.csv`.
 //!
 //! # References
 //! M. Stadlmayr, W. Witteveen, W. Steiner, *A generalized constraint
@@ -81,6 +81,10 @@ pub fn files(model: &str, study: &PodStudy) -> Result<Vec<(String, Vec<u8>)>, Pl
         (
             "pod_povs.svg".to_owned(),
             write::povs_svg(study)?.into_bytes(),
+        ),
+        (
+            "pod_errors.svg".to_owned(),
+            write::errors_svg(study)?.into_bytes(),
         ),
         (
             "pod_constraints.csv".to_owned(),

@@ -1,14 +1,15 @@
 //! Writers of the `[pod]` study: `pod_comparison.csv` and `pod_report.md`
 //! (one row per reduced model and load), `pod_case_<k>.csv` (the outputs
-//! of every model over time with their errors), `pod_povs.csv` and
-//! `pod_povs.svg` (the POV decay), `pod_constraints.csv` and the summary's
+//! of every model over time with their errors), `pod_errors.svg` (those
+//! errors drawn), `pod_povs.csv` and `pod_povs.svg` (the POV decay),
+//! `pod_constraints.csv` and the summary's
 //! `pod`. They format a [`PodStudy`] and compute nothing.
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use ssm_kernel::number::short;
 
-use crate::plot::{line_plot, Curve, PlotError, Scale};
+use crate::plot::{line_plot, stacked_plot, Curve, Panel, PlotError, Scale};
 use ssm_core::compare::pod::{CaseRun, PodStudy, RomRun};
 use ssm_core::reduce::pod::Truncation;
 
@@ -209,6 +210,57 @@ pub(crate) fn povs_svg(study: &PodStudy) -> Result<String, PlotError> {
         &curves,
         Scale::LogLog,
     )
+}
+
+/// `pod_errors.svg`: every reduced model's output error `e(t)` over each
+/// load case (a panel per case, log scale; a failed run's curve ends where it
+/// failed, an exact model's zero errors are not drawn). The figures are
+/// those of `pod_case_<k>.csv`'s `error@<id>` columns.
+pub(crate) fn errors_svg(study: &PodStudy) -> Result<String, PlotError> {
+    let infos = roms(study);
+    let titles: Vec<String> = study
+        .cases
+        .iter()
+        .map(|c| {
+            format!(
+                "{}: output error relative to the full model's peak",
+                c.case.label
+            )
+        })
+        .collect();
+    let curves: Vec<Vec<Curve>> = study
+        .cases
+        .iter()
+        .map(|case| {
+            infos
+                .iter()
+                .zip(runs(case))
+                .map(|(info, run)| Curve {
+                    label: format!("{} ({})", info.id, info.label),
+                    points: run.errors.as_ref().map_or_else(Vec::new, |x| {
+                        case.times
+                            .iter()
+                            .copied()
+                            .zip(x.series.iter().copied())
+                            .collect()
+                    }),
+                    ..Curve::default()
+                })
+                .collect()
+        })
+        .collect();
+    let panels: Vec<Panel<'_>> = titles
+        .iter()
+        .zip(&curves)
+        .map(|(title, curves)| Panel {
+            title,
+            x_label: "t",
+            y_label: "error",
+            curves,
+            scale: Scale::LogY,
+        })
+        .collect();
+    stacked_plot(&panels, 480)
 }
 
 /// `pod_constraints.csv`: the singular values of the stacked projected
@@ -420,8 +472,32 @@ pub struct PodModelSummary {
     pub initial_residual: [f64; 2],
     /// States of the reduced DAE.
     pub states: usize,
-    /// Seconds to build it.
+    /// Seconds to build it (its hyper-reduction's training included).
     pub offline_s: f64,
+    /// Its hyper-reduction of the internal forces (null: the plain
+    /// Galerkin projection).
+    pub hyper: Option<HyperSummary>,
+}
+
+/// The DEIM hyper-reduction of a POD model's internal forces
+/// (Chaturantabut & Sorensen 2010): the full model's force rows evaluated
+/// at the sampled rows only, the constraints and reactions exactly.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct HyperSummary {
+    /// Full rows carrying internal forces (the candidates).
+    pub force_rows: usize,
+    /// The sampled rows (0-based full coordinates), in DEIM's order.
+    pub sampled_rows: Vec<usize>,
+    /// Every force row is sampled: the plain projection, exactly.
+    pub all_rows: bool,
+    /// Relative error of the reduced internal force over the training
+    /// snapshots.
+    pub training_error: f64,
+    /// Force snapshots of the training run used.
+    pub snapshots: usize,
+    /// Seconds of the training.
+    pub training_s: f64,
 }
 
 /// One SSM model of the study.
@@ -532,6 +608,14 @@ impl PodSummary {
                     initial_residual: r.reduction.initial_residual,
                     states: r.system.n_states(),
                     offline_s: r.offline_s,
+                    hyper: r.hyper.as_ref().map(|h| HyperSummary {
+                        force_rows: h.force_rows,
+                        sampled_rows: h.sampled.clone(),
+                        all_rows: h.all_rows,
+                        training_error: h.training_error,
+                        snapshots: h.snapshots,
+                        training_s: h.seconds,
+                    }),
                 })
                 .collect(),
             ssm_models: study
