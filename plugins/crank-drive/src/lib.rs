@@ -2,9 +2,10 @@
 //! 1 to 8 cylinders, inline or V) modeled redundantly in 3-D natural
 //! coordinates, the public stand-in for the V8 crank drive of Stadlmayr,
 //! Witteveen & Steiner (2017), Sect. 4.1, whose FreeDyn model is not public.
-//! Two models: `crank-drive` (below, the crankshaft on a fixed axis) and
+//! Three models: `crank-drive` (below, the crankshaft on a fixed axis),
 //! `crank-drive-housing` (the same drive in a housing on spring-damper
-//! mounts, described in `housing.rs`).
+//! mounts, described in `housing.rs`) and `ancf-beam` (the flexible member in
+//! absolute nodal coordinates on its own, a cantilever, in `flexible.rs`).
 //!
 //! # Model
 //! - **Crankshaft**: rotates about the fixed `z` axis; its coordinates are the
@@ -52,6 +53,7 @@ use ssm_api::{
 };
 use ssm_plugin_kit::{Constraints, MechanicalSystem, ParamSpec, Params};
 
+mod flexible;
 mod housing;
 
 const MODEL: &str = "crank-drive";
@@ -115,6 +117,11 @@ fn models() -> Vec<ModelInfo> {
             name: housing::MODEL.into(),
             description: "the crank drive in an engine housing on nine spring-damper mounts, seven degrees of freedom (Stadlmayr et al. 2017, Sect. 4.1)".into(),
             params: housing_specs().iter().map(ParamSpec::info).collect(),
+        },
+        ModelInfo {
+            name: flexible::MODEL.into(),
+            description: "a cantilever of planar beam elements in absolute nodal coordinates (ANCF), the element for flexible members of the crank drive".into(),
+            params: flexible::specs().iter().map(ParamSpec::info).collect(),
         },
     ]
 }
@@ -222,11 +229,18 @@ fn build(name: &str, params: &str) -> Result<Model, PluginError> {
     if name == housing::MODEL {
         return housing::build(&Params::parse(params, &housing_specs())?);
     }
+    if name == flexible::MODEL {
+        return flexible::build(&Params::parse(params, &flexible::specs())?);
+    }
     if !name.is_empty() && name != MODEL {
         return Err(PluginError::new(
             ErrorKind::UnknownModel,
             name,
-            &format!("this plugin offers '{MODEL}' and '{}'", housing::MODEL),
+            &format!(
+                "this plugin offers '{MODEL}', '{}' and '{}'",
+                housing::MODEL,
+                flexible::MODEL
+            ),
         ));
     }
     let p = Params::parse(params, &specs())?;

@@ -37,7 +37,7 @@ pub const AXIAL: [usize; 2] = [0, 3];
 pub const BENDING: [usize; 4] = [1, 2, 4, 5];
 
 /// Gauss-Legendre rule with 5 points on `[0, 1]`: `(abscissa, weight)`.
-const GAUSS5: [(f64, f64); 5] = [
+pub(crate) const GAUSS5: [(f64, f64); 5] = [
     (0.046_910_077_030_668_004, 0.118_463_442_528_094_54),
     (0.230_765_344_947_158_45, 0.239_314_335_249_683_23),
     (0.5, 0.284_444_444_444_444_45),

@@ -4,6 +4,7 @@
 //! Run one subject with `cargo test --release -p ssm-tests --test suite fuzz::`.
 
 mod accuracy;
+mod ancf;
 mod continuation;
 mod cost_gate;
 mod crank_drive;

@@ -1,0 +1,291 @@
+//! The planar beam element in absolute nodal coordinates (ANCF, gradient
+//! deficient): two nodes, four coordinates per node, the position `r` and the
+//! slope `r' = dr/dx` in the plane, local order
+//! `q = (x1, y1, x1', y1', x2, y2, x2', y2')`, each component interpolated by
+//! the cubic Hermite functions of [`super::element`] in the undeformed arc
+//! length `x`.
+//!
+//! The coordinates are deviations from a straight reference configuration of
+//! unit tangent `t` (`r_ref' = t` everywhere). With the Green axial strain
+//! `e = (|r'|^2 - 1) / 2 = t.d + |d|^2 / 2`, `d = r' - t` the slope deviation,
+//! and the curvature measured by `r''` (the linear bending model of the
+//! references, exact for small strains), the strain energy is
+//!
+//! `U = int_0^L [ EA/2 e^2 + EI/2 |r''|^2 ] dx`,
+//!
+//! and the internal force `dU/dq = K q + f2(q) + f3(q)`. With `a_k(x)` the
+//! Hermite slopes of unknown `k` of component `c`,
+//!
+//! - `K = int EA (a t)(a t)^T + EI r''-terms dx` (axial along `t`, bending per
+//!   component),
+//! - `f2_(c,k) = int EA a_k [ (t.d) d_c + |d|^2 t_c / 2 ] dx`,
+//! - `f3_(c,k) = int EA a_k |d|^2 d_c / 2 dx`.
+//!
+//! The integrands are polynomials of degree at most 8 in `x`; the 5-point
+//! Gauss rule integrates them exactly. The mass `int rhoA N^T N dx` is
+//! constant: absolute coordinates carry the rigid rotations of the element in
+//! its coordinates, not in its mass matrix, and a rigid motion of the element
+//! (rotation and translation of every node, slopes rotated) leaves `e = 0`
+//! and `r'' = 0`, hence no elastic force. That is why a flexible member of a
+//! multibody model in natural coordinates is built from this element rather
+//! than in a floating frame of reference: the mass matrix stays constant and
+//! the forces polynomial, which the model interface requires.
+//!
+//! # References
+//! - A. A. Shabana, *Dynamics of Multibody Systems*, 4th ed., Cambridge
+//!   (2013), Ch. 7 (the absolute nodal coordinate formulation).
+//! - D. Garcia-Vallejo, J. Mayo, J. L. Escalona, J. Dominguez, *Efficient
+//!   evaluation of the elastic forces and the Jacobian in the absolute nodal
+//!   coordinate formulation*, Nonlinear Dyn. 35 (2004) 313-329 (the
+//!   polynomial form of the elastic forces).
+//! - J. T. Sopanen, A. M. Mikkola, *Description of elastic forces in absolute
+//!   nodal coordinate formulation*, Nonlinear Dyn. 34 (2003) 53-74 (the
+//!   axial and bending strain measures).
+
+use super::element::{hermite, hermite_curvature, hermite_slope, LocalTerm, Section, GAUSS5};
+
+/// Local index of component `c` (0: x, 1: y) of Hermite unknown `k`
+/// (0: node 1 position, 1: node 1 slope, 2: node 2 position, 3: node 2
+/// slope).
+pub fn local(c: usize, k: usize) -> usize {
+    (k / 2) * 4 + (k % 2) * 2 + c
+}
+
+/// A two-node planar ANCF beam element of undeformed length `length` whose
+/// reference configuration is straight with unit tangent `tangent`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AncfElement {
+    /// Undeformed length.
+    pub length: f64,
+    /// Section and material.
+    pub section: Section,
+    /// Unit tangent `t` of the reference configuration.
+    pub tangent: [f64; 2],
+}
+
+/// A linear form `sum coeff q[var]` over the local unknowns.
+type Form = Vec<(usize, f64)>;
+
+impl AncfElement {
+    /// Gauss points in `x` with weights scaled to the element length.
+    fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        GAUSS5.iter().map(|&(xi, w)| (xi, w * self.length))
+    }
+
+    /// `int s (f^T f) dx` per component, for the Hermite functions `f(xi)`.
+    fn per_component(&self, f: impl Fn(f64) -> [f64; 4], s: f64) -> [[f64; 8]; 8] {
+        let mut m = [[0.0; 8]; 8];
+        for (xi, w) in self.points() {
+            let v = f(xi);
+            for c in 0..2 {
+                for k in 0..4 {
+                    for j in 0..4 {
+                        m[local(c, k)][local(c, j)] += w * s * v[k] * v[j];
+                    }
+                }
+            }
+        }
+        m
+    }
+
+    /// Consistent mass matrix `int rhoA N^T N dx`.
+    pub fn mass(&self) -> [[f64; 8]; 8] {
+        let l = self.length;
+        self.per_component(|xi| hermite(xi, l), self.section.rho_a)
+    }
+
+    /// Linear stiffness at the reference: `int EI N''^T N'' dx` per component
+    /// plus the axial `int EA (t.d)(t.d)` part.
+    pub fn stiffness(&self) -> [[f64; 8]; 8] {
+        let l = self.length;
+        let mut k = self.per_component(|xi| hermite_curvature(xi, l), self.section.ei);
+        let t = self.tangent;
+        for (xi, w) in self.points() {
+            let a = hermite_slope(xi, l);
+            for (ci, &ti) in t.iter().enumerate() {
+                for (cj, &tj) in t.iter().enumerate() {
+                    for p in 0..4 {
+                        for r in 0..4 {
+                            k[local(ci, p)][local(cj, r)] +=
+                                w * self.section.ea * a[p] * a[r] * ti * tj;
+                        }
+                    }
+                }
+            }
+        }
+        k
+    }
+
+    /// The slope deviation `d_c = sum_k a_k q_(c,k)` at `xi` as two forms,
+    /// and the Hermite slopes `a`.
+    fn slope_forms(&self, xi: f64) -> ([Form; 2], [f64; 4]) {
+        let a = hermite_slope(xi, self.length);
+        let form = |c: usize| (0..4).map(|k| (local(c, k), a[k])).collect::<Form>();
+        ([form(0), form(1)], a)
+    }
+
+    /// The quadratic and cubic internal forces `f2 + f3` as monomials in the
+    /// local unknowns (exact, summed over the Gauss points; repeated
+    /// monomials are left to the caller's canonical form).
+    pub fn nonlinear_force(&self) -> Vec<LocalTerm> {
+        let t = self.tangent;
+        let ea = self.section.ea;
+        let mut out = Vec::new();
+        for (xi, w) in self.points() {
+            let (d, a) = self.slope_forms(xi);
+            let td: Form = d[0]
+                .iter()
+                .map(|&(v, c)| (v, c * t[0]))
+                .chain(d[1].iter().map(|&(v, c)| (v, c * t[1])))
+                .collect();
+            for c in 0..2 {
+                for (k, &ak) in a.iter().enumerate() {
+                    let eq = local(c, k);
+                    let s = w * ea * ak;
+                    // (t.d) d_c
+                    product(&mut out, eq, s, &[&td, &d[c]]);
+                    // |d|^2 t_c / 2 and |d|^2 d_c / 2
+                    for dd in &d {
+                        product(&mut out, eq, 0.5 * s * t[c], &[dd, dd]);
+                        product(&mut out, eq, 0.5 * s, &[dd, dd, &d[c]]);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The strain energy at the local deviations `q`, by the same rule
+    /// (for checks).
+    pub fn strain_energy(&self, q: &[f64; 8]) -> f64 {
+        let l = self.length;
+        let t = self.tangent;
+        let mut u = 0.0;
+        for (xi, w) in self.points() {
+            let (a, b) = (hermite_slope(xi, l), hermite_curvature(xi, l));
+            let mut d = [0.0; 2];
+            let mut curv = [0.0; 2];
+            for c in 0..2 {
+                for k in 0..4 {
+                    d[c] += a[k] * q[local(c, k)];
+                    curv[c] += b[k] * q[local(c, k)];
+                }
+            }
+            let e = t[0] * d[0] + t[1] * d[1] + 0.5 * (d[0] * d[0] + d[1] * d[1]);
+            u += w
+                * (0.5 * self.section.ea * e * e
+                    + 0.5 * self.section.ei * (curv[0] * curv[0] + curv[1] * curv[1]));
+        }
+        u
+    }
+}
+
+/// Pushes `scale * prod forms` expanded into monomials of equation `eq`.
+fn product(out: &mut Vec<LocalTerm>, eq: usize, scale: f64, forms: &[&Form]) {
+    fn rec(
+        out: &mut Vec<LocalTerm>,
+        eq: usize,
+        coeff: f64,
+        forms: &[&Form],
+        vars: &mut Vec<usize>,
+    ) {
+        match forms.split_first() {
+            None => {
+                let mut v = vars.clone();
+                v.sort_unstable();
+                out.push(LocalTerm { eq, coeff, vars: v });
+            }
+            Some((first, rest)) => {
+                for &(var, c) in first.iter() {
+                    if c != 0.0 {
+                        vars.push(var);
+                        rec(out, eq, coeff * c, rest, vars);
+                        vars.pop();
+                    }
+                }
+            }
+        }
+    }
+    if scale != 0.0 {
+        rec(out, eq, scale, forms, &mut Vec::with_capacity(forms.len()));
+    }
+}
+
+/// `sum` of `terms` at the local deviations `q`.
+pub fn evaluate(terms: &[LocalTerm], q: &[f64; 8]) -> [f64; 8] {
+    let mut f = [0.0; 8];
+    for t in terms {
+        f[t.eq] += t.coeff * t.vars.iter().map(|&v| q[v]).product::<f64>();
+    }
+    f
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn element(tangent: [f64; 2]) -> AncfElement {
+        AncfElement {
+            length: 0.3,
+            section: Section {
+                ea: 7.0,
+                ei: 0.4,
+                rho_a: 2.0,
+            },
+            tangent,
+        }
+    }
+
+    fn force(e: &AncfElement, q: &[f64; 8]) -> [f64; 8] {
+        let k = e.stiffness();
+        let mut f = evaluate(&e.nonlinear_force(), q);
+        for (i, fi) in f.iter_mut().enumerate() {
+            *fi += (0..8).map(|j| k[i][j] * q[j]).sum::<f64>();
+        }
+        f
+    }
+
+    /// Reference: the strain energy evaluated directly; its central
+    /// differences (step 1e-5, error of order 1e-10 of the force) equal
+    /// `K q + f2 + f3` at a large deformation.
+    #[test]
+    fn internal_force_is_the_gradient_of_the_strain_energy() {
+        let s = std::f64::consts::FRAC_1_SQRT_2;
+        let e = element([s, s]);
+        let q = [0.03, -0.02, 0.2, -0.15, 0.05, 0.04, -0.1, 0.3];
+        let f = force(&e, &q);
+        let scale = f.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for i in 0..8 {
+            let (mut p, mut m) = (q, q);
+            p[i] += 1e-5;
+            m[i] -= 1e-5;
+            let g = (e.strain_energy(&p) - e.strain_energy(&m)) / 2e-5;
+            assert!((g - f[i]).abs() < 1e-8 * scale, "{i}: {g} {}", f[i]);
+        }
+    }
+
+    /// Reference: a rigid motion strains nothing. The reference element
+    /// rotated by 1.2 rad about its first node and moved leaves no elastic
+    /// force (to rounding: 1e-13 of the axial stiffness).
+    #[test]
+    fn a_rigid_motion_leaves_no_elastic_force() {
+        let t = [0.6, 0.8];
+        let e = element(t);
+        let (s, c) = 1.2_f64.sin_cos();
+        let rot = |v: [f64; 2]| [c * v[0] - s * v[1], s * v[0] + c * v[1]];
+        let (p2, t2) = (rot([0.3 * t[0], 0.3 * t[1]]), rot(t));
+        let shift = [0.4, -0.7];
+        let q = [
+            shift[0],
+            shift[1],
+            t2[0] - t[0],
+            t2[1] - t[1],
+            shift[0] + p2[0] - 0.3 * t[0],
+            shift[1] + p2[1] - 0.3 * t[1],
+            t2[0] - t[0],
+            t2[1] - t[1],
+        ];
+        let f = force(&e, &q);
+        assert!(f.iter().all(|v| v.abs() < 1e-13 * 7.0), "{f:?}");
+    }
+}
