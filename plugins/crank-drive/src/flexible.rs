@@ -11,11 +11,13 @@
 //! of its slope (`y_0' = 0`), not the slope's length, which is the axial
 //! stretch at the root: `dx0` first, then node `j = 1..elements` contributes
 //! the deviations `(x_j, y_j, dx_j, dy_j)` of its position and slope from the
-//! straight reference, all tagged flexible. Damping is Rayleigh, `C = beta K`.
+//! straight reference, all tagged flexible. Damping acts on the strain
+//! rates: `beta K_T(q) q'`, `K_T` the tangent stiffness (linear part `beta
+//! K q'`), which unlike `beta K q'` alone leaves rigid motions undamped.
 //! Outputs `u_tip`, `w_tip`: the tip's axial and transverse displacement.
 
 use ssm_api::{Harmonic, Model, MotionKind, PluginError, PolyVector, SparseMatrix};
-use ssm_plugin_kit::{MechanicalSystem, ParamSpec, Params};
+use ssm_plugin_kit::{Constraints, MechanicalSystem, ParamSpec, Params};
 use von_karman_beam::ancf::AncfElement;
 use von_karman_beam::{LocalTerm, Section};
 
@@ -29,7 +31,11 @@ pub(crate) fn specs() -> Vec<ParamSpec> {
         ParamSpec::float("ea", 1.0e4, "axial stiffness E A [N]"),
         ParamSpec::float("ei", 1.0, "bending stiffness E I [N m^2]"),
         ParamSpec::float("rho_a", 1.0, "mass per unit length rho A [kg/m]"),
-        ParamSpec::float("beta", 0.0, "Rayleigh damping C = beta K [s]"),
+        ParamSpec::float(
+            "beta",
+            0.0,
+            "strain-rate damping beta K_T(q) q' [s] (K_T the tangent stiffness)",
+        ),
         ParamSpec::float("tip_fx", 0.0, "constant axial tip force [N], times eps"),
         ParamSpec::float(
             "tip_fy",
@@ -108,9 +114,13 @@ pub(crate) fn build(p: &Params) -> Result<Model, PluginError> {
     let mut mass = SparseMatrix::zeros(nd, nd);
     let mut stiffness = SparseMatrix::zeros(nd, nd);
     let mut force = PolyVector::zeros(nd, 2 * nd);
-    let terms: Vec<LocalTerm> = element.nonlinear_force();
+    let mut terms: Vec<LocalTerm> = element.nonlinear_force();
+    terms.extend(element.strain_rate_damping(beta));
     for e in 0..n_el {
-        let map: Vec<Option<usize>> = (0..8).map(|i| global(e, i)).collect();
+        // the local unknowns, then their velocities
+        let map: Vec<Option<usize>> = (0..16)
+            .map(|i| global(e, i % 8).map(|g| if i < 8 { g } else { nd + g }))
+            .collect();
         for i in 0..8 {
             for j in 0..8 {
                 if let (Some(a), Some(b)) = (map[i], map[j]) {
@@ -149,5 +159,181 @@ pub(crate) fn build(p: &Params) -> Result<Model, PluginError> {
         ("u_tip".into(), vec![(tip_x, 1.0)]),
         ("w_tip".into(), vec![(tip_y, 1.0)]),
     ];
+    Ok(s.into_model()?)
+}
+
+/// The model's name: the crank drive with flexible connecting rods.
+pub(crate) const FLEXIBLE_DRIVE: &str = "crank-drive-flexible";
+
+/// The crank drive's parameters and the rods' elements and section.
+pub(crate) fn drive_specs() -> Vec<ParamSpec> {
+    let mut s = super::specs();
+    s.extend([
+        ParamSpec::count(
+            "rod_elements",
+            2,
+            "ANCF elements per connecting rod, 1 to 16",
+        ),
+        ParamSpec::float("rod_ea", 1.0e5, "connecting rods' axial stiffness E A [N]"),
+        ParamSpec::float(
+            "rod_ei",
+            5.0,
+            "connecting rods' bending stiffness E I [N m^2]",
+        ),
+        ParamSpec::float(
+            "rod_beta",
+            1.0e-4,
+            "connecting rods' Rayleigh damping C = beta K [s]",
+        ),
+    ]);
+    s
+}
+
+/// Model `crank-drive-flexible`: the crank drive of the `crank-drive` model
+/// with each connecting rod a planar ANCF beam of `rod_elements` elements in
+/// its cylinder's plane `z = z_i` (mass `m_rod` spread uniformly), pinned to
+/// the crank pin at its first node and to the piston at its last
+/// (constraints on the node positions; the slopes are free, so the joints
+/// are revolute). Coordinates: the crank's `u` (rotational), per cylinder
+/// the piston's in-plane position `(sx_i, sy_i)` (translational) and the
+/// rod's nodes' positions and slopes (flexible), all deviations from the
+/// reference configuration `theta = 0` with straight rods. Constraints:
+/// `|u|^2 = 1`, `u_z = 0`, per cylinder the two pin joints (2 each) and the
+/// piston's guide `n_i . S_i = 0`. A rigid rod's kinetic energy is the
+/// rigid model's `m_rod (|P'|^2 + P'.S' + |S'|^2) / 6` (the cubic elements
+/// carry rigid motion exactly), so the model tends to `crank-drive` as the
+/// rods stiffen. The rods' damping acts on their strain rates
+/// ([`AncfElement::strain_rate_damping`]), not on their rigid motion.
+pub(crate) fn build_drive(p: &Params) -> Result<Model, PluginError> {
+    let cyl = super::cylinders(p)?;
+    let n_el = p.count("rod_elements") as usize;
+    if !(1..=16).contains(&n_el) {
+        return Err(invalid(
+            "rod_elements",
+            &format!("must be 1 to 16, got {n_el}"),
+        ));
+    }
+    for name in ["rod_ea", "rod_ei"] {
+        let x = p.float(name);
+        if !(x.is_finite() && x > 0.0) {
+            return Err(invalid(name, &format!("must be positive, got {x}")));
+        }
+    }
+    let beta = p.float("rod_beta");
+    if !(beta.is_finite() && beta >= 0.0) {
+        return Err(invalid(
+            "rod_beta",
+            &format!("must be non-negative, got {beta}"),
+        ));
+    }
+    let (r, l) = (p.float("r"), p.float("l"));
+    let per_cylinder = 2 + 4 * (n_el + 1);
+    let base = |i: usize| 3 + i * per_cylinder;
+    let node = |i: usize, j: usize, m: usize| base(i) + 2 + 4 * j + m;
+    let nd = 3 + cyl.len() * per_cylinder;
+    let mut names: Vec<String> = vec!["ux".into(), "uy".into(), "uz".into()];
+    let mut motion = vec![MotionKind::Rotational; 3];
+    for i in 1..=cyl.len() {
+        names.extend([format!("sx{i}"), format!("sy{i}")]);
+        motion.extend([MotionKind::Translational; 2]);
+        for j in 0..=n_el {
+            names.extend([
+                format!("rod{i}_x{j}"),
+                format!("rod{i}_y{j}"),
+                format!("rod{i}_dx{j}"),
+                format!("rod{i}_dy{j}"),
+            ]);
+            motion.extend([MotionKind::Flexible; 4]);
+        }
+    }
+    let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    let mut s = MechanicalSystem::new(FLEXIBLE_DRIVE, &refs);
+    s.dof_motion = motion;
+    let mut mass = SparseMatrix::zeros(nd, nd);
+    let mut rods = SparseMatrix::zeros(nd, nd);
+    let mut force = PolyVector::zeros(nd, 2 * nd);
+    let mut damping = SparseMatrix::zeros(nd, nd);
+    for a in 0..3 {
+        mass.push(a, a, p.float("j_crank"));
+        damping.push(a, a, p.float("c_crank"));
+    }
+    let section = Section {
+        ea: p.float("rod_ea"),
+        ei: p.float("rod_ei"),
+        rho_a: p.float("m_rod") / l,
+    };
+    for (i, c) in cyl.iter().enumerate() {
+        for a in 0..2 {
+            mass.push(base(i) + a, base(i) + a, p.float("m_piston"));
+            damping.push(base(i) + a, base(i) + a, p.float("c_piston"));
+        }
+        let tangent = [
+            (c.pin[0] - c.crank_pin[0]) / l,
+            (c.pin[1] - c.crank_pin[1]) / l,
+        ];
+        let element = AncfElement {
+            length: l / n_el as f64,
+            section,
+            tangent,
+        };
+        let (me, ke) = (element.mass(), element.stiffness());
+        let mut terms = element.nonlinear_force();
+        terms.extend(element.strain_rate_damping(beta));
+        for e in 0..n_el {
+            // the local unknowns, then their velocities
+            let map: Vec<Option<usize>> = (0..16)
+                .map(|k| {
+                    let g = node(i, e + (k % 8) / 4, k % 4);
+                    Some(if k < 8 { g } else { nd + g })
+                })
+                .collect();
+            for a in 0..8 {
+                for b in 0..8 {
+                    let (ga, gb) = (node(i, e + a / 4, a % 4), node(i, e + b / 4, b % 4));
+                    mass.push(ga, gb, me[a][b]);
+                    rods.push(ga, gb, ke[a][b]);
+                    damping.push(ga, gb, beta * ke[a][b]);
+                }
+            }
+            LocalTerm::scatter(&terms, &map, &mut force);
+        }
+    }
+    s.mass = mass;
+    s.stiffness = rods;
+    s.damping = damping;
+    s.internal_force = force.canonical();
+    let mut g = PolyVector::zeros(2 + 5 * cyl.len(), nd);
+    // |u_ref + u|^2 - 1 = 2 u_ref . u + |u|^2, u_ref = (0, 1, 0); u_z = 0
+    g.push(0, 2.0, &[(1, 1)]);
+    for a in 0..3 {
+        g.push(0, 1.0, &[(a, 2)]);
+    }
+    g.push(1, 1.0, &[(2, 1)]);
+    for (i, c) in cyl.iter().enumerate() {
+        let eq = 2 + 5 * i;
+        for k in 0..2 {
+            // the rod's first node at the crank pin r R_i (u_ref + u): in
+            // deviations, r0_k - r (R_i u)_k = 0
+            g.push(eq + k, 1.0, &[(node(i, 0, k), 1)]);
+            for a in 0..3 {
+                g.push(eq + k, -r * c.throw[k][a], &[(a, 1)]);
+            }
+            // its last node at the piston pin
+            g.push(eq + 2 + k, 1.0, &[(node(i, n_el, k), 1)]);
+            g.push(eq + 2 + k, -1.0, &[(base(i) + k, 1)]);
+            // the piston on its guide
+            g.push(eq + 4, c.normal[k], &[(base(i) + k, 1)]);
+        }
+    }
+    s.constraints = Some(Constraints::polynomial(g.canonical()));
+    let torque = |tau: f64| {
+        let mut cos = PolyVector::zeros(nd, 2 * nd);
+        cos.push(0, -tau, &[]);
+        cos.push(0, -tau, &[(1, 1)]);
+        cos.push(1, tau, &[(0, 1)]);
+        cos
+    };
+    s.forcing = super::torque_harmonics(p, nd, torque);
+    s.extra_outputs = super::strokes(&cyl, base);
     Ok(s.into_model()?)
 }

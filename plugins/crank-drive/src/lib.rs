@@ -2,10 +2,11 @@
 //! 1 to 8 cylinders, inline or V) modeled redundantly in 3-D natural
 //! coordinates, the public stand-in for the V8 crank drive of Stadlmayr,
 //! Witteveen & Steiner (2017), Sect. 4.1, whose FreeDyn model is not public.
-//! Three models: `crank-drive` (below, the crankshaft on a fixed axis),
+//! Four models: `crank-drive` (below, the crankshaft on a fixed axis),
 //! `crank-drive-housing` (the same drive in a housing on spring-damper
-//! mounts, described in `housing.rs`) and `ancf-beam` (the flexible member in
-//! absolute nodal coordinates on its own, a cantilever, in `flexible.rs`).
+//! mounts, described in `housing.rs`), `crank-drive-flexible` (the drive with
+//! flexible connecting rods in absolute nodal coordinates) and `ancf-beam`
+//! (that flexible member on its own, a cantilever), both in `flexible.rs`.
 //!
 //! # Model
 //! - **Crankshaft**: rotates about the fixed `z` axis; its coordinates are the
@@ -117,6 +118,11 @@ fn models() -> Vec<ModelInfo> {
             name: housing::MODEL.into(),
             description: "the crank drive in an engine housing on nine spring-damper mounts, seven degrees of freedom (Stadlmayr et al. 2017, Sect. 4.1)".into(),
             params: housing_specs().iter().map(ParamSpec::info).collect(),
+        },
+        ModelInfo {
+            name: flexible::FLEXIBLE_DRIVE.into(),
+            description: "the crank drive with flexible connecting rods (planar ANCF beams pinned to crank and pistons), the flexible case of Stadlmayr et al. 2017".into(),
+            params: flexible::drive_specs().iter().map(ParamSpec::info).collect(),
         },
         ModelInfo {
             name: flexible::MODEL.into(),
@@ -232,13 +238,17 @@ fn build(name: &str, params: &str) -> Result<Model, PluginError> {
     if name == flexible::MODEL {
         return flexible::build(&Params::parse(params, &flexible::specs())?);
     }
+    if name == flexible::FLEXIBLE_DRIVE {
+        return flexible::build_drive(&Params::parse(params, &flexible::drive_specs())?);
+    }
     if !name.is_empty() && name != MODEL {
         return Err(PluginError::new(
             ErrorKind::UnknownModel,
             name,
             &format!(
-                "this plugin offers '{MODEL}', '{}' and '{}'",
+                "this plugin offers '{MODEL}', '{}', '{}' and '{}'",
                 housing::MODEL,
+                flexible::FLEXIBLE_DRIVE,
                 flexible::MODEL
             ),
         ));

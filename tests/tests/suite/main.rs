@@ -8,6 +8,7 @@ mod ancf;
 mod continuation;
 mod cost_gate;
 mod crank_drive;
+mod crank_flexible;
 mod crank_housing;
 mod damping;
 mod divider;
