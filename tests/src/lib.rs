@@ -681,3 +681,20 @@ pub fn svg_text(svg: &str) -> String {
         .collect::<Vec<_>>()
         .join(" ")
 }
+
+/// The largest deviation of `b` from `a` (time-major outputs, one row per
+/// time), each output's relative to its peak in `a`: computed here, apart
+/// from the engine's own error figures.
+pub fn peak_relative_deviation(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    let outputs = a.first().map_or(0, Vec::len);
+    (0..outputs)
+        .map(|o| {
+            let peak = a.iter().map(|r| r[o].abs()).fold(0.0, f64::max);
+            a.iter()
+                .zip(b)
+                .map(|(x, y)| (x[o] - y[o]).abs())
+                .fold(0.0, f64::max)
+                / peak
+        })
+        .fold(0.0, f64::max)
+}

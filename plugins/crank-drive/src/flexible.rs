@@ -16,6 +16,7 @@
 //! K q'`), which unlike `beta K q'` alone leaves rigid motions undamped.
 //! Outputs `u_tip`, `w_tip`: the tip's axial and transverse displacement.
 
+use super::{count_in, non_negative, positive};
 use ssm_api::{Harmonic, Model, MotionKind, PluginError, PolyVector, SparseMatrix};
 use ssm_plugin_kit::{Constraints, MechanicalSystem, ParamSpec, Params};
 use von_karman_beam::ancf::AncfElement;
@@ -50,10 +51,6 @@ pub(crate) fn specs() -> Vec<ParamSpec> {
     ]
 }
 
-fn invalid(name: &str, message: &str) -> PluginError {
-    PluginError::new(ssm_api::ErrorKind::InvalidParameter, name, message)
-}
-
 /// Global index of local unknown `i` of element `e` (`None`: fixed by the
 /// clamp).
 fn global(e: usize, i: usize) -> Option<usize> {
@@ -65,29 +62,10 @@ fn global(e: usize, i: usize) -> Option<usize> {
 }
 
 pub(crate) fn build(p: &Params) -> Result<Model, PluginError> {
-    let n_el = p.count("elements") as usize;
-    if !(1..=64).contains(&n_el) {
-        return Err(invalid("elements", &format!("must be 1 to 64, got {n_el}")));
-    }
-    for name in ["length", "ea", "ei", "rho_a"] {
-        let x = p.float(name);
-        if !(x.is_finite() && x > 0.0) {
-            return Err(invalid(name, &format!("must be positive, got {x}")));
-        }
-    }
+    let n_el = count_in(p, "elements", 1..=64)?;
+    positive(p, &["length", "ea", "ei", "rho_a"])?;
+    non_negative(p, &["beta"])?;
     let beta = p.float("beta");
-    if !(beta.is_finite() && beta >= 0.0) {
-        return Err(invalid(
-            "beta",
-            &format!("must be non-negative, got {beta}"),
-        ));
-    }
-    for name in ["tip_fx", "tip_fy", "tip_amp"] {
-        let x = p.float(name);
-        if !x.is_finite() {
-            return Err(invalid(name, &format!("must be finite, got {x}")));
-        }
-    }
     let element = AncfElement {
         length: p.float("length") / n_el as f64,
         section: Section {
@@ -206,26 +184,10 @@ pub(crate) fn drive_specs() -> Vec<ParamSpec> {
 /// ([`AncfElement::strain_rate_damping`]), not on their rigid motion.
 pub(crate) fn build_drive(p: &Params) -> Result<Model, PluginError> {
     let cyl = super::cylinders(p)?;
-    let n_el = p.count("rod_elements") as usize;
-    if !(1..=16).contains(&n_el) {
-        return Err(invalid(
-            "rod_elements",
-            &format!("must be 1 to 16, got {n_el}"),
-        ));
-    }
-    for name in ["rod_ea", "rod_ei"] {
-        let x = p.float(name);
-        if !(x.is_finite() && x > 0.0) {
-            return Err(invalid(name, &format!("must be positive, got {x}")));
-        }
-    }
+    let n_el = count_in(p, "rod_elements", 1..=16)?;
+    positive(p, &["rod_ea", "rod_ei"])?;
+    non_negative(p, &["rod_beta"])?;
     let beta = p.float("rod_beta");
-    if !(beta.is_finite() && beta >= 0.0) {
-        return Err(invalid(
-            "rod_beta",
-            &format!("must be non-negative, got {beta}"),
-        ));
-    }
     let (r, l) = (p.float("r"), p.float("l"));
     let per_cylinder = 2 + 4 * (n_el + 1);
     let base = |i: usize| 3 + i * per_cylinder;
@@ -326,14 +288,7 @@ pub(crate) fn build_drive(p: &Params) -> Result<Model, PluginError> {
         }
     }
     s.constraints = Some(Constraints::polynomial(g.canonical()));
-    let torque = |tau: f64| {
-        let mut cos = PolyVector::zeros(nd, 2 * nd);
-        cos.push(0, -tau, &[]);
-        cos.push(0, -tau, &[(1, 1)]);
-        cos.push(1, tau, &[(0, 1)]);
-        cos
-    };
-    s.forcing = super::torque_harmonics(p, nd, torque);
+    s.forcing = super::torque_harmonics(p, nd, |tau| super::crank_torque(nd, tau));
     s.extra_outputs = super::strokes(&cyl, base);
     Ok(s.into_model()?)
 }

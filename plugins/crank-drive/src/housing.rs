@@ -167,25 +167,17 @@ fn sparse(m: &[Vec<f64>]) -> SparseMatrix {
 /// `Jb = ((i_yy + i_zz - i_xx) / 2, ...)` (positive: the triangle
 /// inequality of a rigid body's principal moments).
 fn second_moments(p: &Params) -> Result<[f64; 3], PluginError> {
-    for name in [
-        "m_housing",
-        "i_xx",
-        "i_yy",
-        "i_zz",
-        "mount_k",
-        "mount_ratio",
-    ] {
-        let x = p.float(name);
-        if !(x.is_finite() && x > 0.0) {
-            return Err(invalid(name, &format!("must be positive, got {x}")));
-        }
-    }
-    for name in ["mount_dx", "mount_dy", "mount_dz"] {
-        let x = p.float(name);
-        if !x.is_finite() {
-            return Err(invalid(name, &format!("must be finite, got {x}")));
-        }
-    }
+    super::positive(
+        p,
+        &[
+            "m_housing",
+            "i_xx",
+            "i_yy",
+            "i_zz",
+            "mount_k",
+            "mount_ratio",
+        ],
+    )?;
     if p.float("mount_dx") == 0.0 || p.float("mount_dz") == 0.0 {
         return Err(invalid(
             "mount_dx",

@@ -136,6 +136,54 @@ fn invalid(name: &str, message: &str) -> PluginError {
     PluginError::new(ErrorKind::InvalidParameter, name, message)
 }
 
+/// Refuses the first parameter of `names` that is not positive (the
+/// parameters are finite: [`Params::parse`] refuses others).
+fn positive(p: &Params, names: &[&str]) -> Result<(), PluginError> {
+    match names.iter().find(|n| p.float(n) <= 0.0) {
+        Some(n) => Err(invalid(n, &format!("must be positive, got {}", p.float(n)))),
+        None => Ok(()),
+    }
+}
+
+/// Refuses the first parameter of `names` that is negative.
+fn non_negative(p: &Params, names: &[&str]) -> Result<(), PluginError> {
+    match names.iter().find(|n| p.float(n) < 0.0) {
+        Some(n) => Err(invalid(
+            n,
+            &format!("must be non-negative, got {}", p.float(n)),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The count parameter `name`, refused outside `range`.
+fn count_in(
+    p: &Params,
+    name: &str,
+    range: std::ops::RangeInclusive<usize>,
+) -> Result<usize, PluginError> {
+    let n = p.count(name) as usize;
+    if range.contains(&n) {
+        Ok(n)
+    } else {
+        Err(invalid(
+            name,
+            &format!("must be {} to {}, got {n}", range.start(), range.end()),
+        ))
+    }
+}
+
+/// The driving torque `tau` about `+z` as the generalized force on the
+/// crank's `u = u_ref + q_u` (coordinates 0..3 of `nd`): `tau (-u_y, u_x,
+/// 0)`, `u_ref = (0, 1, 0)`.
+fn crank_torque(nd: usize, tau: f64) -> PolyVector {
+    let mut cos = PolyVector::zeros(nd, 2 * nd);
+    cos.push(0, -tau, &[]);
+    cos.push(0, -tau, &[(1, 1)]);
+    cos.push(1, tau, &[(0, 1)]);
+    cos
+}
+
 /// `R_z(beta)`, the rotation by `beta` about `z`.
 fn rot_z(beta: f64) -> [[f64; 3]; 3] {
     let (s, c) = beta.sin_cos();
@@ -166,10 +214,7 @@ struct Cylinder {
 }
 
 fn cylinders(p: &Params) -> Result<Vec<Cylinder>, PluginError> {
-    let n = p.count("cylinders") as usize;
-    if !(1..=8).contains(&n) {
-        return Err(invalid("cylinders", &format!("must be 1 to 8, got {n}")));
-    }
+    let n = count_in(p, "cylinders", 1..=8)?;
     let v = p.float("v_angle");
     if !(0.0..180.0).contains(&v) {
         return Err(invalid(
@@ -177,24 +222,8 @@ fn cylinders(p: &Params) -> Result<Vec<Cylinder>, PluginError> {
             &format!("must lie in [0, 180) degrees, got {v}"),
         ));
     }
-    for name in ["r", "pitch", "m_rod", "m_piston", "j_crank"] {
-        let x = p.float(name);
-        if !(x.is_finite() && x > 0.0) {
-            return Err(invalid(name, &format!("must be positive, got {x}")));
-        }
-    }
-    for name in ["c_crank", "c_piston"] {
-        let x = p.float(name);
-        if !(x.is_finite() && x >= 0.0) {
-            return Err(invalid(name, &format!("must be non-negative, got {x}")));
-        }
-    }
-    for name in ["tau_mean", "tau_amp"] {
-        let x = p.float(name);
-        if !x.is_finite() {
-            return Err(invalid(name, &format!("must be finite, got {x}")));
-        }
-    }
+    positive(p, &["r", "pitch", "m_rod", "m_piston", "j_crank"])?;
+    non_negative(p, &["c_crank", "c_piston"])?;
     let (r, l) = (p.float("r"), p.float("l"));
     if !(l.is_finite() && l > r) {
         return Err(invalid(
@@ -336,15 +365,7 @@ fn build(name: &str, params: &str) -> Result<Model, PluginError> {
         g.push(eq + 2, 1.0, &[(o + 2, 1)]);
     }
     s.constraints = Some(Constraints::polynomial(g.canonical()));
-    // torque tau (-u_y, u_x, 0) with u = u_ref + deviation
-    let torque = |tau: f64| {
-        let mut cos = PolyVector::zeros(nd, 2 * nd);
-        cos.push(0, -tau, &[]);
-        cos.push(0, -tau, &[(1, 1)]);
-        cos.push(1, tau, &[(0, 1)]);
-        cos
-    };
-    s.forcing = torque_harmonics(&p, nd, torque);
+    s.forcing = torque_harmonics(&p, nd, |tau| crank_torque(nd, tau));
     s.extra_outputs = strokes(&cyl, |i| 3 + 3 * i);
     Ok(s.into_model()?)
 }

@@ -17,23 +17,7 @@ use ssm_core::fom::DaeProblem;
 use ssm_core::model::system::System;
 use ssm_core::reduce::hyper::Sample;
 use ssm_core::reduce::pod::Truncation;
-use ssm_tests::{model_and_system, scene_error};
-
-/// The largest deviation of `b` from `a` (time-major outputs) relative to
-/// each output's peak in `a`.
-fn deviation(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
-    let outputs = a[0].len();
-    (0..outputs)
-        .map(|o| {
-            let peak = a.iter().map(|r| r[o].abs()).fold(0.0, f64::max);
-            a.iter()
-                .zip(b)
-                .map(|(x, y)| (x[o] - y[o]).abs())
-                .fold(0.0, f64::max)
-                / peak
-        })
-        .fold(0.0, f64::max)
-}
+use ssm_tests::{model_and_system, peak_relative_deviation, scene_error};
 
 /// Acceptance of issue 42, item 3: on the divider forced at 30 rad/s
 /// (below its first frequency; POD at a drop of 6 decades), the lifted
@@ -90,7 +74,7 @@ fn deim_converges_to_the_pod_model_and_is_exact_with_every_row() {
         })
         .collect();
     let pod = &runs[0];
-    let error = deviation(&full.outputs, pod);
+    let error = peak_relative_deviation(&full.outputs, pod);
     eprintln!("plain POD against the full model: {error:.2e}");
 
     // the lifted run against the expanded polynomial on the same steps
@@ -141,7 +125,7 @@ fn deim_converges_to_the_pod_model_and_is_exact_with_every_row() {
         .zip(&runs[1..])
         .map(|(rom, run)| {
             let h = rom.hyper.as_ref().expect("hyper-reduced");
-            let e = deviation(pod, run);
+            let e = peak_relative_deviation(pod, run);
             eprintln!(
                 "{}: {} of {} rows, training error {:.2e}, against POD {e:.2e}",
                 rom.label,
