@@ -309,12 +309,34 @@ pub fn pod_roms(
         let n = reduction.u.nrows();
         let mut extra = Vec::new();
         for &sample in hyper.iter().filter(|_| liftable) {
-            let h = deim(&sys.nonlinearity, &v_rows, nr, n, &train.states, sample).map_err(
-                |source| PodStudyError::Hyper {
-                    rom: label.clone(),
-                    source,
-                },
-            )?;
+            let h = deim(
+                &sys.nonlinearity,
+                &full_model.a,
+                &v_rows,
+                nr,
+                n,
+                &train.states,
+                sample,
+            )
+            .map_err(|source| PodStudyError::Hyper {
+                rom: label.clone(),
+                source,
+            })?;
+            // the sampled rows' linear part, where DEIM carries it, out of A_r
+            let system = if h.linear_removed.is_empty() {
+                system.clone()
+            } else {
+                let mut model = reduction.model.clone();
+                for &(p, q, value) in &h.linear_removed {
+                    model.a.push(p, q, -value);
+                }
+                System::from_model(&format!("{} via pod", sys.plugin), model).map_err(|source| {
+                    PodStudyError::ReducedModel {
+                        rom: label.clone(),
+                        source: Box::new(source),
+                    }
+                })?
+            };
             let what = match sample {
                 Sample::Tolerance(tol) => format!("deim {tol:e}"),
                 Sample::Points(m) => format!("deim {m} rows"),
@@ -323,7 +345,7 @@ pub fn pod_roms(
                 label: format!("{label} {what}"),
                 truncation: *truncation,
                 reduction: reduction.clone(),
-                system: system.clone(),
+                system,
                 offline_s: offline_s + h.info.seconds,
                 lifted: Some(h.lifted),
                 hyper: Some(h.info),

@@ -133,8 +133,11 @@ pub(super) fn pow(x: f64, p: u32) -> f64 {
 #[derive(Debug, Clone)]
 pub(crate) struct PreparedLifted<'a> {
     poly: &'a LiftedPoly,
-    /// `(term, factor, local row, local variable)` of each derivative.
-    jac: Vec<(u32, u32, u32, u32)>,
+    /// `(term, factor, slot)` of each derivative: it adds into `slot` of
+    /// the sparse `dF_S`.
+    jac: Vec<(u32, u32, u32)>,
+    /// `(local row, local variable)` of each slot of `dF_S`, by rows.
+    slots: Vec<(u32, u32)>,
     /// The reduced states each local row depends on.
     row_cols: Vec<Vec<u32>>,
 }
@@ -143,16 +146,27 @@ impl<'a> PreparedLifted<'a> {
     /// Prepares `poly`; its Jacobian cells `(reduced column, reduced row)`.
     pub(crate) fn new(poly: &'a LiftedPoly) -> (Self, Vec<(usize, usize)>) {
         let nr = poly.n_reduced;
-        let mut jac = Vec::new();
         let mut reach: Vec<Vec<bool>> = vec![vec![false; nr]; poly.rows.len()];
+        let mut cell: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut pairs = Vec::new();
         for (k, t) in poly.poly.terms.iter().enumerate() {
             for (q, f) in t.factors.iter().enumerate() {
-                jac.push((k as u32, q as u32, t.eq, f.var));
+                pairs.push((k as u32, q as u32, t.eq, f.var));
+                cell.insert((t.eq, f.var), 0);
                 for &(j, _) in &poly.lift[f.var as usize] {
                     reach[t.eq as usize][j as usize] = true;
                 }
             }
         }
+        let mut slots: Vec<(u32, u32)> = cell.keys().copied().collect();
+        slots.sort_unstable();
+        for (k, key) in slots.iter().enumerate() {
+            cell.insert(*key, k as u32);
+        }
+        let jac = pairs
+            .iter()
+            .map(|&(k, q, row, var)| (k, q, cell[&(row, var)]))
+            .collect();
         let row_cols: Vec<Vec<u32>> = reach
             .iter()
             .map(|r| (0..nr as u32).filter(|&j| r[j as usize]).collect())
@@ -174,6 +188,7 @@ impl<'a> PreparedLifted<'a> {
             Self {
                 poly,
                 jac,
+                slots,
                 row_cols,
             },
             cells,
@@ -198,8 +213,9 @@ impl<'a> PreparedLifted<'a> {
         lp.project_into(&f, scale, out);
     }
 
-    /// `vals[slot(p, q)] += scale dF_r,p / dy_q`: `W = dF_S V_S` row by row,
-    /// then `P W`; `slot` maps a reduced `(row, column)` to the pattern.
+    /// `vals[slot(p, q)] += scale dF_r,p / dy_q`: the sparse `dF_S` (each
+    /// distinct row and variable once), `W = dF_S V_S` row by row, then
+    /// `P W`; `slot` maps a reduced `(row, column)` to the pattern.
     pub(crate) fn jac_into(
         &self,
         y: &[f64],
@@ -215,8 +231,9 @@ impl<'a> PreparedLifted<'a> {
         let mut z = vec![0.0; lp.vars.len()];
         lp.lift_into(y, &mut z);
         let mut w = vec![0.0; lp.rows.len() * nr];
+        let mut df = vec![0.0; self.slots.len()];
         let terms = &lp.poly.terms;
-        for &(term, factor, row, var) in &self.jac {
+        for &(term, factor, cell) in &self.jac {
             let t = &terms[term as usize];
             let mut d = t.coeff;
             for (q, f) in t.factors.iter().enumerate() {
@@ -227,6 +244,9 @@ impl<'a> PreparedLifted<'a> {
                     d *= pow(zv, f.power);
                 }
             }
+            df[cell as usize] += d;
+        }
+        for (&(row, var), &d) in self.slots.iter().zip(&df) {
             if d != 0.0 {
                 let wr = &mut w[row as usize * nr..(row as usize + 1) * nr];
                 for &(j, v) in &lp.lift[var as usize] {

@@ -31,9 +31,11 @@
 //! reaction would no longer be the transpose of the reduced constraint
 //! Jacobian, and the iteration matrix of the index-3 DAE relies on it.
 //! The error control is the training error of the reduced force,
-//! `max_k |V_F^T (F_k - D F_k)| / max_k |V_F^T F_k|` over the snapshots
-//! (`D` the DEIM interpolation), and `m` is the smallest sample meeting the
-//! tolerance; with every force row sampled the interpolation is the
+//! `max_k |V_F^T (F_k - D F_k)|` over the snapshots (`D` the DEIM
+//! interpolation) relative to the peak of the reduced internal force, and
+//! `m` is the smallest sample meeting the tolerance; where the nonlinear
+//! part cancels the linear one the whole internal force is sampled instead
+//! ([`deim`]); with every force row sampled the interpolation is the
 //! identity and the model is exact.
 //!
 //! # References
@@ -125,6 +127,9 @@ pub struct HyperInfo {
     pub snapshots: usize,
     /// Seconds of the training.
     pub seconds: f64,
+    /// `true` when the sampled rows carry the whole internal force, its
+    /// linear part included (see [`deim`]).
+    pub total: bool,
 }
 
 /// Why a hyper-reduction could not be trained.
@@ -146,13 +151,35 @@ pub struct Hyper {
     pub lifted: LiftedPoly,
     /// The training's figures.
     pub info: HyperInfo,
+    /// Where the sampled rows carry the whole internal force
+    /// ([`HyperInfo::total`]): the entries `(p, q, value)` to subtract from
+    /// the reduced model's linear part `A_r`, the projection `V_F^T A_F V`
+    /// of the sampled rows' linear part now evaluated at the DEIM rows
+    /// (empty otherwise).
+    pub linear_removed: Vec<(usize, usize, f64)>,
 }
 
 /// The DEIM hyper-reduction of `V^T F(V y)` for the canonical mechanical
 /// layout with `n` coordinates, trained on the full states `snapshots`
-/// (shifted like `F`).
+/// (shifted like `F`); `linear` is the full model's linear part `A`.
+///
+/// What is sampled: the nonlinear internal force `F_nl`, or the whole
+/// internal force `A_F z + F_nl(z)` (the force rows' linear part off the
+/// multipliers included), whichever meets `sample` with fewer rows (then
+/// with the smaller training error). The whole force wins where the
+/// nonlinear part cancels the linear one, as in absolute nodal coordinates,
+/// where a rigid rotation of an element makes large coordinates and no
+/// force, or in a von Karman beam's membrane response: an interpolation
+/// error relative to the cancelling parts is then an error far larger
+/// relative to the force they leave, while the whole force is zero at the
+/// sampled rows under rigid motion, hence zero after the interpolation. Its
+/// linear part then leaves the reduced `A` ([`Hyper::linear_removed`]).
+/// Either way the training error is that of the reduced internal force,
+/// `max_k |V_F^T (F_k - D F_k)|` of the sampled `F` relative to
+/// `max_k |V_F^T (A_F z_k + F_nl(z_k))|`.
 pub fn deim(
     full: &PolyVector,
+    linear: &ssm_api::SparseMatrix,
     v_rows: &[Vec<(u32, f64)>],
     n_reduced: usize,
     n: usize,
@@ -189,16 +216,21 @@ pub fn deim(
         .enumerate()
         .map(|(i, &r)| (r, i))
         .collect();
-    let mut g = Mat::<f64>::zeros(nf, picks.len());
-    for (s, z) in picks.iter().enumerate() {
-        for &k in &force_terms {
-            let t = &full.terms[k];
-            let v = t.factors.iter().fold(t.coeff, |acc, f| {
-                acc * z[f.var as usize].powi(f.power as i32)
-            });
-            g[(row_of[&t.eq], s)] += v;
+    // the force rows' linear part off the multipliers, as degree-one terms
+    // appended to the polynomial (the model's own ones kept in place)
+    let mut aug = full.clone();
+    let mut linear_terms: Vec<usize> = (0..full.terms.len())
+        .filter(|&k| !nonlinear(full, k) && !is_constraint_term(full, k, n))
+        .filter(|&k| full.terms[k].factors.len() == 1 && row_of.contains_key(&full.terms[k].eq))
+        .collect();
+    for (i, k, value) in linear.iter() {
+        if value != 0.0 && k < 2 * n && row_of.contains_key(&(i as u32)) {
+            aug.push(i, value, &[(k, 1)]);
+            linear_terms.push(aug.terms.len() - 1);
         }
     }
+    let g_nl = snapshot_matrix(&aug, &force_terms, &row_of, &picks);
+    let g_lin = snapshot_matrix(&aug, &linear_terms, &row_of, &picks);
     // V_F (nf x nr) and the reduced force snapshots V_F^T g
     let vf = Mat::from_fn(nf, n_reduced, |i, j| {
         v_rows[force_rows[i] as usize]
@@ -206,9 +238,157 @@ pub fn deim(
             .find(|e| e.0 as usize == j)
             .map_or(0.0, |e| e.1)
     });
-    let reduced = vf.transpose() * &g;
-    let peak = column_peak(&reduced);
-    let (values, modes) = if nf == 0 || picks.is_empty() {
+    let g_total = &g_nl + &g_lin;
+    // the error of either variant is the error of the reduced internal
+    // force, V_F^T (F - D F) of what is sampled, against its peak
+    let peak = column_peak(&(vf.transpose() * &g_total));
+    let nl = select(&g_nl, &vf, peak, sample, picks.len());
+    let whole =
+        (!linear_terms.is_empty()).then(|| select(&g_total, &vf, peak, sample, picks.len()));
+    let rows_of = |c: &Option<(usize, Mat<f64>, f64)>| c.as_ref().map_or((nf, 0.0), |x| (x.0, x.2));
+    let (total, selection) = match (nl, whole) {
+        (Ok(a), Some(Ok(b))) => {
+            // the fewer rows, then the smaller error
+            let ((ma, ea), (mb, eb)) = (rows_of(&a.chosen), rows_of(&b.chosen));
+            if mb < ma || (mb == ma && eb < ea) {
+                (true, b)
+            } else {
+                (false, a)
+            }
+        }
+        (Err(_), Some(Ok(b))) => (true, b),
+        (a, _) => (false, a?),
+    };
+    let Selection {
+        values,
+        points,
+        chosen,
+    } = selection;
+    let sampled_terms = if total {
+        [force_terms.clone(), linear_terms.clone()].concat()
+    } else {
+        force_terms.clone()
+    };
+    let mut local_row: HashMap<u32, usize> = HashMap::new();
+    let mut rows = Vec::new();
+    let mut placed = Vec::new();
+    for (k, t) in aug.terms.iter().enumerate() {
+        if nonlinear(&aug, k) && is_constraint_term(&aug, k, n) && !v_rows[t.eq as usize].is_empty()
+        {
+            let row = *local_row.entry(t.eq).or_insert_with(|| {
+                rows.push((t.eq, v_rows[t.eq as usize].clone()));
+                rows.len() - 1
+            });
+            placed.push(Placed { term: k, row });
+        }
+    }
+    let (sampled, all_rows, training_error) = match chosen {
+        Some((m, p, err)) => {
+            // the sampled rows, projected by the columns of P
+            let mut deim_row: HashMap<u32, usize> = HashMap::new();
+            for (i, &pt) in points[..m].iter().enumerate() {
+                let full_row = force_rows[pt];
+                let weights: Vec<(u32, f64)> = (0..n_reduced)
+                    .filter(|&j| p[(j, i)] != 0.0)
+                    .map(|j| (j as u32, p[(j, i)]))
+                    .collect();
+                rows.push((full_row, weights));
+                deim_row.insert(full_row, rows.len() - 1);
+            }
+            for &k in &sampled_terms {
+                if let Some(&row) = deim_row.get(&aug.terms[k].eq) {
+                    placed.push(Placed { term: k, row });
+                }
+            }
+            let sampled = points[..m]
+                .iter()
+                .map(|&i| force_rows[i] as usize)
+                .collect();
+            (sampled, false, err)
+        }
+        None => {
+            let mut exact_row: HashMap<u32, usize> = HashMap::new();
+            for &r in &force_rows {
+                rows.push((r, v_rows[r as usize].clone()));
+                exact_row.insert(r, rows.len() - 1);
+            }
+            for &k in &force_terms {
+                placed.push(Placed {
+                    term: k,
+                    row: exact_row[&full.terms[k].eq],
+                });
+            }
+            (force_rows.iter().map(|&r| r as usize).collect(), true, 0.0)
+        }
+    };
+    // every row sampled: the plain projection, its linear part in A_r
+    let total = total && !all_rows;
+    let linear_removed = if total {
+        projected_linear(&aug, &linear_terms, v_rows, n_reduced)
+    } else {
+        Vec::new()
+    };
+    let lifted = LiftedPoly::assemble(&aug, &placed, rows, v_rows, n_reduced);
+    Ok(Hyper {
+        linear_removed,
+        lifted,
+        info: HyperInfo {
+            force_rows: nf,
+            sampled,
+            all_rows,
+            singular_values: values,
+            training_error,
+            snapshots: picks.len(),
+            seconds: clock.elapsed().as_secs_f64(),
+            total,
+        },
+    })
+}
+
+/// The force snapshots: the `terms` of `poly` at the states `picks`,
+/// summed per force row (`row_of`: full row -> snapshot row).
+fn snapshot_matrix(
+    poly: &PolyVector,
+    terms: &[usize],
+    row_of: &HashMap<u32, usize>,
+    picks: &[&Vec<f64>],
+) -> Mat<f64> {
+    let mut g = Mat::<f64>::zeros(row_of.len(), picks.len());
+    for (s, z) in picks.iter().enumerate() {
+        for &k in terms {
+            let t = &poly.terms[k];
+            let v = t.factors.iter().fold(t.coeff, |acc, f| {
+                acc * z[f.var as usize].powi(f.power as i32)
+            });
+            g[(row_of[&t.eq], s)] += v;
+        }
+    }
+    g
+}
+
+/// A DEIM training of one sampled force: its singular values, the greedy
+/// points, and the chosen sample `(m, P, training error)` (`None`: every
+/// row).
+struct Selection {
+    values: Vec<f64>,
+    points: Vec<usize>,
+    chosen: Option<(usize, Mat<f64>, f64)>,
+}
+
+/// The DEIM of the force snapshots `g` (force rows x snapshots) for the
+/// projection `V_F`: the training error of `m` points is
+/// `max_k |V_F^T (g_k - U_m (S^T U_m)^{-1} S^T g_k)| / peak`, and `sample`
+/// picks `m`.
+fn select(
+    g: &Mat<f64>,
+    vf: &Mat<f64>,
+    peak: f64,
+    sample: Sample,
+    snapshots: usize,
+) -> Result<Selection, HyperError> {
+    let nf = g.nrows();
+    let reduced = vf.transpose() * g;
+    let (values, modes) = if nf == 0 || g.ncols() == 0 {
         (Vec::new(), Mat::zeros(nf, 0))
     } else {
         let svd = g.thin_svd().map_err(|_| HyperError::Svd)?;
@@ -229,7 +409,7 @@ pub fn deim(
         let stu = Mat::from_fn(m, m, |i, j| um[(points[i], j)]);
         let lu = stu.partial_piv_lu();
         // (S^T U)^{-1} as the solve of its transpose: P^T = (S^T U)^{-T} U^T V_F
-        let ut_vf = um.transpose() * &vf;
+        let ut_vf = um.transpose() * vf;
         let pt = faer::linalg::solvers::Solve::solve_transpose(&lu, &ut_vf);
         if pt
             .col_iter()
@@ -247,8 +427,7 @@ pub fn deim(
         Sample::Points(m) if m >= nf => None,
         Sample::Points(m) if m > rank => {
             return Err(HyperError::Sample(format!(
-                "{m} rows need {m} force modes, the {} training snapshots give {rank} of the {nf} force rows: sample at most {rank}, or all {nf}",
-                picks.len()
+                "{m} rows need {m} force modes, the {snapshots} training snapshots give {rank} of the {nf} force rows: sample at most {rank}, or all {nf}"
             )))
         }
         Sample::Points(m) => trial(m).map(|(p, e)| (m, p, e)),
@@ -284,71 +463,36 @@ pub fn deim(
             }
         }
     };
-    let mut local_row: HashMap<u32, usize> = HashMap::new();
-    let mut rows = Vec::new();
-    let mut placed = Vec::new();
-    for (k, t) in full.terms.iter().enumerate() {
-        if nonlinear(full, k) && is_constraint_term(full, k, n) && !v_rows[t.eq as usize].is_empty()
-        {
-            let row = *local_row.entry(t.eq).or_insert_with(|| {
-                rows.push((t.eq, v_rows[t.eq as usize].clone()));
-                rows.len() - 1
-            });
-            placed.push(Placed { term: k, row });
+    Ok(Selection {
+        values,
+        points,
+        chosen,
+    })
+}
+
+/// `V^T L V` of the degree-one `terms` `L` of `poly`, as `(p, q, value)`.
+fn projected_linear(
+    poly: &PolyVector,
+    terms: &[usize],
+    v_rows: &[Vec<(u32, f64)>],
+    n_reduced: usize,
+) -> Vec<(usize, usize, f64)> {
+    let mut dense = vec![0.0; n_reduced * n_reduced];
+    for &k in terms {
+        let t = &poly.terms[k];
+        let var = t.factors[0].var as usize;
+        for &(p, wp) in &v_rows[t.eq as usize] {
+            for &(q, wq) in &v_rows[var] {
+                dense[p as usize * n_reduced + q as usize] += wp * t.coeff * wq;
+            }
         }
     }
-    let (sampled, all_rows, training_error) = match chosen {
-        Some((m, p, err)) => {
-            // the sampled rows, projected by the columns of P
-            let mut deim_row: HashMap<u32, usize> = HashMap::new();
-            for (i, &pt) in points[..m].iter().enumerate() {
-                let full_row = force_rows[pt];
-                let weights: Vec<(u32, f64)> = (0..n_reduced)
-                    .filter(|&j| p[(j, i)] != 0.0)
-                    .map(|j| (j as u32, p[(j, i)]))
-                    .collect();
-                rows.push((full_row, weights));
-                deim_row.insert(full_row, rows.len() - 1);
-            }
-            for &k in &force_terms {
-                if let Some(&row) = deim_row.get(&full.terms[k].eq) {
-                    placed.push(Placed { term: k, row });
-                }
-            }
-            let sampled = points[..m]
-                .iter()
-                .map(|&i| force_rows[i] as usize)
-                .collect();
-            (sampled, false, err)
-        }
-        None => {
-            let mut exact_row: HashMap<u32, usize> = HashMap::new();
-            for &r in &force_rows {
-                rows.push((r, v_rows[r as usize].clone()));
-                exact_row.insert(r, rows.len() - 1);
-            }
-            for &k in &force_terms {
-                placed.push(Placed {
-                    term: k,
-                    row: exact_row[&full.terms[k].eq],
-                });
-            }
-            (force_rows.iter().map(|&r| r as usize).collect(), true, 0.0)
-        }
-    };
-    let lifted = LiftedPoly::assemble(full, &placed, rows, v_rows, n_reduced);
-    Ok(Hyper {
-        lifted,
-        info: HyperInfo {
-            force_rows: nf,
-            sampled,
-            all_rows,
-            singular_values: values,
-            training_error,
-            snapshots: picks.len(),
-            seconds: clock.elapsed().as_secs_f64(),
-        },
-    })
+    dense
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v != 0.0)
+        .map(|(k, &v)| (k / n_reduced, k % n_reduced, v))
+        .collect()
 }
 
 /// The largest column norm of `m`.
@@ -453,6 +597,57 @@ mod tests {
         out
     }
 
+    fn none(n: usize) -> ssm_api::SparseMatrix {
+        ssm_api::SparseMatrix::zeros(n, n)
+    }
+
+    /// Two coordinates without constraints (states `q0, q1, v0, v1`), the
+    /// linear force `-k q0 (1, 2)` in the momentum rows 2, 3 and the
+    /// nonlinear one `k q1^2 (1, 2)`: on the "rigid" states `q0 = q1^2` the
+    /// whole force is zero while its parts are of size `k`, as
+    /// for an element of absolute nodal coordinates turning rigidly.
+    /// Trained on states near that curve, DEIM samples the whole force, takes
+    /// its projected linear part out of `A_r`, and gives exactly zero at a
+    /// rigid state with one row; with every row it is the plain projection.
+    #[test]
+    fn deim_samples_the_whole_force_where_its_parts_cancel() {
+        let k = 1e4;
+        let mut a = none(4);
+        a.push(2, 0, -k);
+        a.push(3, 0, -2.0 * k);
+        let mut f = PolyVector::zeros(4, 4);
+        f.push(2, k, &[(1, 2)]);
+        f.push(3, 2.0 * k, &[(1, 2)]);
+        let rows: Rows = (0..4).map(|i| vec![(i as u32, 1.0)]).collect();
+        let snaps: Vec<Vec<f64>> = (0..30)
+            .map(|j| {
+                let s = 0.1 * j as f64 - 1.5;
+                vec![s * s + 1e-4 * (3.0 * s).sin(), s, 0.0, 0.0]
+            })
+            .collect();
+        let h = deim(&f, &a, &rows, 4, 2, &snaps, Sample::Points(1)).expect("trains");
+        assert!(h.info.total && !h.info.all_rows, "{:?}", h.info);
+        let mut removed = [0.0; 16];
+        for &(p, q, v) in &h.linear_removed {
+            removed[4 * p + q] += v;
+        }
+        assert_eq!(removed[2 * 4], -k);
+        assert_eq!(removed[3 * 4], -2.0 * k);
+        assert_eq!(removed.iter().filter(|v| **v != 0.0).count(), 2);
+        // A_r - removed is zero: the reduced force is the lifted one alone
+        for y in [[4.0, 2.0, 0.3, -0.1], [0.25, -0.5, 0.0, 1.0]] {
+            let got = eval(&h.lifted, &y);
+            for g in &got {
+                assert!(g.abs() < 1e-12 * k, "{got:?}");
+            }
+        }
+        let all = deim(&f, &a, &rows, 4, 2, &snaps, Sample::Points(2)).expect("trains");
+        assert!(all.info.all_rows && !all.info.total && all.linear_removed.is_empty());
+        // without the linear part nothing cancels: the nonlinear force alone
+        let plain = deim(&f, &none(4), &rows, 4, 2, &snaps, Sample::Points(1)).expect("trains");
+        assert!(!plain.info.total && plain.linear_removed.is_empty());
+    }
+
     #[test]
     fn lifted_exact_is_the_projection_and_its_jacobian_the_derivative() {
         let (f, rows, v) = sample();
@@ -495,7 +690,7 @@ mod tests {
                 vec![t.sin(), (1.3 * t).cos(), 0.1 * t, 0.2, 0.5 * t.cos(), -0.1]
             })
             .collect();
-        let all = deim(&f, &rows, 4, 2, &snaps, Sample::Points(2)).expect("trains");
+        let all = deim(&f, &none(6), &rows, 4, 2, &snaps, Sample::Points(2)).expect("trains");
         assert!(all.info.all_rows && all.info.force_rows == 2);
         let y = [0.3, -0.2, 0.5, 1.2];
         let (got, want) = (eval(&all.lifted, &y), direct(&f, &v, &y));
@@ -504,7 +699,7 @@ mod tests {
         }
         // one row: the force is interpolated, the multiplier rows (reduced
         // equation 3: the constraint rows 4, 5) are not touched
-        let one = deim(&f, &rows, 4, 2, &snaps, Sample::Points(1)).expect("trains");
+        let one = deim(&f, &none(6), &rows, 4, 2, &snaps, Sample::Points(1)).expect("trains");
         assert_eq!(one.info.sampled.len(), 1);
         let got = eval(&one.lifted, &y);
         assert!((got[3] - want[3]).abs() < 1e-14 * (1.0 + want[3].abs()));
@@ -530,7 +725,7 @@ mod tests {
             .map(|k| vec![(k as f64).sin(), (0.7 * k as f64).cos(), 0.0])
             .collect();
         // n = 3 here: a first-order model without constraints or velocities
-        let h = deim(&f, &rows, 2, 3, &snaps, Sample::Tolerance(1e-12)).expect("trains");
+        let h = deim(&f, &none(6), &rows, 2, 3, &snaps, Sample::Tolerance(1e-12)).expect("trains");
         assert_eq!(h.info.sampled.len(), 2, "{:?}", h.info);
         assert!(!h.info.all_rows && h.info.training_error < 1e-12);
         let v = Mat::from_fn(3, 2, |i, j| rows[i][j].1);
@@ -540,11 +735,11 @@ mod tests {
             assert!((g - w).abs() < 1e-12 * (1.0 + w.abs()), "{got:?} {want:?}");
         }
         assert!(matches!(
-            deim(&f, &rows, 2, 3, &snaps, Sample::Tolerance(0.0)),
+            deim(&f, &none(6), &rows, 2, 3, &snaps, Sample::Tolerance(0.0)),
             Err(HyperError::Sample(_))
         ));
         assert!(matches!(
-            deim(&f, &rows, 2, 3, &snaps, Sample::Points(0)),
+            deim(&f, &none(6), &rows, 2, 3, &snaps, Sample::Points(0)),
             Err(HyperError::Sample(_))
         ));
     }
@@ -562,7 +757,7 @@ mod tests {
             .collect();
         let snaps = vec![vec![0.1; 6]; 5];
         for s in [Sample::Tolerance(1e-3), Sample::Points(3)] {
-            let h = deim(&f, &rows, 4, 2, &snaps, s).expect("trains");
+            let h = deim(&f, &none(6), &rows, 4, 2, &snaps, s).expect("trains");
             assert_eq!((h.info.force_rows, h.info.sampled.len()), (0, 0));
             assert!(h.info.all_rows);
             let y = [0.3, -0.2, 0.5, 1.2];
@@ -574,7 +769,7 @@ mod tests {
         // a zero snapshot set: no mode, every row
         let zero = vec![vec![0.0; 6]; 5];
         let (g, _, _) = sample();
-        let h = deim(&g, &rows, 4, 2, &zero, Sample::Tolerance(1e-3)).expect("trains");
+        let h = deim(&g, &none(6), &rows, 4, 2, &zero, Sample::Tolerance(1e-3)).expect("trains");
         assert!(h.info.all_rows && h.info.sampled.len() == 2);
     }
 }

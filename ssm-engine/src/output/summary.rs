@@ -89,7 +89,7 @@ pub(crate) struct Summary<'a> {
 
 /// The version of the shape of `summary.json` (its `schema_version`); it
 /// changes whenever a key is added, removed or changes its type.
-pub const SCHEMA_VERSION: u32 = 4;
+pub const SCHEMA_VERSION: u32 = 5;
 
 /// `summary.json`: a run's summary, or that of a `[pod]` scene that asks
 /// for no SSM answer.

@@ -69,7 +69,13 @@ fn deim_converges_to_the_pod_model_and_is_exact_with_every_row() {
         .iter()
         .map(|rom| {
             let run = pod_case_run(rom, &sys, &case, &full, &settings, &outputs);
-            assert!(run.failure.is_none(), "{}: {:?}", rom.label, run.failure);
+            assert!(
+                run.failure.is_none(),
+                "{}: {:?} {:?}",
+                rom.label,
+                run.failure,
+                rom.hyper.as_ref().map(|h| h.total)
+            );
             run.outputs
         })
         .collect();
@@ -127,11 +133,12 @@ fn deim_converges_to_the_pod_model_and_is_exact_with_every_row() {
             let h = rom.hyper.as_ref().expect("hyper-reduced");
             let e = peak_relative_deviation(pod, run);
             eprintln!(
-                "{}: {} of {} rows, training error {:.2e}, against POD {e:.2e}",
+                "{}: {} of {} rows, training error {:.2e}, against POD {e:.2e}, whole force {}",
                 rom.label,
                 h.sampled.len(),
                 h.force_rows,
-                h.training_error
+                h.training_error,
+                h.total
             );
             e
         })

@@ -259,17 +259,18 @@ impl<'p, 'a> Hht<'p, 'a> {
                 let stalled = finite && k > 0 && size > 0.5 * last_size && {
                     let (bh2, gh) = (beta * hs * hs, gamma * hs);
                     (0..r.len()).all(|i| {
-                        let (impact, scale) = if i < n {
-                            (
-                                gh * r[i].abs(),
-                                (1.0 + z1[i].abs()).min(1.0 + z1[n + i].abs()),
-                            )
+                        let d = r[i].abs();
+                        if i < n {
+                            // each state against its own size: an acceleration
+                            // moves its position by beta h^2 da and its velocity
+                            // by gamma h da
+                            bh2 * d <= o.tol * (1.0 + z1[i].abs())
+                                && gh * d <= o.tol * (1.0 + z1[n + i].abs())
                         } else if i < n + l.n_c {
-                            (gh * r[i].abs(), 1.0 + u[i].abs())
+                            gh * d <= o.tol * (1.0 + u[i].abs())
                         } else {
-                            (bh2 * r[i].abs(), 1.0 + z1[i + n].abs())
-                        };
-                        impact <= o.tol * scale
+                            bh2 * d <= o.tol * (1.0 + z1[i + n].abs())
+                        }
                     })
                 };
                 last_size = size;

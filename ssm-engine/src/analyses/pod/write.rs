@@ -344,10 +344,15 @@ pub(crate) fn report_md(model: &str, study: &PodStudy) -> String {
     for (k, r) in study.pod.iter().enumerate() {
         if let Some(h) = &r.hyper {
             s.push_str(&format!(
-                "pod{}: DEIM hyper-reduction (Chaturantabut & Sorensen 2010) of the internal forces: \
+                "pod{}: DEIM hyper-reduction (Chaturantabut & Sorensen 2010) of the {}: \
                  {} of {} force rows sampled{}, training error {:.2e} over {} snapshots, \
                  trained in {}; constraints and reactions lifted exactly.\n",
                 k + 1,
+                if h.total {
+                    "whole internal forces (their nonlinear part cancels the linear one)"
+                } else {
+                    "nonlinear internal forces"
+                },
                 h.sampled.len(),
                 h.force_rows,
                 if h.all_rows { " (all: exact)" } else { "" },
@@ -498,6 +503,10 @@ pub struct HyperSummary {
     pub snapshots: usize,
     /// Seconds of the training.
     pub training_s: f64,
+    /// The sampled rows carry the whole internal force, its linear part
+    /// included (where the nonlinear part alone cancels it, as in absolute
+    /// nodal coordinates); otherwise the nonlinear part only.
+    pub whole_force: bool,
 }
 
 /// One SSM model of the study.
@@ -615,6 +624,7 @@ impl PodSummary {
                         training_error: h.training_error,
                         snapshots: h.snapshots,
                         training_s: h.seconds,
+                        whole_force: h.total,
                     }),
                 })
                 .collect(),
