@@ -11,7 +11,8 @@
 //! of its slope (`y_0' = 0`), not the slope's length, which is the axial
 //! stretch at the root: `dx0` first, then node `j = 1..elements` contributes
 //! the deviations `(x_j, y_j, dx_j, dy_j)` of its position and slope from the
-//! straight reference, all tagged flexible. Damping acts on the strain
+//! straight reference, the slopes scaled by the element length (`L_e r'`,
+//! [`von_karman_beam::ancf::slope_scaling`]), all tagged flexible. Damping acts on the strain
 //! rates: `beta K_T(q) q'`, `K_T` the tangent stiffness (linear part `beta
 //! K q'`), which unlike `beta K q'` alone leaves rigid motions undamped.
 //! Outputs `u_tip`, `w_tip`: the tip's axial and transverse displacement.
@@ -19,7 +20,7 @@
 use super::{count_in, non_negative, positive};
 use ssm_api::{Harmonic, Model, MotionKind, PluginError, PolyVector, SparseMatrix};
 use ssm_plugin_kit::{Constraints, MechanicalSystem, ParamSpec, Params};
-use von_karman_beam::ancf::AncfElement;
+use von_karman_beam::ancf::{scaled_matrix, scaled_terms, slope_scaling, AncfElement};
 use von_karman_beam::{LocalTerm, Section};
 
 /// The model's name.
@@ -88,12 +89,17 @@ pub(crate) fn build(p: &Params) -> Result<Model, PluginError> {
     let refs: Vec<&str> = names.iter().map(String::as_str).collect();
     let mut s = MechanicalSystem::new(MODEL, &refs);
     s.dof_motion = vec![MotionKind::Flexible; nd];
-    let (me, ke) = (element.mass(), element.stiffness());
+    let sc = slope_scaling(element.length);
+    let (me, ke) = (
+        scaled_matrix(&element.mass(), &sc),
+        scaled_matrix(&element.stiffness(), &sc),
+    );
     let mut mass = SparseMatrix::zeros(nd, nd);
     let mut stiffness = SparseMatrix::zeros(nd, nd);
     let mut force = PolyVector::zeros(nd, 2 * nd);
     let mut terms: Vec<LocalTerm> = element.nonlinear_force();
     terms.extend(element.strain_rate_damping(beta));
+    let terms = scaled_terms(&terms, &sc);
     for e in 0..n_el {
         // the local unknowns, then their velocities
         let map: Vec<Option<usize>> = (0..16)
@@ -174,14 +180,16 @@ pub(crate) fn drive_specs() -> Vec<ParamSpec> {
 /// (constraints on the node positions; the slopes are free, so the joints
 /// are revolute). Coordinates: the crank's `u` (rotational), per cylinder
 /// the piston's in-plane position `(sx_i, sy_i)` (translational) and the
-/// rod's nodes' positions and slopes (flexible), all deviations from the
-/// reference configuration `theta = 0` with straight rods. Constraints:
+/// rod's nodes' positions and slopes scaled by the element length
+/// (flexible), all deviations from the reference configuration `theta = 0` with straight rods. Constraints:
 /// `|u|^2 = 1`, `u_z = 0`, per cylinder the two pin joints (2 each) and the
 /// piston's guide `n_i . S_i = 0`. A rigid rod's kinetic energy is the
 /// rigid model's `m_rod (|P'|^2 + P'.S' + |S'|^2) / 6` (the cubic elements
 /// carry rigid motion exactly), so the model tends to `crank-drive` as the
 /// rods stiffen. The rods' damping acts on their strain rates
 /// ([`AncfElement::strain_rate_damping`]), not on their rigid motion.
+/// Outputs: the strokes `stroke_i` and the rods' bending deflections
+/// `bend_i` ([`midspan_offset`]).
 pub(crate) fn build_drive(p: &Params) -> Result<Model, PluginError> {
     let cyl = super::cylinders(p)?;
     let n_el = count_in(p, "rod_elements", 1..=16)?;
@@ -238,9 +246,14 @@ pub(crate) fn build_drive(p: &Params) -> Result<Model, PluginError> {
             section,
             tangent,
         };
-        let (me, ke) = (element.mass(), element.stiffness());
+        let sc = slope_scaling(element.length);
+        let (me, ke) = (
+            scaled_matrix(&element.mass(), &sc),
+            scaled_matrix(&element.stiffness(), &sc),
+        );
         let mut terms = element.nonlinear_force();
         terms.extend(element.strain_rate_damping(beta));
+        let terms = scaled_terms(&terms, &sc);
         for e in 0..n_el {
             // the local unknowns, then their velocities
             let map: Vec<Option<usize>> = (0..16)
@@ -290,5 +303,47 @@ pub(crate) fn build_drive(p: &Params) -> Result<Model, PluginError> {
     s.constraints = Some(Constraints::polynomial(g.canonical()));
     s.forcing = super::torque_harmonics(p, nd, |tau| super::crank_torque(nd, tau));
     s.extra_outputs = super::strokes(&cyl, base);
+    for (i, c) in cyl.iter().enumerate() {
+        let t = [
+            (c.pin[0] - c.crank_pin[0]) / l,
+            (c.pin[1] - c.crank_pin[1]) / l,
+        ];
+        s.extra_outputs.push((
+            format!("bend{}", i + 1),
+            midspan_offset(n_el, t, |j, m| node(i, j, m)),
+        ));
+    }
     Ok(s.into_model()?)
+}
+
+/// The weights of output `bend_i`: the rod's midspan point `r(l/2)` (the
+/// middle node, or for an odd number of elements the cubic interpolation at
+/// the middle of the middle element, `(r_a + r_b)/2 + L_e (r'_a - r'_b)/8`,
+/// in the scaled slopes `L_e r'`)
+/// less the mean of its end nodes, across the reference axis `t` (along
+/// `(-t_y, t_x)`): the rod's bending deflection, linear in the nodal
+/// coordinates (the projection on the reference normal is the deflection to
+/// `cos` of the rod's swing from its reference direction, within 6 % for
+/// `l = 3 r`). `node(j, m)` is the index of unknown `m` of node `j`.
+fn midspan_offset(
+    n_el: usize,
+    t: [f64; 2],
+    node: impl Fn(usize, usize) -> usize,
+) -> Vec<(usize, f64)> {
+    let normal = [-t[1], t[0]];
+    let mut w = Vec::new();
+    for (k, &nk) in normal.iter().enumerate() {
+        if n_el.is_multiple_of(2) {
+            w.push((node(n_el / 2, k), nk));
+        } else {
+            let (a, b) = (n_el / 2, n_el / 2 + 1);
+            w.push((node(a, k), 0.5 * nk));
+            w.push((node(b, k), 0.5 * nk));
+            w.push((node(a, 2 + k), nk / 8.0));
+            w.push((node(b, 2 + k), -nk / 8.0));
+        }
+        w.push((node(0, k), -0.5 * nk));
+        w.push((node(n_el, k), -0.5 * nk));
+    }
+    w
 }

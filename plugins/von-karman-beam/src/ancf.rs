@@ -252,6 +252,44 @@ pub fn evaluate(terms: &[LocalTerm], q: &[f64; 8]) -> [f64; 8] {
     f
 }
 
+/// The factors `S` of the length-scaled unknowns `xi`, `q = S xi`: one for
+/// the positions, `1 / L` for the slopes (`xi = L r'`, a length like the
+/// positions). In slopes the unknowns' mass is `rho A L^3 / 105`, so the
+/// round-off floor of their accelerations (the axial force `EA e` carries
+/// an absolute error of order `EA` times the machine epsilon) grows as
+/// `L^-3` under mesh refinement, which stalls a Newton iteration on fine
+/// meshes; scaled, it grows as `L^-2` and the slope unknowns' accelerations
+/// are of the positions' size.
+pub fn slope_scaling(length: f64) -> [f64; 8] {
+    let l = 1.0 / length;
+    [1.0, 1.0, l, l, 1.0, 1.0, l, l]
+}
+
+/// `S A S` for the diagonal `S` of [`slope_scaling`]: the mass or stiffness
+/// in the scaled unknowns.
+pub fn scaled_matrix(a: &[[f64; 8]; 8], s: &[f64; 8]) -> [[f64; 8]; 8] {
+    let mut out = *a;
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v *= s[i] * s[j];
+        }
+    }
+    out
+}
+
+/// The terms of `S f(S xi)` (generalized forces on the scaled unknowns);
+/// local unknowns `8..16` are velocities, scaled like their coordinates.
+pub fn scaled_terms(terms: &[LocalTerm], s: &[f64; 8]) -> Vec<LocalTerm> {
+    terms
+        .iter()
+        .map(|t| LocalTerm {
+            eq: t.eq,
+            coeff: t.coeff * s[t.eq] * t.vars.iter().map(|&v| s[v % 8]).product::<f64>(),
+            vars: t.vars.clone(),
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -359,5 +397,33 @@ mod tests {
         let total: Vec<f64> = d.iter().zip(&linear).map(|(a, b)| a + b).collect();
         assert!(worst(&total) < 1e-13 * beta * 7.0, "{total:?}");
         assert!(worst(&linear) > 1e-2 * beta * 7.0, "{linear:?}");
+    }
+
+    /// Reference: the chain rule. In the scaled unknowns `xi` (`q = S xi`)
+    /// the energy `U(S xi)` has the gradient `S dU/dq`, and the scaled
+    /// stiffness and terms give exactly that (to 1e-13); the mass scales
+    /// alike (`S M S`, the kinetic energy unchanged).
+    #[test]
+    fn scaled_unknowns_carry_the_same_energy() {
+        let e = element([0.6, 0.8]);
+        let sc = slope_scaling(e.length);
+        let xi = [0.03, -0.02, 0.06, -0.045, 0.05, 0.04, -0.03, 0.09];
+        let q: [f64; 8] = std::array::from_fn(|i| sc[i] * xi[i]);
+        let f = force(&e, &q);
+        let k = scaled_matrix(&e.stiffness(), &sc);
+        let mut g = evaluate(&scaled_terms(&e.nonlinear_force(), &sc), &xi);
+        for (i, gi) in g.iter_mut().enumerate() {
+            *gi += (0..8).map(|j| k[i][j] * xi[j]).sum::<f64>();
+        }
+        for i in 0..8 {
+            assert!((g[i] - sc[i] * f[i]).abs() < 1e-13 * 7.0, "{i}");
+        }
+        let (m, ms) = (e.mass(), scaled_matrix(&e.mass(), &sc));
+        let energy = |a: &[[f64; 8]; 8], v: &[f64; 8]| -> f64 {
+            (0..8)
+                .map(|i| (0..8).map(|j| v[i] * a[i][j] * v[j]).sum::<f64>())
+                .sum()
+        };
+        assert!((energy(&m, &q) - energy(&ms, &xi)).abs() < 1e-15);
     }
 }

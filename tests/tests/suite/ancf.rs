@@ -96,8 +96,11 @@ fn cantilever_statics_match_beam_theory() {
     let force = ea * (lambda * lambda - 1.0) / 2.0 * lambda;
     let (model, _) = model_and_system("crank-drive", "ancf-beam", &params(force, 0.0));
     let h = length / n_el as f64;
-    let q: Vec<f64> = std::iter::once(lambda - 1.0)
-        .chain((1..=n_el).flat_map(|j| [(lambda - 1.0) * h * j as f64, 0.0, lambda - 1.0, 0.0]))
+    // positions, then slopes scaled by the element length (`h r'`)
+    let q: Vec<f64> = std::iter::once((lambda - 1.0) * h)
+        .chain(
+            (1..=n_el).flat_map(|j| [(lambda - 1.0) * h * j as f64, 0.0, (lambda - 1.0) * h, 0.0]),
+        )
         .collect();
     let largest = |r: Vec<f64>| r.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     let worst = largest(static_residual(&model, &q, true));

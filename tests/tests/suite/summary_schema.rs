@@ -19,6 +19,10 @@ use ssm_tests::{repo_root, run_zoo_in};
 const ELSEWHERE: &[(&str, &str)] = &[
     ("beam_data.toml", "src/lib.rs"),
     ("beam_nar.toml", "tests/suite/nar_models.rs"),
+    (
+        "crank_drive_flexible_pod.toml",
+        "tests/suite/crank_flexible.rs",
+    ),
     ("crank_drive_v8_pod.toml", "tests/suite/pod_report.rs"),
     ("divider_fig22_ic1.toml", "tests/suite/divider.rs"),
     ("divider_frc.toml", "tests/suite/divider.rs"),
