@@ -349,7 +349,7 @@ pub(crate) fn report_md(model: &str, study: &PodStudy) -> String {
                  trained in {}; constraints and reactions lifted exactly.\n",
                 k + 1,
                 if h.total {
-                    "whole internal forces (their nonlinear part cancels the linear one)"
+                    "whole internal forces (linear part included: fewer rows than the nonlinear part alone)"
                 } else {
                     "nonlinear internal forces"
                 },
@@ -504,8 +504,9 @@ pub struct HyperSummary {
     /// Seconds of the training.
     pub training_s: f64,
     /// The sampled rows carry the whole internal force, its linear part
-    /// included (where the nonlinear part alone cancels it, as in absolute
-    /// nodal coordinates); otherwise the nonlinear part only.
+    /// included (chosen where it needs fewer rows than the nonlinear part
+    /// alone, as where that part cancels the linear one in absolute nodal
+    /// coordinates); otherwise the nonlinear part only.
     pub whole_force: bool,
 }
 
