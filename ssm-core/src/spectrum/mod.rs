@@ -130,6 +130,32 @@ pub struct Spectrum {
     pub complete: bool,
     /// Solver used.
     pub method: Method,
+    /// The factorizations and solves it took.
+    pub work: SpectrumWork,
+}
+
+/// Linear algebra a spectral computation did: factorizations of the shifted
+/// pencil (sparse: symbolic and numeric; dense: numeric only) and solves
+/// with them (one per right-hand side).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SpectrumWork {
+    /// Symbolic (sparsity) factorizations.
+    pub symbolic: usize,
+    /// Numeric factorizations.
+    pub numeric: usize,
+    /// Solves.
+    pub solves: usize,
+}
+
+impl std::ops::Add for SpectrumWork {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        SpectrumWork {
+            symbolic: self.symbolic + o.symbolic,
+            numeric: self.numeric + o.numeric,
+            solves: self.solves + o.solves,
+        }
+    }
 }
 
 /// What a structural dynamicist reads off one finite eigenvalue `lambda`.
@@ -195,12 +221,20 @@ pub fn compute(
         Method::Sparse
     });
     let found = match method {
-        Method::Dense => dense::finite_eigenvalues(a, b, opts.shift),
+        // one dense LU of A - sigma B, solved for the n columns of B
+        Method::Dense => dense::finite_eigenvalues(a, b, opts.shift).map(|v| {
+            let work = SpectrumWork {
+                symbolic: 0,
+                numeric: 1,
+                solves: a.nrows(),
+            };
+            (v, work)
+        }),
         Method::Sparse => {
             sparse::eigenvalues_near_shift(a, b, opts.velocities.clone(), opts.shift, opts.modes)
         }
     };
-    let mut eigenvalues = match found {
+    let (mut eigenvalues, work) = match found {
         Err(SpectrumError::SingularShift { shift, detail, .. }) => {
             return Err(diagnose_singular_shift(a, b, shift, detail))
         }
@@ -211,6 +245,7 @@ pub fn compute(
         eigenvalues,
         complete: method == Method::Dense,
         method,
+        work,
     })
 }
 

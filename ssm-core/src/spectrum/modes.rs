@@ -45,6 +45,8 @@ pub struct MasterMode {
     pub left: Vec<C64>,
     /// Relative residual `||A v - lambda B v|| / ((||A|| + |lambda| ||B||) ||v||)`.
     pub residual: f64,
+    /// The inverse iteration's sparse LU and solves.
+    pub work: super::SpectrumWork,
 }
 
 /// `y = M x` for real sparse `M`, complex `x`.
@@ -159,7 +161,9 @@ fn refine(
     }
     .map_err(|e| fail(format!("sparse LU of A - lambda B failed: {e:?}")))?;
     // (A - sigma B)^{-1} y, or (A - sigma B)^{-H} y, for y = B z (B^T z)
+    let solves = std::cell::Cell::new(0usize);
     let solve = |y: Vec<C64>, z: &[C64], adjoint: bool| -> Vec<C64> {
+        solves.set(solves.get() + 1);
         let s = if adjoint { sigma.conj() } else { sigma };
         let r = match &condensed {
             Some(c) => c.rhs(&y, s),
@@ -272,5 +276,10 @@ fn refine(
         right: v,
         left: u,
         residual,
+        work: super::SpectrumWork {
+            symbolic: 1,
+            numeric: 1,
+            solves: solves.get(),
+        },
     })
 }

@@ -126,14 +126,16 @@ pub(crate) fn combine(
 }
 
 /// The `modes` finite eigenvalues of `(A, B)` nearest `shift`, unsorted
-/// (conjugate partners included).
+/// (conjugate partners included), and the sparse work done: one symbolic
+/// and one numeric factorization at the shift, one solve per application
+/// of the shift-invert operator.
 pub(crate) fn eigenvalues_near_shift(
     a: SparseColMatRef<'_, usize, f64>,
     b: SparseColMatRef<'_, usize, f64>,
     velocities: Option<Range<usize>>,
     shift: f64,
     modes: usize,
-) -> Result<Vec<C64>, SpectrumError> {
+) -> Result<(Vec<C64>, super::SpectrumWork), SpectrumError> {
     let n = a.nrows();
     let condensed = velocities.and_then(|v| condense::ShiftInvert::detect(a, b, v));
     let shifted = match &condensed {
@@ -171,7 +173,9 @@ pub(crate) fn eigenvalues_near_shift(
     let v0: Col<f64> = x.col(0).to_owned();
     // a pair at the edge is taken whole by the iteration
     let want = modes.min(n);
+    let applied = std::cell::Cell::new(2usize);
     let apply = |x: faer::ColRef<'_, f64>, out: MatMut<'_, f64>| {
+        applied.set(applied.get() + 1);
         op.apply(
             out,
             x.as_mat(),
@@ -218,7 +222,12 @@ pub(crate) fn eigenvalues_near_shift(
         }
         kept.push(l);
     }
-    Ok(kept)
+    let work = super::SpectrumWork {
+        symbolic: 1,
+        numeric: 1,
+        solves: applied.get(),
+    };
+    Ok((kept, work))
 }
 
 /// A sparse LU failure in words.

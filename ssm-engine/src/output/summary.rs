@@ -403,8 +403,10 @@ pub struct LinearAlgebraSummary {
     pub solves: usize,
     /// Krylov steps of band solves, all stages.
     pub krylov_iterations: usize,
-    /// Per stage: `ssm` (the homological equations of every order), `frc`
-    /// (the forced response's leading-order and non-autonomous terms).
+    /// Per stage: `spectrum` (the shifted pencil's factorization and the
+    /// shift-invert solves, then the master modes' inverse iteration), `ssm`
+    /// (the homological equations of every order), `frc` (the forced
+    /// response's leading-order and non-autonomous terms).
     pub stages: BTreeMap<String, LinearWork>,
 }
 
@@ -487,6 +489,18 @@ impl MemorySummary {
                 })
                 .collect(),
         }
+    }
+}
+
+/// The spectrum's factorizations and solves with those of the master
+/// modes' inverse iteration.
+fn spectrum_work(spectrum: &Spectrum, masters: &[MasterMode]) -> LinearWork {
+    let w = masters.iter().fold(spectrum.work, |acc, m| acc + m.work);
+    LinearWork {
+        symbolic_factorizations: w.symbolic,
+        numeric_factorizations: w.numeric,
+        solves: w.solves,
+        krylov_iterations: 0,
     }
 }
 
@@ -575,15 +589,18 @@ impl RunSummary {
                 ssm_solves: lin.solve_s,
             },
             linear_algebra: LinearAlgebraSummary::of(
-                [("ssm".to_owned(), LinearWork::of(lin.counts()))]
-                    .into_iter()
-                    .chain(
-                        s.answers
-                            .frc
-                            .as_ref()
-                            .map(|f| ("frc".to_owned(), f.linear_algebra)),
-                    )
-                    .collect(),
+                [
+                    ("spectrum".to_owned(), spectrum_work(s.spectrum, s.masters)),
+                    ("ssm".to_owned(), LinearWork::of(lin.counts())),
+                ]
+                .into_iter()
+                .chain(
+                    s.answers
+                        .frc
+                        .as_ref()
+                        .map(|f| ("frc".to_owned(), f.linear_algebra)),
+                )
+                .collect(),
             ),
             memory: MemorySummary::new(s.ssm, s.answers.frc.as_ref().and_then(|f| f.factor_bytes)),
             analyses: s.answers.analyses.clone(),

@@ -512,17 +512,35 @@ fn the_strided_search_finds_the_first_failing_index_of_a_full_scan() {
 }
 
 /// `summary.json` counts the forced response's sparse linear algebra with
-/// the SSM's: `linear_algebra.stages` holds `ssm` and `frc`, the totals are
-/// their sums, the forced response's own entry repeats its stage, and a
-/// scene without forcing has no `frc` stage. On the spatial oscillator the
-/// forced response solves at least once per Chebyshev node of its X0
-/// table (17 at the least) and its non-autonomous table (17 nodes).
+/// the SSM's and the spectrum's: `linear_algebra.stages` holds `spectrum`,
+/// `ssm` and `frc`, the totals are their sums, the forced response's own
+/// entry repeats its stage, and a scene without forcing has no `frc` stage.
+/// On the spatial oscillator the forced response solves at least once per
+/// Chebyshev node of its X0 table (17 at the least) and its non-autonomous
+/// table (17 nodes). Its spectrum (7 states, dense path, one master pair)
+/// is one dense LU solved for the 7 columns of `B`, then the master mode's
+/// inverse iteration: one sparse LU and 3 right and 3 left solves, so 1
+/// symbolic, 2 numeric factorizations and 13 solves, exactly.
 #[test]
 fn the_forced_response_s_factorizations_and_solves_are_counted() {
     let s = ssm_tests::run_zoo("spatial_oscillator_cubic_fig5.toml");
     let la = &s["linear_algebra"];
     let stages = la["stages"].as_object().expect("stages");
-    assert_eq!(stages.keys().collect::<Vec<_>>(), ["frc", "ssm"]);
+    assert_eq!(
+        stages.keys().collect::<Vec<_>>(),
+        ["frc", "spectrum", "ssm"]
+    );
+    assert_eq!(s["model"]["n_states"], 7);
+    let sp = &stages["spectrum"];
+    assert_eq!(
+        (
+            &sp["symbolic_factorizations"],
+            &sp["numeric_factorizations"],
+            &sp["solves"]
+        ),
+        (&1.into(), &2.into(), &13.into()),
+        "{sp}"
+    );
     for key in [
         "symbolic_factorizations",
         "numeric_factorizations",
@@ -542,5 +560,36 @@ fn the_forced_response_s_factorizations_and_solves_are_counted() {
     let stages = none["linear_algebra"]["stages"]
         .as_object()
         .expect("stages");
-    assert_eq!(stages.keys().collect::<Vec<_>>(), ["ssm"]);
+    assert_eq!(stages.keys().collect::<Vec<_>>(), ["spectrum", "ssm"]);
+}
+
+/// The sparse path counts one symbolic and one numeric factorization of the
+/// shifted pencil and one solve per application of the shift-invert
+/// operator: two for the start vector, and at least one per Krylov
+/// direction, so at least two more than the modes asked for (here 4 of the
+/// unconstrained spatial oscillator's 6 states; the sparse eigenvalues are
+/// the dense ones to 1e-10, whose path is one dense LU solved for the 6
+/// columns of `B`).
+#[test]
+fn the_sparse_spectrum_counts_its_factorization_and_solves() {
+    let sys = system("spatial-oscillator", "", "constraint = \"none\"");
+    let (a, b) = sys.spectral_pencil();
+    let sparse = spectrum::compute(a, b, &spectrum_options(Some(spectrum::Method::Sparse), 4))
+        .expect("sparse spectrum");
+    let dense = spectrum::compute(a, b, &spectrum_options(Some(spectrum::Method::Dense), 6))
+        .expect("dense spectrum");
+    let w = sparse.work;
+    eprintln!("sparse spectrum: {w:?}; dense: {:?}", dense.work);
+    assert_eq!((w.symbolic, w.numeric), (1, 1));
+    assert!(w.solves >= 2 + 4, "{w:?}");
+    assert_eq!(dense.work.numeric, 1);
+    assert_eq!(dense.work.solves, sys.n_states());
+    for l in &sparse.eigenvalues {
+        let near = dense
+            .eigenvalues
+            .iter()
+            .map(|d| (d - l).norm())
+            .fold(f64::INFINITY, f64::min);
+        assert!(near < 1e-10 * (1.0 + l.norm()), "{l}: {near:e}");
+    }
 }

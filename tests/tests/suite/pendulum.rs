@@ -127,6 +127,7 @@ fn chain_size_changes_and_lowest_pair_converges() {
             eigenvalues: vec![lowest[1]],
             complete: false,
             method: Method::Sparse,
+            work: Default::default(),
         },
         &[("-0.0569", "1.9939")],
         "n = 41",
