@@ -426,3 +426,30 @@ fn an_address_space_limit_below_the_kernels_buffers_is_refused_not_aborted() {
     );
     assert_eq!(code, Some(0), "two buffers fit: {err}");
 }
+
+/// The sparse spectrum is costed before it runs: on the ANCF cantilever of
+/// 64 elements (514 states), 200 modes make an Arnoldi basis of 408
+/// vectors whose orthogonalization alone is `6 N m^2` = 5e8 operations,
+/// refused at `spectrum.modes` under a 0.6 s limit, while 6 modes (a basis
+/// of 20) pass that gate.
+#[test]
+fn the_sparse_spectrum_is_costed_at_its_modes() {
+    let scene = |modes: usize| {
+        format!(
+            "[model]\nplugin = \"crank-drive\"\nname = \"ancf-beam\"\n[model.params]\nelements = 64\n\
+             [spectrum]\nmethod = \"sparse\"\nmodes = {modes}\n[ssm]\norder = 3\n\
+             [outputs]\ncoordinates = [\"w_tip\"]\n"
+        )
+    };
+    let env = [("SSM_TIME_LIMIT_MINUTES", "0.01")];
+    let (code, err) = run_limited("sparse-modes", &scene(200), 8_000_000, &env);
+    assert_refused(
+        code,
+        &err,
+        8,
+        "spectrum.modes",
+        "the sparse spectrum of 514 states",
+    );
+    let (_, err) = run_limited("sparse-modes-few", &scene(6), 8_000_000, &env);
+    assert!(!err.contains("`spectrum.modes`"), "{err}");
+}

@@ -299,9 +299,9 @@ fn within(cost: &Cost, limits: &Limits) -> bool {
 }
 
 /// Before the spectral stage: the dense spectrum (a QZ iteration on the
-/// `N x N` pencil, about `70 N^3` operations on 6 dense complex matrices) and
-/// the SSM order (see `order_ceiling`); returns the highest order the run
-/// may compute.
+/// `N x N` pencil, about `70 N^3` operations on 6 dense complex matrices),
+/// or the sparse one (`sparse_spectrum_cost`), and the SSM order (see
+/// `order_ceiling`); returns the highest order the run may compute.
 pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<usize, PlanError> {
     let n = system.n_states() as f64;
     let dense = match plan.spectrum.method {
@@ -313,6 +313,7 @@ pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<u
         ops: 70.0 * n.powi(3),
         bytes: 6.0 * 16.0 * n * n,
     };
+    let pairs = plan.ssm.master_pairs.len().max(1);
     if dense {
         ensure(
             "spectrum.method",
@@ -321,9 +322,41 @@ pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<u
             limits,
             "use method = \"sparse\" with the modes you need",
         )?;
+    } else {
+        let highest = plan.ssm.master_pairs.iter().copied().max().unwrap_or(1);
+        let modes = plan
+            .spectrum
+            .modes
+            .unwrap_or(2 * highest + 10)
+            .max(2 * highest);
+        ensure(
+            "spectrum.modes",
+            format!("the sparse spectrum of {n} states ({modes} modes)"),
+            &sparse_spectrum_cost(&Sizes::with_factors(system), modes),
+            limits,
+            "ask for fewer modes, or coarsen the model",
+        )?;
     }
-    let pairs = plan.ssm.master_pairs.len().max(1);
     order_ceiling(plan, system, pairs, limits)
+}
+
+/// The sparse spectrum of `modes` modes: one sparse LU of the shifted
+/// pencil (held while the Krylov iteration runs) and, one at a time, the
+/// complex LU of a master mode's inverse iteration (the estimate's
+/// [`lu_bytes_estimate`] is the complex one, so it bounds both), the
+/// pencil's shifted copy, and the Arnoldi basis of `m + 1` vectors, `m =
+/// max(2 modes + 8, 20)` (as `spectrum::krylov` sizes it). Work: the
+/// factorization, the `3 m` solves of a few restarts and the basis's
+/// orthogonalization, `2 N m^2` per restart.
+fn sparse_spectrum_cost(sizes: &Sizes, modes: usize) -> Cost {
+    let m = ((2 * modes + 8).max(20) as f64).min(sizes.states);
+    Cost {
+        ops: sizes.sparse_solve() * (1.0 + 3.0 * m) + 6.0 * sizes.states * m * m,
+        bytes: sizes.lu_bytes
+            + sizes.mass_lu_bytes
+            + 16.0 * sizes.nnz
+            + 8.0 * sizes.states * (m + 3.0),
+    }
 }
 
 /// The highest SSM order of the run, with `pairs` master pairs: the scene's
