@@ -23,7 +23,7 @@ use ssm_core::model::system::System;
 use ssm_core::rom::frc::NONAUTONOMOUS_NODES;
 use ssm_core::spec::SsmSpec;
 use ssm_core::spectrum::{MasterMode, Method, DENSE_LIMIT};
-use ssm_core::ssm::{band_vectors, lu_bytes_estimate, Dynamics, SERIES_TERMS};
+use ssm_core::ssm::{band_vectors, lu_bytes_estimate, Dynamics, LU_BYTES_PER_ENTRY, SERIES_TERMS};
 
 /// Elementary operations per second assumed by the estimates (complex
 /// multiply-adds and sparse-solve entries on one core of a 2-core machine,
@@ -332,7 +332,7 @@ pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<u
         ensure(
             "spectrum.modes",
             format!("the sparse spectrum of {n} states ({modes} modes)"),
-            &sparse_spectrum_cost(&Sizes::with_factors(system), modes),
+            &sparse_spectrum_cost(&Sizes::with_factors(system), modes, pairs),
             limits,
             "ask for fewer modes, or coarsen the model",
         )?;
@@ -340,18 +340,26 @@ pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<u
     order_ceiling(plan, system, pairs, limits)
 }
 
-/// The sparse spectrum of `modes` modes: one sparse LU of the shifted
-/// pencil (held while the Krylov iteration runs) and, one at a time, the
-/// complex LU of a master mode's inverse iteration (the estimate's
-/// [`lu_bytes_estimate`] is the complex one, so it bounds both), the
-/// pencil's shifted copy, and the Arnoldi basis of `m + 1` vectors, `m =
-/// max(2 modes + 8, 20)` (as `spectrum::krylov` sizes it). Work: the
-/// factorization, the `3 m` solves of a few restarts and the basis's
-/// orthogonalization, `2 N m^2` per restart.
-fn sparse_spectrum_cost(sizes: &Sizes, modes: usize) -> Cost {
+/// The sparse spectrum of `modes` modes and the inverse iteration of
+/// `pairs` master modes: one sparse LU of the shifted pencil, held while
+/// the Krylov iteration runs, and one at a time the complex LU of a master
+/// mode (the estimate's [`lu_bytes_estimate`] is the complex one, so it
+/// bounds both), the pencil's shifted copy, and the Arnoldi basis of `m + 1`
+/// vectors, `m = max(2 modes + 8, 20)` (as `spectrum::krylov` sizes it).
+/// Work: the real factorization and each complex one (four times as dear)
+/// as the SSM's sparse factorization is costed, the `3 m` Krylov solves of
+/// a few restarts and the 6 inverse-iteration solves per pair, each a pass
+/// over the factors' entries (`L + U`, twice the symbolic Cholesky entries
+/// the memory estimate counts; a complex entry four operations), and the
+/// basis's orthogonalization, `2 N m^2` per restart.
+fn sparse_spectrum_cost(sizes: &Sizes, modes: usize, pairs: usize) -> Cost {
     let m = ((2 * modes + 8).max(20) as f64).min(sizes.states);
+    let entries = 2.0 * sizes.lu_bytes / LU_BYTES_PER_ENTRY;
+    let pairs = pairs as f64;
     Cost {
-        ops: sizes.sparse_solve() * (1.0 + 3.0 * m) + 6.0 * sizes.states * m * m,
+        ops: sizes.sparse_solve() * (1.0 + 4.0 * pairs)
+            + entries * (3.0 * m + 24.0 * pairs)
+            + 6.0 * sizes.states * m * m,
         bytes: sizes.lu_bytes
             + sizes.mass_lu_bytes
             + 16.0 * sizes.nnz
