@@ -89,7 +89,7 @@ pub(crate) struct Summary<'a> {
 
 /// The version of the shape of `summary.json` (its `schema_version`); it
 /// changes whenever a key is added, removed or changes its type.
-pub const SCHEMA_VERSION: u32 = 5;
+pub const SCHEMA_VERSION: u32 = 6;
 
 /// `summary.json`: a run's summary, or that of a `[pod]` scene that asks
 /// for no SSM answer.
@@ -406,7 +406,9 @@ pub struct LinearAlgebraSummary {
     /// Per stage: `spectrum` (the shifted pencil's factorization and the
     /// shift-invert solves, then the master modes' inverse iteration), `ssm`
     /// (the homological equations of every order), `frc` (the forced
-    /// response's leading-order and non-autonomous terms).
+    /// response's leading-order and non-autonomous terms), `validation`
+    /// (the full-system Radau IIA runs of the transient and the steady
+    /// states).
     pub stages: BTreeMap<String, LinearWork>,
 }
 
@@ -500,6 +502,25 @@ fn spectrum_work(spectrum: &Spectrum, masters: &[MasterMode]) -> LinearWork {
         symbolic_factorizations: w.symbolic,
         numeric_factorizations: w.numeric,
         solves: w.solves,
+        krylov_iterations: 0,
+    }
+}
+
+/// The full-system integrations of the validation (Radau IIA): per run
+/// two symbolic analyses (the real and the complex iteration matrix), per
+/// factorization pair two numeric ones, per Newton iteration two solves.
+fn validation_work(v: &ValidationSummary) -> LinearWork {
+    let transient = v.transient.as_ref().map(|t| &t.full_system);
+    let steady = v.steady_state.as_ref();
+    let runs = usize::from(transient.is_some()) + steady.map_or(0, |s| s.points);
+    let factorizations =
+        transient.map_or(0, |t| t.factorizations) + steady.map_or(0, |s| s.factorizations);
+    let newton =
+        transient.map_or(0, |t| t.newton_iterations) + steady.map_or(0, |s| s.newton_iterations);
+    LinearWork {
+        symbolic_factorizations: 2 * runs,
+        numeric_factorizations: 2 * factorizations,
+        solves: 2 * newton,
         krylov_iterations: 0,
     }
 }
@@ -599,6 +620,12 @@ impl RunSummary {
                         .frc
                         .as_ref()
                         .map(|f| ("frc".to_owned(), f.linear_algebra)),
+                )
+                .chain(
+                    s.answers
+                        .validation
+                        .as_ref()
+                        .map(|v| ("validation".to_owned(), validation_work(v))),
                 )
                 .collect(),
             ),

@@ -514,7 +514,9 @@ fn the_strided_search_finds_the_first_failing_index_of_a_full_scan() {
 /// `summary.json` counts the forced response's sparse linear algebra with
 /// the SSM's and the spectrum's: `linear_algebra.stages` holds `spectrum`,
 /// `ssm` and `frc`, the totals are their sums, the forced response's own
-/// entry repeats its stage, and a scene without forcing has no `frc` stage.
+/// entry repeats its stage, a scene without forcing has no `frc` stage,
+/// and one with `[validate]` has a `validation` stage that counts its
+/// full-system run as the run's own section does.
 /// On the spatial oscillator the forced response solves at least once per
 /// Chebyshev node of its X0 table (17 at the least) and its non-autonomous
 /// table (17 nodes). Its spectrum (7 states, dense path, one master pair)
@@ -560,7 +562,23 @@ fn the_forced_response_s_factorizations_and_solves_are_counted() {
     let stages = none["linear_algebra"]["stages"]
         .as_object()
         .expect("stages");
-    assert_eq!(stages.keys().collect::<Vec<_>>(), ["spectrum", "ssm"]);
+    assert_eq!(
+        stages.keys().collect::<Vec<_>>(),
+        ["spectrum", "ssm", "validation"]
+    );
+    // the transient's Radau IIA run: two symbolic analyses (real and complex
+    // iteration matrices), two numeric factorizations per pair and two
+    // solves per Newton iteration, as its own section counts them
+    let run = &none["validation"]["transient"]["full_system"];
+    let v = &stages["validation"];
+    let count = |x: &serde_json::Value| x.as_u64().expect("a count");
+    assert_eq!(count(&v["symbolic_factorizations"]), 2);
+    assert_eq!(
+        count(&v["numeric_factorizations"]),
+        2 * count(&run["factorizations"])
+    );
+    assert_eq!(count(&v["solves"]), 2 * count(&run["newton_iterations"]));
+    assert!(count(&run["factorizations"]) > 0, "{run}");
 }
 
 /// The sparse path counts one symbolic and one numeric factorization of the

@@ -325,6 +325,11 @@ pub struct SteadySummary {
     pub wall_s: f64,
     /// Accepted steps of all of them.
     pub steps: usize,
+    /// LU factorizations of all of them (Radau IIA: pairs, real and
+    /// complex).
+    pub factorizations: usize,
+    /// Newton iterations of all of them.
+    pub newton_iterations: usize,
     /// One per frequency.
     pub responses: Vec<SteadyResponse>,
     /// Where the runs started.
@@ -343,6 +348,8 @@ impl SteadySummary {
             points: r.points.len(),
             wall_s: r.wall_s,
             steps: r.steps,
+            factorizations: r.points.iter().map(|p| p.stats.factorizations).sum(),
+            newton_iterations: r.points.iter().map(|p| p.stats.newton).sum(),
             responses: r
                 .points
                 .iter()
