@@ -27,6 +27,34 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par};
 
+/// Work done in linear algebra, without its seconds (by the SSM's
+/// homological solves, the forced response, the spectrum).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SolveCounts {
+    /// Symbolic factorizations.
+    pub symbolic: usize,
+    /// Numeric factorizations.
+    pub factorizations: usize,
+    /// Solves.
+    pub solves: usize,
+    /// Factorized solves at a nearby value: those that grew a band solve's
+    /// search space and the Taylor coefficients of band series (both through
+    /// one factorization for many frequencies).
+    pub iterations: usize,
+}
+
+impl std::ops::Add for SolveCounts {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        SolveCounts {
+            symbolic: self.symbolic + o.symbolic,
+            factorizations: self.factorizations + o.factorizations,
+            solves: self.solves + o.solves,
+            iterations: self.iterations + o.iterations,
+        }
+    }
+}
+
 /// An LU factorization of square sparse matrices of one pattern.
 pub struct SparseLu<T: ComplexField> {
     symbolic: SymbolicLu<usize>,

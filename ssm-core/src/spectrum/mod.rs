@@ -32,6 +32,7 @@ use crate::C64;
 pub use modes::{master_modes, MasterMode};
 pub use normalization::Normalization;
 pub use resonance::{check_resonances, ResonanceReport, SpectralQuotients};
+pub use ssm_kernel::sparse_lu::SolveCounts;
 
 /// Largest number of states for which `auto` uses the dense path.
 pub const DENSE_LIMIT: usize = 100;
@@ -130,32 +131,10 @@ pub struct Spectrum {
     pub complete: bool,
     /// Solver used.
     pub method: Method,
-    /// The factorizations and solves it took.
-    pub work: SpectrumWork,
-}
-
-/// Linear algebra a spectral computation did: factorizations of the shifted
-/// pencil (sparse: symbolic and numeric; dense: numeric only) and solves
-/// with them (one per right-hand side).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct SpectrumWork {
-    /// Symbolic (sparsity) factorizations.
-    pub symbolic: usize,
-    /// Numeric factorizations.
-    pub numeric: usize,
-    /// Solves.
-    pub solves: usize,
-}
-
-impl std::ops::Add for SpectrumWork {
-    type Output = Self;
-    fn add(self, o: Self) -> Self {
-        SpectrumWork {
-            symbolic: self.symbolic + o.symbolic,
-            numeric: self.numeric + o.numeric,
-            solves: self.solves + o.solves,
-        }
-    }
+    /// The factorizations of the shifted pencil (sparse: symbolic and
+    /// numeric; dense: numeric only) and the solves with them (one per
+    /// right-hand side).
+    pub work: SolveCounts,
 }
 
 /// What a structural dynamicist reads off one finite eigenvalue `lambda`.
@@ -223,10 +202,10 @@ pub fn compute(
     let found = match method {
         // one dense LU of A - sigma B, solved for the n columns of B
         Method::Dense => dense::finite_eigenvalues(a, b, opts.shift).map(|v| {
-            let work = SpectrumWork {
-                symbolic: 0,
-                numeric: 1,
+            let work = SolveCounts {
+                factorizations: 1,
                 solves: a.nrows(),
+                ..SolveCounts::default()
             };
             (v, work)
         }),

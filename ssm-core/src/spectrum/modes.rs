@@ -46,7 +46,7 @@ pub struct MasterMode {
     /// Relative residual `||A v - lambda B v|| / ((||A|| + |lambda| ||B||) ||v||)`.
     pub residual: f64,
     /// The inverse iteration's sparse LU and solves.
-    pub work: super::SpectrumWork,
+    pub work: super::SolveCounts,
 }
 
 /// `y = M x` for real sparse `M`, complex `x`.
@@ -276,10 +276,11 @@ fn refine(
         right: v,
         left: u,
         residual,
-        work: super::SpectrumWork {
+        work: super::SolveCounts {
             symbolic: 1,
-            numeric: 1,
+            factorizations: 1,
             solves: solves.get(),
+            iterations: 0,
         },
     })
 }

@@ -135,7 +135,7 @@ pub(crate) fn eigenvalues_near_shift(
     velocities: Option<Range<usize>>,
     shift: f64,
     modes: usize,
-) -> Result<(Vec<C64>, super::SpectrumWork), SpectrumError> {
+) -> Result<(Vec<C64>, super::SolveCounts), SpectrumError> {
     let n = a.nrows();
     let condensed = velocities.and_then(|v| condense::ShiftInvert::detect(a, b, v));
     let shifted = match &condensed {
@@ -222,10 +222,11 @@ pub(crate) fn eigenvalues_near_shift(
         }
         kept.push(l);
     }
-    let work = super::SpectrumWork {
+    let work = super::SolveCounts {
         symbolic: 1,
-        numeric: 1,
+        factorizations: 1,
         solves: applied.get(),
+        iterations: 0,
     };
     Ok((kept, work))
 }

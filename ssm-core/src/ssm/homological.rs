@@ -123,20 +123,7 @@ impl SolveStats {
     }
 }
 
-/// Work done in linear algebra, without its seconds.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct SolveCounts {
-    /// Symbolic factorizations.
-    pub symbolic: usize,
-    /// Numeric factorizations.
-    pub factorizations: usize,
-    /// Solves.
-    pub solves: usize,
-    /// Factorized solves at a nearby value: those that grew a band solve's
-    /// search space and the Taylor coefficients of band series (both through
-    /// one factorization for many frequencies).
-    pub iterations: usize,
-}
+pub use ssm_kernel::sparse_lu::SolveCounts;
 
 /// A bordered solve's `w_k` and reduced-dynamics coefficients `r_k`.
 pub(crate) type Solution = (Vec<C64>, Vec<C64>);

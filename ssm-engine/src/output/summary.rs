@@ -497,13 +497,7 @@ impl MemorySummary {
 /// The spectrum's factorizations and solves with those of the master
 /// modes' inverse iteration.
 fn spectrum_work(spectrum: &Spectrum, masters: &[MasterMode]) -> LinearWork {
-    let w = masters.iter().fold(spectrum.work, |acc, m| acc + m.work);
-    LinearWork {
-        symbolic_factorizations: w.symbolic,
-        numeric_factorizations: w.numeric,
-        solves: w.solves,
-        krylov_iterations: 0,
-    }
+    LinearWork::of(masters.iter().fold(spectrum.work, |acc, m| acc + m.work))
 }
 
 /// The full-system integrations of the validation (Radau IIA): per run

@@ -314,6 +314,9 @@ pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<u
         bytes: 6.0 * 16.0 * n * n,
     };
     let pairs = plan.ssm.master_pairs.len().max(1);
+    // one symbolic analysis of the pattern for the spectrum's and the
+    // order's estimates
+    let sizes = Sizes::with_factors(system);
     if dense {
         ensure(
             "spectrum.method",
@@ -332,12 +335,12 @@ pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<u
         ensure(
             "spectrum.modes",
             format!("the sparse spectrum of {n} states ({modes} modes)"),
-            &sparse_spectrum_cost(&Sizes::with_factors(system), modes, pairs),
+            &sparse_spectrum_cost(&sizes, modes, pairs),
             limits,
             "ask for fewer modes, or coarsen the model",
         )?;
     }
-    order_ceiling(plan, system, pairs, limits)
+    order_ceiling(plan, &sizes, pairs, limits)
 }
 
 /// The sparse spectrum of `modes` modes and the inverse iteration of
@@ -373,25 +376,24 @@ fn sparse_spectrum_cost(sizes: &Sizes, modes: usize, pairs: usize) -> Cost {
 /// the orders the answers name), which the pipeline may then lower. Run
 /// before the spectral stage, since the eq. (53) resonance check there
 /// enumerates the multi-indices up to this order.
-pub(crate) fn order_ceiling(
+fn order_ceiling(
     plan: &Plan,
-    system: &System,
+    sizes: &Sizes,
     pairs: usize,
     limits: &Limits,
 ) -> Result<usize, PlanError> {
-    let sizes = Sizes::with_factors(system);
     if let Some(o) = plan.ssm.order {
-        check_order(plan, &sizes, pairs, o, limits)?;
+        check_order(plan, sizes, pairs, o, limits)?;
         return Ok(o);
     }
     let floor = plan.highest_named_order().max(3);
     let top = (floor..=SsmSpec::AUTO_MAX_ORDER.max(floor))
         .rev()
         .filter(|o| o % 2 == 1 || *o == floor)
-        .find(|&o| within(&order_cost(plan, &sizes, pairs, o), limits));
+        .find(|&o| within(&order_cost(plan, sizes, pairs, o), limits));
     match top {
         Some(o) => Ok(o),
-        None => check_order(plan, &sizes, pairs, floor, limits).map(|()| floor),
+        None => check_order(plan, sizes, pairs, floor, limits).map(|()| floor),
     }
 }
 
