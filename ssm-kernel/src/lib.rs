@@ -8,6 +8,8 @@
 //! - [`continuation`]: the continuation core (local parametrization, step
 //!   control, test functions and the events they locate);
 //! - [`sparse_lu`]: a sparse LU analyzed once and refactored in place;
+//! - [`sparse_sym`]: complex symmetric sparse matrices factorized through
+//!   their real symmetric form (`L B L^T`, minimum-degree order);
 //! - [`stepper`]: the one interface of the time integrators, and sampling
 //!   any of them at given times;
 //! - [`dopri`]: the Dormand-Prince 5(4) pair on complex states;
@@ -30,6 +32,7 @@ pub mod number;
 pub mod poly;
 pub mod search;
 pub mod sparse_lu;
+pub mod sparse_sym;
 pub mod stepper;
 pub mod workspace;
 

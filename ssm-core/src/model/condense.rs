@@ -38,7 +38,9 @@ use std::ops::Range;
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
-use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
+use faer::sparse::{
+    SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef, Triplet,
+};
 use faer::Mat;
 
 use crate::C64;
@@ -289,6 +291,19 @@ impl Condensed {
             .then_some(out)
     }
 
+    /// Whether `S(sigma)` is symmetric (`S^T = S`, complex symmetric at a
+    /// complex `sigma`) for every `sigma`: its pattern is, and each of the
+    /// stiffness, damping and mass parts to rounding, `|X_ij - X_ji| <=
+    /// 1e-12 sqrt(m_i m_j)` with `m_i` the largest `|X_ik|` of row `i` (an
+    /// assembled finite-element model's parts are sums of symmetric element
+    /// matrices, equal across the diagonal to a few roundings).
+    pub(crate) fn is_symmetric(&self) -> bool {
+        symmetric(
+            self.symbolic.as_ref(),
+            &[&self.a_val, &self.b_val, &self.m_val],
+        )
+    }
+
     /// The values of `S(sigma)` on [`Condensed::symbolic`].
     pub(crate) fn values(&self, sigma: C64) -> Vec<C64> {
         let s2 = sigma * sigma;
@@ -353,16 +368,63 @@ impl Condensed {
     }
 }
 
+/// Whether the pattern `p` is symmetric and each of `parts` (values on it)
+/// is to rounding (see [`Condensed::is_symmetric`]).
+fn symmetric(p: SymbolicSparseColMatRef<'_, usize>, parts: &[&[f64]]) -> bool {
+    let n = p.nrows();
+    // the position of (j, i) for each entry (i, j)
+    let mut mirror = vec![usize::MAX; p.row_idx().len()];
+    let mut next: Vec<usize> = (0..n).map(|j| p.col_range(j).start).collect();
+    for j in 0..n {
+        for k in p.col_range(j) {
+            let i = p.row_idx()[k];
+            // the entries (j, i') of column i in row order meet j in
+            // column order: the transpose's walk
+            let m = next[i];
+            if m >= p.col_range(i).end || p.row_idx()[m] != j {
+                return false;
+            }
+            mirror[k] = m;
+            next[i] += 1;
+        }
+    }
+    if (0..n).any(|i| next[i] != p.col_range(i).end) {
+        return false;
+    }
+    parts.iter().all(|x| {
+        let mut row = vec![0.0f64; n];
+        for j in 0..n {
+            for k in p.col_range(j) {
+                let i = p.row_idx()[k];
+                row[i] = row[i].max(x[k].abs());
+            }
+        }
+        (0..n).all(|j| {
+            p.col_range(j).all(|k| {
+                let i = p.row_idx()[k];
+                (x[k] - x[mirror[k]]).abs() <= 1e-12 * (row[i] * row[j]).sqrt()
+            })
+        })
+    })
+}
+
 /// The patterns of the condensed pencil of `(A, B)` with velocities `v` and
 /// of its mass matrix, when the structure holds; for the estimates made
 /// before a run.
+/// and whether the condensed pencil is symmetric ([`Condensed::is_symmetric`]).
 pub(crate) fn patterns(
     a: SparseColMatRef<'_, usize, f64>,
     b: SparseColMatRef<'_, usize, f64>,
     v: Range<usize>,
-) -> Option<(SymbolicSparseColMat<usize>, SymbolicSparseColMat<usize>)> {
+) -> Option<(
+    SymbolicSparseColMat<usize>,
+    SymbolicSparseColMat<usize>,
+    bool,
+)> {
     let parts = split(a, b, &v)?;
-    Some((parts.symbolic, parts.mass.symbolic().to_owned().ok()?))
+    let [a_val, b_val, m_val] = &parts.vals;
+    let sym = symmetric(parts.symbolic.as_ref(), &[a_val, b_val, m_val]);
+    Some((parts.symbolic, parts.mass.symbolic().to_owned().ok()?, sym))
 }
 
 /// The shift-invert operator `(A - sigma B)^{-1} B` of a mechanical pencil

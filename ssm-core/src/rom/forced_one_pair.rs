@@ -35,6 +35,7 @@ use crate::ssm::modal_residual::ModalResidual;
 use crate::ssm::nonautonomous::NaSeries;
 use crate::ssm::SsmExpansion;
 use crate::C64;
+use rayon::prelude::*;
 use ssm_kernel::poly::MultiIndexSet;
 use ssm_kernel::search::first_true;
 
@@ -419,22 +420,25 @@ impl Context<'_> {
                     None => forced.expansions(ssm, sys, &[pk.omega], k_eff, Some(mid))?,
                 };
                 let na = one.pop().expect("one frequency, one expansion");
-                let mut res60 = 0.0f64;
-                let mut modal = Vec::with_capacity(ORBIT_SAMPLES);
-                for k in 0..ORBIT_SAMPLES {
-                    let phi = 2.0 * std::f64::consts::PI * k as f64 / ORBIT_SAMPLES as f64;
-                    let q = C64::from_polar(pk.rho, pk.theta + phi);
-                    let r = na.residual(ssm, sys, eps, &[q, q.conj()], phi, order);
-                    res60 = res60.max(r.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt());
-                    modal.push(
-                        masters[0]
+                // the orbit's samples are independent: one per core
+                let samples: Vec<(f64, C64)> = (0..ORBIT_SAMPLES)
+                    .into_par_iter()
+                    .map(|k| {
+                        let phi = 2.0 * std::f64::consts::PI * k as f64 / ORBIT_SAMPLES as f64;
+                        let q = C64::from_polar(pk.rho, pk.theta + phi);
+                        let r = na.residual(ssm, sys, eps, &[q, q.conj()], phi, order);
+                        let norm = r.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
+                        let modal = masters[0]
                             .left
                             .iter()
                             .zip(&r)
                             .map(|(u, x)| u.conj() * x)
-                            .sum(),
-                    );
-                }
+                            .sum();
+                        (norm, modal)
+                    })
+                    .collect();
+                let res60 = samples.iter().map(|s| s.0).fold(0.0f64, f64::max);
+                let modal: Vec<C64> = samples.iter().map(|s| s.1).collect();
                 let lambda = masters[0].lambda;
                 let q0 = C64::from_polar(pk.rho, pk.theta);
                 let d = accuracy::defect(&modal, 1, q0, pk.rho, lambda.norm());

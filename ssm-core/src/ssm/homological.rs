@@ -58,10 +58,12 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
-use faer::Mat;
+use ssm_kernel::sparse_sym::{ComplexSymFactor, SymbolicComplexSym};
+
+use factor::{equilibrate_in_place, kernel_solve, symmetric_equilibrate, Factor, Kernel};
+use std::sync::Arc;
 
 use crate::model::condense;
 use crate::spectrum::modes::{spmv, spmv_t};
@@ -69,6 +71,7 @@ use crate::spectrum::modes::{spmv, spmv_t};
 use crate::C64;
 
 mod band;
+mod factor;
 mod pattern;
 mod series;
 pub use band::band_vectors;
@@ -95,6 +98,9 @@ pub struct SolveStats {
     pub symbolic: usize,
     /// Numeric factorizations.
     pub factorizations: usize,
+    /// Of them, those of a symmetric condensed pencil's real form (`L B
+    /// L^T`, [`ssm_kernel::sparse_sym`]) instead of an LU.
+    pub symmetric_factorizations: usize,
     /// Solves.
     pub solves: usize,
     /// Factorized solves at a nearby value: those that grew a band solve's
@@ -139,70 +145,6 @@ struct Residual {
     componentwise: f64,
 }
 
-/// A sparse LU of `M = sigma B - A`, or of `D_r M D_c` with the diagonal
-/// equilibration `scale = (D_r, D_c)` (each row, then each column, scaled
-/// to a largest entry between 1/2 and 1 by a power of two, so that scaling
-/// rounds nothing): where band solves run (finite-element models whose rows
-/// differ in scale by orders of magnitude) the pivots of the equilibrated
-/// matrix keep an unrefined solve's componentwise backward error small, and
-/// a refined solve needs fewer sweeps.
-///
-/// # References
-/// N. J. Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed.,
-/// SIAM (2002), Sect. 9.8 (scaling and equilibration); E. Anderson et al.,
-/// *LAPACK Users' Guide*, 3rd ed., SIAM (1999) (`xGEEQU`).
-///
-/// Where the velocities of a mechanical model are eliminated
-/// ([`condense`]), the LU is of the condensed `S(sigma)`, half the size.
-pub(super) struct Factor {
-    lu: Lu<usize, C64>,
-    scale: Option<(Vec<f64>, Vec<f64>)>,
-    /// The value factorized (what [`condense::Condensed`] expands with).
-    sigma: C64,
-    /// Heap the LU holds (0 where the allocator does not count).
-    bytes: usize,
-}
-
-/// The power of two nearest below `1 / m` (`1` for a zero or non-finite
-/// `m`).
-fn inverse_power_of_two(m: f64) -> f64 {
-    if m > 0.0 && m.is_finite() {
-        (-m.log2().ceil()).exp2()
-    } else {
-        1.0
-    }
-}
-
-/// Scales `vals` (the values of `pattern`) to `D_r M D_c` and returns `(D_r,
-/// D_c)` (see [`Factor`]).
-fn equilibrate_in_place(
-    pattern: faer::sparse::SymbolicSparseColMatRef<'_, usize>,
-    vals: &mut [C64],
-) -> (Vec<f64>, Vec<f64>) {
-    let n = pattern.nrows();
-    let mut row_max = vec![0.0f64; n];
-    for j in 0..pattern.ncols() {
-        for k in pattern.col_range(j) {
-            let i = pattern.row_idx()[k];
-            row_max[i] = row_max[i].max(vals[k].norm());
-        }
-    }
-    let row: Vec<f64> = row_max.into_iter().map(inverse_power_of_two).collect();
-    let mut col = vec![1.0f64; pattern.ncols()];
-    for (j, cj) in col.iter_mut().enumerate() {
-        let mut m = 0.0f64;
-        for k in pattern.col_range(j) {
-            vals[k] *= row[pattern.row_idx()[k]];
-            m = m.max(vals[k].norm());
-        }
-        *cj = inverse_power_of_two(m);
-        for k in pattern.col_range(j) {
-            vals[k] *= *cj;
-        }
-    }
-    (row, col)
-}
-
 /// Solver for the homological equations of one SSM computation.
 pub(crate) struct Homological<'a> {
     n: usize,
@@ -210,6 +152,11 @@ pub(crate) struct Homological<'a> {
     b: SparseColMatRef<'a, usize, f64>,
     symbolic: SymbolicSparseColMat<usize>,
     lu_symbolic: Option<SymbolicLu<usize>>,
+    /// The real form's analysis where the condensed pencil is symmetric and
+    /// its factors are dear (decided with [`Homological::iterative`]).
+    sym_symbolic: Option<Arc<SymbolicComplexSym>>,
+    /// Whether that has been decided.
+    sym_checked: bool,
     a_val: Vec<f64>,
     b_val: Vec<f64>,
     /// `max_j |A_ij|` and `max_j |B_ij|` per row (the guard of the
@@ -302,6 +249,8 @@ impl<'a> Homological<'a> {
             b,
             symbolic,
             lu_symbolic: None,
+            sym_symbolic: None,
+            sym_checked: false,
             a_val,
             b_val,
             row_max: (row_max(a), row_max(b)),
@@ -349,6 +298,34 @@ impl<'a> Homological<'a> {
             Some(c) => c.symbolic.as_ref(),
             None => self.symbolic.as_ref(),
         };
+        // decided once: the real form's L B L^T where the condensed pencil
+        // is symmetric and the factors dear
+        if equilibrate && !self.sym_checked {
+            self.sym_checked = true;
+            if self.condensed.as_ref().is_some_and(|c| c.is_symmetric()) {
+                let sym = SymbolicComplexSym::analyze(pattern).map_err(|e| {
+                    HomologicalError::Singular {
+                        detail: format!("symbolic L B L^T failed: {e:?}"),
+                    }
+                })?;
+                self.sym_symbolic = Some(Arc::new(sym));
+                self.stats.symbolic += 1;
+            }
+        }
+        if let Some(sym) = self.sym_symbolic.clone() {
+            let mut vals = self
+                .condensed
+                .as_ref()
+                .expect("symmetric: condensed")
+                .values(sigma);
+            let scale = symmetric_equilibrate(pattern, &mut vals);
+            let (f, bytes) = ssm_kernel::heap::held(|| {
+                ComplexSymFactor::factor(sym, &vals, faer::get_global_parallelism())
+            });
+            self.stats.symmetric_factorizations += 1;
+            let scale = Some((scale.clone(), scale));
+            return Ok(self.counted(t, Kernel::Symmetric(f), scale, sigma, bytes));
+        }
         if self.lu_symbolic.is_none() {
             let sym = SymbolicLu::try_new(pattern).map_err(|e| HomologicalError::Singular {
                 detail: format!("symbolic LU failed: {e:?}"),
@@ -376,18 +353,30 @@ impl<'a> Homological<'a> {
         let lu = lu.map_err(|e| HomologicalError::Singular {
             detail: format!("sparse LU of Lambda B - A at Lambda = {sigma:.4e} failed: {e:?}"),
         })?;
+        Ok(self.counted(t, Kernel::Lu(Box::new(lu)), scale, sigma, bytes))
+    }
+
+    /// A factorization begun at `t` counted, with the heap it holds.
+    fn counted(
+        &mut self,
+        t: Instant,
+        lu: Kernel,
+        scale: Option<(Vec<f64>, Vec<f64>)>,
+        sigma: C64,
+        bytes: Option<usize>,
+    ) -> Factor {
         self.stats.factorizations += 1;
         self.stats.factor_s += t.elapsed().as_secs_f64();
         if let Some(b) = bytes {
             let held = self.held_factor_bytes() + b;
             self.stats.factor_bytes = Some(self.stats.factor_bytes.unwrap_or(0).max(held));
         }
-        Ok(Factor {
+        Factor {
             lu,
             scale,
             sigma,
             bytes: bytes.unwrap_or(0),
-        })
+        }
     }
 
     /// Heap the factors kept now hold (cached values and band anchors), as
@@ -423,15 +412,10 @@ impl<'a> Homological<'a> {
             None => rhs,
         };
         let x: Vec<C64> = match &f.scale {
-            None => {
-                let mut x = Mat::<C64>::from_fn(h.len(), 1, |i, _| h[i]);
-                f.lu.solve_in_place(x.as_mut());
-                (0..h.len()).map(|i| x[(i, 0)]).collect()
-            }
+            None => kernel_solve(&f.lu, h.to_vec()),
             Some((row, col)) => {
-                let mut x = Mat::<C64>::from_fn(h.len(), 1, |i, _| h[i] * row[i]);
-                f.lu.solve_in_place(x.as_mut());
-                (0..h.len()).map(|i| x[(i, 0)] * col[i]).collect()
+                let x = kernel_solve(&f.lu, h.iter().zip(row).map(|(v, r)| v * r).collect());
+                x.into_iter().zip(col).map(|(v, c)| v * c).collect()
             }
         };
         match &self.condensed {

@@ -277,8 +277,9 @@ fn a_band_over_a_pencil_eigenvalue_is_solved_frequency_by_frequency() {
 /// the factors an order holds (one per distinct `k . lambda`, each of the
 /// pencil with its velocities eliminated, and the mass matrix's LU) hold
 /// between half and all of the gate's estimate before the run
-/// (`lu_bytes_estimate`: 128 bytes an entry of the symbolic Cholesky factor
-/// of the condensed pattern, 64 of the mass matrix's); the forced response
+/// (`lu_bytes_estimate`: 80 bytes an entry of the symbolic Cholesky factor
+/// of the condensed pattern, whose real form's `L B L^T` the solves use, 64
+/// of the mass matrix's); the forced response
 /// holds at most the four factors the gate counts (`FRC_FACTORS_HELD`); and
 /// the peak heap of the run, above the heap the model and its spectrum held
 /// when the SSM began, stays within twice the most the factors (with the
@@ -454,7 +455,8 @@ fn the_master_mode_does_not_depend_on_the_starting_eigenvalue() {
 }
 
 /// A mechanical model's homological equations solved with its velocities
-/// eliminated (the LU of `Lambda^2 M + Lambda C + K`, half the size) against
+/// eliminated (the symmetric `Lambda^2 M + Lambda C + K`, half the size,
+/// factorized as the `L B L^T` of its real form) against
 /// the LU of the whole first-order pencil `Lambda B - A` (the same model
 /// and master modes, without its mechanical layout): on the 8 x 8 plate
 /// every coefficient vector of the O(5) SSM and every coefficient of its
@@ -481,6 +483,10 @@ fn the_velocities_eliminated_solve_the_whole_pencil() {
         resonance_tol: 0.02,
     };
     let reference = ssm_mod::compute(&whole, &masters, &others, &options).expect("SSM");
+    // the condensed pencil is symmetric: its real form's L B L^T solved it;
+    // the whole pencil is not: an LU
+    assert!(condensed.timing.linear.symmetric_factorizations > 0);
+    assert_eq!(reference.timing.linear.symmetric_factorizations, 0);
     assert_eq!(condensed.w.len(), reference.w.len());
     let mut worst = 0.0f64;
     for (a, b) in condensed.w.iter().zip(&reference.w) {

@@ -223,14 +223,15 @@ impl ForcedSsm<'_> {
                 };
                 let (w, r): (Vec<Vec<C64>>, Vec<Vec<C64>>) = series.into_iter().unzip();
                 // every frequency asked for: its value solves its system
-                for &t in ts {
+                // (the checks are independent: one per core)
+                let solver = &self.solver;
+                let missed = ts.iter().any(|&t| {
                     let (wt, rt, bt) = (horner(&w, t), horner(&r, t), horner(&rhs, t));
-                    let error =
-                        self.solver
-                            .backward_error(big + slope * t, &set_res, &wt, &rt, &bt);
-                    if error.is_nan() || error > series_accept(floor) {
-                        return Ok(None);
-                    }
+                    let error = solver.backward_error(big + slope * t, &set_res, &wt, &rt, &bt);
+                    error.is_nan() || error > series_accept(floor)
+                });
+                if missed {
+                    return Ok(None);
                 }
                 ss[idx] = r
                     .into_iter()

@@ -167,6 +167,8 @@ struct Sizes {
     /// with them ([`lu_bytes_estimate`]; 0 until [`Sizes::with_factors`]
     /// computes it).
     lu_bytes: f64,
+    /// Heap of one complex sparse LU of the same matrix (the spectrum's).
+    spectrum_lu_bytes: f64,
     mass_lu_bytes: f64,
 }
 
@@ -183,6 +185,7 @@ impl Sizes {
             nnz: (system.a.compute_nnz() + system.b.compute_nnz()) as f64,
             factors: factors as f64,
             lu_bytes: 0.0,
+            spectrum_lu_bytes: 0.0,
             mass_lu_bytes: 0.0,
         }
     }
@@ -193,6 +196,7 @@ impl Sizes {
         let lu = lu_bytes_estimate(system.a.as_ref(), system.b.as_ref(), system.velocities());
         Self {
             lu_bytes: lu.map_or(0.0, |f| f.each),
+            spectrum_lu_bytes: lu.map_or(0.0, |f| f.lu),
             mass_lu_bytes: lu.map_or(0.0, |f| f.shared),
             ..Self::of(system)
         }
@@ -346,7 +350,7 @@ pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<u
 /// The sparse spectrum of `modes` modes and the inverse iteration of
 /// `pairs` master modes: one sparse LU of the shifted pencil, held while
 /// the Krylov iteration runs, and one at a time the complex LU of a master
-/// mode (the estimate's [`lu_bytes_estimate`] is the complex one, so it
+/// mode ([`lu_bytes_estimate`]'s `lu` is the complex LU's, so it
 /// bounds both), the pencil's shifted copy, and the Arnoldi basis of `m + 1`
 /// vectors, `m = max(2 modes + 8, 20)` (as `spectrum::krylov` sizes it).
 /// Work: the real factorization and each complex one (four times as dear)
@@ -357,13 +361,13 @@ pub fn check_spectrum(plan: &Plan, system: &System, limits: &Limits) -> Result<u
 /// basis's orthogonalization, `2 N m^2` per restart.
 fn sparse_spectrum_cost(sizes: &Sizes, modes: usize, pairs: usize) -> Cost {
     let m = ((2 * modes + 8).max(20) as f64).min(sizes.states);
-    let entries = 2.0 * sizes.lu_bytes / LU_BYTES_PER_ENTRY;
+    let entries = 2.0 * sizes.spectrum_lu_bytes / LU_BYTES_PER_ENTRY;
     let pairs = pairs as f64;
     Cost {
         ops: sizes.sparse_solve() * (1.0 + 4.0 * pairs)
             + entries * (3.0 * m + 24.0 * pairs)
             + 6.0 * sizes.states * m * m,
-        bytes: sizes.lu_bytes
+        bytes: sizes.spectrum_lu_bytes
             + sizes.mass_lu_bytes
             + 16.0 * sizes.nnz
             + 8.0 * sizes.states * (m + 3.0),
