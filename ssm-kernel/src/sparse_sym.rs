@@ -1,5 +1,6 @@
-//! Complex symmetric sparse matrices (`S^T = S`, not Hermitian) factorized
-//! through their real symmetric form.
+//! Symmetric sparse factorizations: complex symmetric matrices (`S^T = S`,
+//! not Hermitian) through their real symmetric form ([`ComplexSymFactor`]),
+//! and real symmetric positive definite ones by Cholesky ([`SpdFactor`]).
 //!
 //! A damped finite-element pencil `S(sigma) = K + sigma C + sigma^2 M` at a
 //! complex `sigma` is complex symmetric. An LU ignores the symmetry: faer's
@@ -34,8 +35,8 @@ use std::sync::Arc;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, SymbolicCholesky,
-    SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, LltRef,
+    SymbolicCholesky, SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
@@ -224,6 +225,64 @@ impl ComplexSymFactor {
     }
 }
 
+/// The sparse Cholesky factor `L L^T` of a real symmetric positive
+/// definite matrix (a mass matrix), in approximate minimum degree order,
+/// solved on one thread: a solve is a pass over the factor's entries, and on
+/// two cores faer's parallel sparse triangular solves of a plate's mass
+/// matrix took 54 ms where one thread takes 11 ms.
+#[derive(Debug)]
+pub struct SpdFactor {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+}
+
+impl SpdFactor {
+    /// Factorizes `a` (square; its upper triangle is read), or `None` when
+    /// it is not numerically positive definite or the analysis fails.
+    pub fn factor(a: SparseColMatRef<'_, usize, f64>) -> Option<Self> {
+        let symbolic = factorize_symbolic_cholesky(
+            a.symbolic(),
+            Side::Upper,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .ok()?;
+        let par = faer::get_global_parallelism();
+        let mut values = vec![0.0f64; symbolic.len_val()];
+        let mut mem = MemBuffer::try_new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        )
+        .ok()?;
+        symbolic
+            .factorize_numeric_llt(
+                &mut values,
+                a,
+                Side::Upper,
+                Default::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .ok()?;
+        Some(Self { symbolic, values })
+    }
+
+    /// Overwrites the columns of `rhs` with `A^{-1} rhs`.
+    ///
+    /// # Panics
+    /// If `rhs` does not have the matrix's number of rows.
+    pub fn solve_in_place(&self, rhs: faer::MatMut<'_, f64>) {
+        let k = rhs.ncols();
+        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq));
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            Par::Seq,
+            MemStack::new(&mut mem),
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -283,5 +342,38 @@ mod tests {
                 reference[(i, 0)]
             );
         }
+    }
+
+    /// A mass-like matrix (tridiagonal, symmetric positive definite) solved
+    /// by [`SpdFactor`] agrees with a dense LU's solution; an indefinite one
+    /// is refused (the caller then takes an LU).
+    #[test]
+    fn the_cholesky_factor_solves_a_positive_definite_system_and_refuses_others() {
+        let n = 40;
+        let build = |diag: f64| {
+            let mut trip = Vec::new();
+            for i in 0..n {
+                trip.push(faer::sparse::Triplet::new(i, i, diag + 0.01 * i as f64));
+                if i + 1 < n {
+                    trip.push(faer::sparse::Triplet::new(i, i + 1, 1.0));
+                    trip.push(faer::sparse::Triplet::new(i + 1, i, 1.0));
+                }
+            }
+            faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).unwrap()
+        };
+        let spd = build(4.0);
+        let f = SpdFactor::factor(spd.as_ref()).expect("positive definite");
+        let mut x = faer::Mat::<f64>::from_fn(n, 2, |i, k| (i + 3 * k) as f64 - 7.0);
+        let rhs = x.clone();
+        f.solve_in_place(x.as_mut());
+        let reference = spd.to_dense().partial_piv_lu().solve(&rhs);
+        for k in 0..2 {
+            for i in 0..n {
+                assert!(
+                    (x[(i, k)] - reference[(i, k)]).abs() < 1e-12 * (1.0 + reference[(i, k)].abs())
+                );
+            }
+        }
+        assert!(SpdFactor::factor(build(-0.5).as_ref()).is_none());
     }
 }

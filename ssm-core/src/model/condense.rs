@@ -42,11 +42,12 @@ use faer::sparse::{
     SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef, Triplet,
 };
 use faer::Mat;
+use ssm_kernel::sparse_sym::SpdFactor;
 
 use crate::C64;
 
 /// The condensed pencil `S(sigma) = sigma B_KK - A_KK + sigma^2 E M E^T`
-/// of a mechanical model and the LU of its mass matrix (see the module).
+/// of a mechanical model and the factor of its mass matrix (see the module).
 pub(crate) struct Condensed {
     /// Velocities `start .. start + n` of the full state (their displacements
     /// are `0 .. n`).
@@ -62,8 +63,8 @@ pub(crate) struct Condensed {
     m_val: Vec<f64>,
     /// `M` itself, for the refinement of its solves.
     m: SparseColMat<usize, f64>,
-    /// LU of `D M D`, `D` = [`Condensed::mass_scale`].
-    mass: Lu<usize, f64>,
+    /// Factor of `D M D`, `D` = [`Condensed::mass_scale`].
+    mass: MassFactor,
     /// Powers of two near `|M_ii|^(-1/2)`: a finite-element mass matrix
     /// couples displacements and slopes whose entries differ by the square
     /// of the element size, and its LU's solves are componentwise accurate
@@ -71,6 +72,35 @@ pub(crate) struct Condensed {
     mass_scale: Vec<f64>,
     /// Heap the LU of `M` holds (0 where the allocator does not count).
     pub(crate) mass_bytes: usize,
+}
+
+/// The factor of the scaled mass matrix: Cholesky where it is symmetric
+/// positive definite (in minimum-degree order it holds a fraction of an
+/// LU's entries, and solves on one thread), an LU otherwise.
+enum MassFactor {
+    Cholesky(SpdFactor),
+    Lu(Lu<usize, f64>),
+}
+
+impl MassFactor {
+    fn new(scaled: &SparseColMat<usize, f64>) -> Option<Self> {
+        if symmetric(scaled.symbolic(), &[scaled.val()]) {
+            if let Some(f) = SpdFactor::factor(scaled.as_ref()) {
+                return Some(Self::Cholesky(f));
+            }
+        }
+        let sym = SymbolicLu::try_new(scaled.symbolic()).ok()?;
+        Lu::try_new_with_symbolic(sym, scaled.as_ref())
+            .ok()
+            .map(Self::Lu)
+    }
+
+    fn solve_in_place(&self, x: faer::MatMut<'_, f64>) {
+        match self {
+            Self::Cholesky(f) => f.solve_in_place(x),
+            Self::Lu(lu) => lu.solve_in_place(x),
+        }
+    }
 }
 
 /// The parts [`split`] finds.
@@ -262,10 +292,7 @@ impl Condensed {
             }
         }
         let scaled = SparseColMat::new(pattern.to_owned().ok()?, vals);
-        let (mass, bytes) = ssm_kernel::heap::held(|| {
-            let sym = SymbolicLu::try_new(scaled.symbolic()).ok()?;
-            Lu::try_new_with_symbolic(sym, scaled.as_ref()).ok()
-        });
+        let (mass, bytes) = ssm_kernel::heap::held(|| MassFactor::new(&scaled));
         let mass = mass?;
         let out = Self {
             start: v.start,

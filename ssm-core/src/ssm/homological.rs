@@ -78,7 +78,7 @@ pub use band::band_vectors;
 use pattern::iterates;
 pub use pattern::{lu_bytes_estimate, FactorBytes, LU_BYTES_PER_ENTRY};
 pub use series::MAX_TERMS as SERIES_TERMS;
-pub(crate) use series::{accept as series_accept, horner};
+pub(crate) use series::{accept as series_accept, horner, SeriesRun};
 
 /// Why a homological equation could not be solved.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -78,6 +78,14 @@ pub(crate) fn horner(terms: &[Vec<C64>], t: f64) -> Vec<C64> {
     out
 }
 
+/// What [`Homological::series_at`] found: the terms and the floor of their
+/// refined solves where the series converged, and the work it spent.
+pub(crate) struct SeriesRun {
+    solved: Option<(Vec<Solution>, f64)>,
+    terms: usize,
+    seconds: f64,
+}
+
 fn size(s: &Solution) -> f64 {
     s.0.iter()
         .chain(&s.1)
@@ -134,13 +142,46 @@ impl Homological<'_> {
         set: &[usize],
         rhs: &[Vec<C64>],
     ) -> Result<Option<(Vec<Solution>, f64)>, HomologicalError> {
+        let Some(slot) = self.series_anchor(anchor, set)? else {
+            return Ok(None);
+        };
+        let run = self.series_at(slot, anchor + delta, slope, set, rhs);
+        Ok(self.series_counted(run))
+    }
+
+    /// The slot of the factorization at `anchor` with the border of `set`
+    /// that [`Homological::series_at`] solves through (factorized if new);
+    /// `None` when the anchor would be factorized at a shifted value (it
+    /// hits a master eigenvalue).
+    ///
+    /// # Errors
+    /// The anchor's factorization failed.
+    pub(crate) fn series_anchor(
+        &mut self,
+        anchor: C64,
+        set: &[usize],
+    ) -> Result<Option<usize>, HomologicalError> {
         let all: Vec<usize> = (0..self.lambda.len()).collect();
         if self.factorized_at(anchor, &all) != anchor {
             return Ok(None);
         }
-        let slot = self.anchor_slot(anchor, set)?;
+        self.anchor_slot(anchor, set).map(Some)
+    }
+
+    /// The series of [`Homological::solve_series`] along `Lambda(t) =
+    /// lambda + slope t` through the factorization of `slot` (whose border
+    /// is of `set`), uncounted: it reads the solver alone, so that series
+    /// through different slots run side by side; its work goes to
+    /// [`Homological::series_counted`].
+    pub(crate) fn series_at(
+        &self,
+        slot: usize,
+        lambda: C64,
+        slope: C64,
+        set: &[usize],
+        rhs: &[Vec<C64>],
+    ) -> SeriesRun {
         let t = Instant::now();
-        let lambda = anchor + delta;
         let zero = C64::new(0.0, 0.0);
         let zero_g = vec![zero; set.len()];
         let mut terms: Vec<Solution> = Vec::new();
@@ -185,9 +226,19 @@ impl Homological<'_> {
                 break;
             }
         }
-        self.stats.iterations += terms.len();
-        self.stats.solve_s += t.elapsed().as_secs_f64();
-        Ok(converged.then_some((terms, floor)))
+        let count = terms.len();
+        SeriesRun {
+            solved: converged.then_some((terms, floor)),
+            terms: count,
+            seconds: t.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// A series' work counted; its terms and floor if it converged.
+    pub(crate) fn series_counted(&mut self, run: SeriesRun) -> Option<(Vec<Solution>, f64)> {
+        self.stats.iterations += run.terms;
+        self.stats.solve_s += run.seconds;
+        run.solved
     }
 
     /// One coefficient's solve at `lambda` through the anchor's block solve,

@@ -31,10 +31,22 @@ use super::{
 };
 use crate::model::system::System;
 use crate::ssm::forced::{ForcedError, ForcedSsm};
-use crate::ssm::homological::{horner, series_accept, HomologicalError};
+use crate::ssm::homological::{horner, series_accept, HomologicalError, SeriesRun};
 use crate::ssm::SsmExpansion;
 use crate::C64;
+use rayon::prelude::*;
 use ssm_kernel::poly::MultiIndexSet;
+
+/// One multi-index's system of an order: its resonant set, right-hand
+/// side series, value at the band's middle, anchor and the anchor's slot.
+struct Job {
+    idx: usize,
+    set_res: Vec<usize>,
+    rhs: Vec<Vec<C64>>,
+    big: C64,
+    at: C64,
+    slot: usize,
+}
 
 /// One harmonic's series: `x[idx][m]`, `s[idx][m]`, the coefficient of `t^m`.
 #[derive(Debug, Clone)]
@@ -186,6 +198,9 @@ impl ForcedSsm<'_> {
         let zeros = vec![zero; nvar];
         for k in 0..=set.max_order() {
             let done = set.of_order(k).start;
+            // the order's systems: their right-hand sides come from the
+            // lower orders alone
+            let mut jobs = Vec::new();
             for idx in set.of_order(k) {
                 let e = set.exponents(idx).to_vec();
                 let shift = shift_of(&e);
@@ -214,26 +229,63 @@ impl ForcedSsm<'_> {
                     .collect();
                 let big = C64::new(0.0, multiple * center) + shift;
                 let at = anchor_for(anchors, big).expect("every multi-index has its anchor");
-                let slope = C64::new(0.0, multiple * half_width);
-                let Some((series, floor)) =
-                    self.solver
-                        .solve_series(at, big - at, slope, &set_res, &rhs)?
-                else {
+                let Some(slot) = self.solver.series_anchor(at, &set_res)? else {
+                    return Ok(None);
+                };
+                jobs.push(Job {
+                    idx,
+                    set_res,
+                    rhs,
+                    big,
+                    at,
+                    slot,
+                });
+            }
+            let slope = C64::new(0.0, multiple * half_width);
+            // series through different factorizations (or through one with
+            // one border) read the solver alone: one per core; a slot whose
+            // border two resonant sets share is re-bordered before each
+            let shared = jobs.iter().all(|a| {
+                jobs.iter()
+                    .all(|b| a.slot != b.slot || a.set_res == b.set_res)
+            });
+            let runs: Vec<SeriesRun> = if shared {
+                let solver = &self.solver;
+                jobs.par_iter()
+                    .map(|j| solver.series_at(j.slot, j.big, slope, &j.set_res, &j.rhs))
+                    .collect()
+            } else {
+                let mut runs = Vec::with_capacity(jobs.len());
+                for j in &jobs {
+                    let slot = self
+                        .solver
+                        .series_anchor(j.at, &j.set_res)?
+                        .expect("factorized above");
+                    runs.push(
+                        self.solver
+                            .series_at(slot, j.big, slope, &j.set_res, &j.rhs),
+                    );
+                }
+                runs
+            };
+            for (job, run) in jobs.into_iter().zip(runs) {
+                let Some((series, floor)) = self.solver.series_counted(run) else {
                     return Ok(None);
                 };
                 let (w, r): (Vec<Vec<C64>>, Vec<Vec<C64>>) = series.into_iter().unzip();
                 // every frequency asked for: its value solves its system
-                // (the checks are independent: one per core)
-                let solver = &self.solver;
+                let (big, set_res, rhs) = (job.big, &job.set_res, &job.rhs);
                 let missed = ts.iter().any(|&t| {
-                    let (wt, rt, bt) = (horner(&w, t), horner(&r, t), horner(&rhs, t));
-                    let error = solver.backward_error(big + slope * t, &set_res, &wt, &rt, &bt);
+                    let (wt, rt, bt) = (horner(&w, t), horner(&r, t), horner(rhs, t));
+                    let error = self
+                        .solver
+                        .backward_error(big + slope * t, set_res, &wt, &rt, &bt);
                     error.is_nan() || error > series_accept(floor)
                 });
                 if missed {
                     return Ok(None);
                 }
-                ss[idx] = r
+                ss[job.idx] = r
                     .into_iter()
                     .map(|rv| {
                         let mut full = vec![zero; nvar];
@@ -243,7 +295,7 @@ impl ForcedSsm<'_> {
                         full
                     })
                     .collect();
-                xs[idx] = w;
+                xs[job.idx] = w;
             }
             for &(at, _) in anchors.iter().filter(|(_, l)| *l == k) {
                 self.release_anchor(at);
