@@ -342,6 +342,11 @@ impl Condensed {
             .collect()
     }
 
+    /// The number `n` of displacements (and of velocities).
+    pub(crate) fn displacements(&self) -> usize {
+        self.n
+    }
+
     /// The right-hand side `h_K + sigma E h_V` of the condensed system.
     pub(crate) fn reduce(&self, sigma: C64, h: &[C64]) -> Vec<C64> {
         let v = self.start..self.start + self.n;
@@ -353,15 +358,26 @@ impl Condensed {
     }
 
     /// The full solution `z = (x, sigma E^T x - M^{-1} h_V)` (velocities in
-    /// place) from the condensed one `x`.
-    pub(crate) fn expand(&self, sigma: C64, x: &[C64], h: &[C64]) -> Vec<C64> {
+    /// place) from the condensed one `x`; `mass_part`, where given, is
+    /// `M^{-1} h_V` (`n` values), known to the caller without a solve.
+    pub(crate) fn expand(
+        &self,
+        sigma: C64,
+        x: &[C64],
+        h: &[C64],
+        mass_part: Option<&[C64]>,
+    ) -> Vec<C64> {
         let v = self.start..self.start + self.n;
         let hv = &h[v.clone()];
         let mut z = Vec::with_capacity(self.full);
         z.extend_from_slice(&x[..v.start]);
         z.extend(x[..self.n].iter().map(|&xi| sigma * xi));
         z.extend_from_slice(&x[v.start..]);
-        if hv.iter().any(|c| c.re != 0.0 || c.im != 0.0) {
+        if let Some(u) = mass_part.filter(|u| u.len() == self.n) {
+            for (zv, u) in z[v].iter_mut().zip(u) {
+                *zv -= u;
+            }
+        } else if hv.iter().any(|c| c.re != 0.0 || c.im != 0.0) {
             for (zv, u) in z[v].iter_mut().zip(self.mass_solve(hv)) {
                 *zv -= u;
             }
@@ -602,7 +618,7 @@ mod tests {
             .partial_piv_lu()
             .solve(Mat::from_fn(ns, 1, |i, _| rhs[i]));
         let x: Vec<C64> = (0..ns).map(|i| x[(i, 0)]).collect();
-        let z = c.expand(sigma, &x, &h);
+        let z = c.expand(sigma, &x, &h, None);
         // the residual of (sigma B - A) z = h
         let (ad, bd) = (a.to_dense(), b.to_dense());
         for i in 0..5 {

@@ -403,6 +403,14 @@ impl<'a> Homological<'a> {
 
     /// `(sigma B - A)^{-1} rhs` through the factor `f` at `sigma`.
     fn lu_solve(&self, f: &Factor, rhs: &[C64]) -> Vec<C64> {
+        self.lu_solve_known(f, rhs, None)
+    }
+
+    /// [`Homological::lu_solve`] where, for a condensed pencil, `mass_part`
+    /// is `M^{-1} rhs_V` when the caller knows it (a right-hand side `g - B
+    /// c` with `g_V = 0` has `M^{-1} rhs_V = -c_x`, since `(B c)_V = M c_x`),
+    /// so that the mass matrix is not solved with.
+    fn lu_solve_known(&self, f: &Factor, rhs: &[C64], mass_part: Option<&[C64]>) -> Vec<C64> {
         let reduced;
         let h = match &self.condensed {
             Some(c) => {
@@ -419,9 +427,15 @@ impl<'a> Homological<'a> {
             }
         };
         match &self.condensed {
-            Some(c) => c.expand(f.sigma, &x, rhs),
+            Some(c) => c.expand(f.sigma, &x, rhs, mass_part),
             None => x,
         }
+    }
+
+    /// The displacements of a condensed pencil (`x` of `z = (x, x', ..)`),
+    /// `None` where the whole pencil is solved.
+    pub(crate) fn displacements(&self) -> Option<usize> {
+        self.condensed.as_ref().map(|c| c.displacements())
     }
 
     /// Solves the bordered system at `lambda` with resonant master coordinates

@@ -309,6 +309,22 @@ impl<'s> Rhs<'s> {
         s: &[&[C64]],
         forcing: Option<&[C64]>,
     ) -> Vec<C64> {
+        self.rhs_known(e, done, below, x, s, forcing).0
+    }
+
+    /// [`Rhs::rhs`], with `M^{-1} rhs_V` where the model is mechanical and
+    /// the part of the right-hand side that `B` does not multiply has no
+    /// velocity rows: then `rhs_V = -(B c)_V = -M c_x` for the correction
+    /// `c`, and `M^{-1} rhs_V = -c_x` without a solve.
+    pub(crate) fn rhs_known(
+        &self,
+        e: &[u16],
+        done: usize,
+        below: &[(usize, usize)],
+        x: &[&[C64]],
+        s: &[&[C64]],
+        forcing: Option<&[C64]>,
+    ) -> (Vec<C64>, Option<Vec<C64>>) {
         let (ssm, set, wset) = (self.ssm, &self.set, &self.wset);
         let n = self.sys.n_states();
         let zero = C64::new(0.0, 0.0);
@@ -353,11 +369,17 @@ impl<'s> Rhs<'s> {
             n,
         );
         let corr: Vec<C64> = dx_r.iter().zip(&dw_s).map(|(a, b)| a + b).collect();
+        let known = self.sys.velocities().and_then(|v| {
+            rhs[v.clone()]
+                .iter()
+                .all(|c| c.re == 0.0 && c.im == 0.0)
+                .then(|| corr[..v.len()].iter().map(|c| -c).collect())
+        });
         let bc = spmv(self.sys.b.as_ref(), &corr);
         for (r, c) in rhs.iter_mut().zip(&bc) {
             *r -= c;
         }
-        rhs
+        (rhs, known)
     }
 }
 

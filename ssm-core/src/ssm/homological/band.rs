@@ -421,7 +421,7 @@ impl Homological<'_> {
         let (n, r) = (self.n, set.len());
         // P^-1: the bordered block solve at the anchor
         let precond = |v: &[C64]| -> Option<Vec<C64>> {
-            let (mut w, r) = self.anchor_block_solve(slot, set, &v[..n], &v[n..])?;
+            let (mut w, r) = self.anchor_block_solve(slot, set, &v[..n], &v[n..], None)?;
             w.extend(r);
             Some(w)
         };

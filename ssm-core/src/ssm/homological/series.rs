@@ -104,10 +104,11 @@ impl Homological<'_> {
         set: &[usize],
         h: &[C64],
         g: &[C64],
+        mass_part: Option<&[C64]>,
     ) -> Option<Solution> {
         let anc = &self.anchors[slot];
         let border = anc.border.as_ref().expect("set by anchor_slot");
-        let w0 = self.lu_solve(&anc.lu, h);
+        let w0 = self.lu_solve_known(&anc.lu, h, mass_part);
         let mut s_rhs: Vec<C64> = set
             .iter()
             .zip(g)
@@ -145,7 +146,7 @@ impl Homological<'_> {
         let Some(slot) = self.series_anchor(anchor, set)? else {
             return Ok(None);
         };
-        let run = self.series_at(slot, anchor + delta, slope, set, rhs);
+        let run = self.series_at(slot, anchor + delta, slope, set, rhs, &[]);
         Ok(self.series_counted(run))
     }
 
@@ -180,7 +181,9 @@ impl Homological<'_> {
         slope: C64,
         set: &[usize],
         rhs: &[Vec<C64>],
+        mass_parts: &[Option<Vec<C64>>],
     ) -> SeriesRun {
+        let disp = self.displacements();
         let t = Instant::now();
         let zero = C64::new(0.0, 0.0);
         let zero_g = vec![zero; set.len()];
@@ -192,11 +195,22 @@ impl Homological<'_> {
         let mut floor = 0.0f64;
         for m in 0..MAX_TERMS {
             let mut c = rhs.get(m).cloned().unwrap_or_else(|| vec![zero; self.n]);
+            // M^{-1} c_V where it is known: the right-hand side's own (zero
+            // past it), less slope w_x for the term's - slope B w
+            let mut known: Option<Vec<C64>> = match disp {
+                Some(n) if m >= rhs.len() => Some(vec![zero; n]),
+                Some(_) => mass_parts.get(m).cloned().flatten(),
+                None => None,
+            };
             if let Some((w, _)) = terms.last() {
                 let bw = spmv(self.b, w);
                 c.iter_mut().zip(&bw).for_each(|(x, b)| *x -= slope * b);
+                if let Some(u) = known.as_mut() {
+                    u.iter_mut().zip(w).for_each(|(x, wx)| *x -= slope * wx);
+                }
             }
-            let Some((term, error)) = self.refined_at_anchor(slot, lambda, set, &c, &zero_g) else {
+            let refined = self.refined_at_anchor(slot, lambda, set, &c, &zero_g, known.as_deref());
+            let Some((term, error)) = refined else {
                 break;
             };
             floor = floor.max(error);
@@ -251,14 +265,15 @@ impl Homological<'_> {
         set: &[usize],
         h: &[C64],
         g: &[C64],
+        mass_part: Option<&[C64]>,
     ) -> Option<(Solution, f64)> {
-        let (mut w, mut r) = self.anchor_block_solve(slot, set, h, g)?;
+        let (mut w, mut r) = self.anchor_block_solve(slot, set, h, g, mass_part)?;
         let mut res = self.residual(lambda, set, &w, &r, h);
         for _ in 0..MAX_SWEEPS {
             if !res.componentwise.is_finite() || res.componentwise <= TERM_REFINED {
                 break;
             }
-            let (dw, dr) = self.anchor_block_solve(slot, set, &res.h, &res.g)?;
+            let (dw, dr) = self.anchor_block_solve(slot, set, &res.h, &res.g, None)?;
             let w1: Vec<C64> = w.iter().zip(&dw).map(|(x, d)| x + d).collect();
             let r1: Vec<C64> = r.iter().zip(&dr).map(|(x, d)| x + d).collect();
             let res1 = self.residual(lambda, set, &w1, &r1, h);

@@ -43,6 +43,8 @@ struct Job {
     idx: usize,
     set_res: Vec<usize>,
     rhs: Vec<Vec<C64>>,
+    /// `M^{-1} rhs_V` per term where known without a solve.
+    known: Vec<Option<Vec<C64>>>,
     big: C64,
     at: C64,
     slot: usize,
@@ -215,7 +217,7 @@ impl ForcedSsm<'_> {
                 } else {
                     (0..done).map(|j| xs[j].len()).max().unwrap_or(1)
                 };
-                let rhs: Vec<Vec<C64>> = (0..terms)
+                let (rhs, known): (Vec<Vec<C64>>, Vec<Option<Vec<C64>>>) = (0..terms)
                     .map(|m| {
                         let x: Vec<&[C64]> = (0..done)
                             .map(|j| xs[j].get(m).map_or(empty, Vec::as_slice))
@@ -224,9 +226,9 @@ impl ForcedSsm<'_> {
                             .map(|j| ss[j].get(m).map_or(zeros.as_slice(), Vec::as_slice))
                             .collect();
                         let forcing = (k == 0 && m == 0).then_some(f);
-                        cx.rhs(&e, done, &below, &x, &s, forcing)
+                        cx.rhs_known(&e, done, &below, &x, &s, forcing)
                     })
-                    .collect();
+                    .unzip();
                 let big = C64::new(0.0, multiple * center) + shift;
                 let at = anchor_for(anchors, big).expect("every multi-index has its anchor");
                 let Some(slot) = self.solver.series_anchor(at, &set_res)? else {
@@ -236,6 +238,7 @@ impl ForcedSsm<'_> {
                     idx,
                     set_res,
                     rhs,
+                    known,
                     big,
                     at,
                     slot,
@@ -252,7 +255,7 @@ impl ForcedSsm<'_> {
             let runs: Vec<SeriesRun> = if shared {
                 let solver = &self.solver;
                 jobs.par_iter()
-                    .map(|j| solver.series_at(j.slot, j.big, slope, &j.set_res, &j.rhs))
+                    .map(|j| solver.series_at(j.slot, j.big, slope, &j.set_res, &j.rhs, &j.known))
                     .collect()
             } else {
                 let mut runs = Vec::with_capacity(jobs.len());
@@ -263,7 +266,7 @@ impl ForcedSsm<'_> {
                         .expect("factorized above");
                     runs.push(
                         self.solver
-                            .series_at(slot, j.big, slope, &j.set_res, &j.rhs),
+                            .series_at(slot, j.big, slope, &j.set_res, &j.rhs, &j.known),
                     );
                 }
                 runs
