@@ -153,9 +153,8 @@ impl Ssm {
                     ..Plan::default()
                 };
                 let limits = Limits::of_machine();
-                plan.check(&sys, &limits)
-                    .map_err(|e| Failure::of(Family::Input, e))?;
-                let ceiling = budget::check_spectrum(&plan, &sys, &limits)
+                let ceiling = plan
+                    .check(&sys, &limits)
                     .map_err(|e| Failure::of(Family::Input, e))?;
                 let spec = plan.ssm;
                 progress.begin("spectrum");

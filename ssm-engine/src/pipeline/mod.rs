@@ -360,7 +360,7 @@ pub fn execute(
         full: full_model,
         plugins,
     } = model;
-    plan.check(&system, limits)?;
+    let ceiling = plan.check(&system, limits)?;
     let analysis_orders = highest_analysis_order(plan)?;
     let mut timing = Timing::default();
     let mut warnings = Vec::new();
@@ -380,7 +380,6 @@ pub fn execute(
     }
     let coordinates = named_outputs(&system, &plan.coordinates, "outputs.coordinates")?;
 
-    let ceiling = budget::check_spectrum(plan, &system, limits)?;
     progress.stage("spectrum");
     let sp = spectral(
         &plan.ssm,

@@ -239,13 +239,13 @@ impl Plan {
     /// model can be validated and forced as asked, and the requests fit.
     /// The pipeline runs these checks on every plan it is given; the
     /// estimates that need the master modes run after the spectrum
-    /// ([`budget::check`]).
-    pub fn check(&self, system: &System, limits: &Limits) -> Result<(), PlanError> {
+    /// ([`budget::check`]). Returns the highest SSM order the run may
+    /// compute ([`budget::check_spectrum`]).
+    pub fn check(&self, system: &System, limits: &Limits) -> Result<usize, PlanError> {
         self.validate().map_err(PlanError::from)?;
         checks::check(self, system)?;
         budget::check_pod(self, system, limits)?;
-        budget::check_spectrum(self, system, limits)?;
-        Ok(())
+        budget::check_spectrum(self, system, limits)
     }
 }
 
