@@ -38,6 +38,7 @@ use crate::spectrum::MasterMode;
 use crate::ssm::modal_residual::ModalResidual;
 use crate::ssm::{Dynamics, SsmExpansion};
 use crate::C64;
+use rayon::prelude::*;
 
 /// Phases of a master pair sampled per turn (resolves harmonics up to 16,
 /// beyond any order used in practice: order `O` has harmonics up to `O`).
@@ -213,7 +214,7 @@ pub fn backbone_error(
     let p = [C64::new(rho, 0.0), C64::new(rho, 0.0)];
     let reference = exponent(ssm, lambda);
     let figures = tail_orders(order)
-        .into_iter()
+        .into_par_iter()
         .map(|o| pair_defect(ssm, modal, lambda, &p, 0, o).map(|d| d.backbone(reference)))
         .collect::<Option<Vec<f64>>>()?;
     Some(tail(&figures))

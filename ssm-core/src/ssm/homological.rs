@@ -58,11 +58,11 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
-use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
-use ssm_kernel::sparse_sym::{ComplexSymFactor, SymbolicComplexSym};
+use faer::sparse::linalg::solvers::SymbolicLu;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use ssm_kernel::sparse_sym::SymbolicComplexSym;
 
-use factor::{equilibrate_in_place, kernel_solve, symmetric_equilibrate, Factor, Kernel};
+use factor::{kernel_solve, Factor};
 use std::sync::Arc;
 
 use crate::model::condense;
@@ -287,104 +287,6 @@ impl<'a> Homological<'a> {
             self.numeric.insert(key, lu);
         }
         Ok(&self.numeric[&key])
-    }
-
-    /// A new LU of `sigma B - A` (counted); where band solves run, of the
-    /// equilibrated matrix (see [`Factor`]).
-    fn fresh_lu(&mut self, sigma: C64) -> Result<Factor, HomologicalError> {
-        let equilibrate = self.iterative();
-        let t = Instant::now();
-        let pattern = match &self.condensed {
-            Some(c) => c.symbolic.as_ref(),
-            None => self.symbolic.as_ref(),
-        };
-        // decided once: the real form's L B L^T where the condensed pencil
-        // is symmetric and the factors dear
-        if equilibrate && !self.sym_checked {
-            self.sym_checked = true;
-            if self.condensed.as_ref().is_some_and(|c| c.is_symmetric()) {
-                let sym = SymbolicComplexSym::analyze(pattern).map_err(|e| {
-                    HomologicalError::Singular {
-                        detail: format!("symbolic L B L^T failed: {e:?}"),
-                    }
-                })?;
-                self.sym_symbolic = Some(Arc::new(sym));
-                self.stats.symbolic += 1;
-            }
-        }
-        if let Some(sym) = self.sym_symbolic.clone() {
-            let mut vals = self
-                .condensed
-                .as_ref()
-                .expect("symmetric: condensed")
-                .values(sigma);
-            let scale = symmetric_equilibrate(pattern, &mut vals);
-            let (f, bytes) = ssm_kernel::heap::held(|| {
-                ComplexSymFactor::factor(sym, &vals, faer::get_global_parallelism())
-            });
-            self.stats.symmetric_factorizations += 1;
-            let scale = Some((scale.clone(), scale));
-            return Ok(self.counted(t, Kernel::Symmetric(f), scale, sigma, bytes));
-        }
-        if self.lu_symbolic.is_none() {
-            let sym = SymbolicLu::try_new(pattern).map_err(|e| HomologicalError::Singular {
-                detail: format!("symbolic LU failed: {e:?}"),
-            })?;
-            self.lu_symbolic = Some(sym);
-            self.stats.symbolic += 1;
-        }
-        let mut vals: Vec<C64> = match &self.condensed {
-            Some(c) => c.values(sigma),
-            None => self
-                .a_val
-                .iter()
-                .zip(&self.b_val)
-                .map(|(&a, &b)| sigma * b - a)
-                .collect(),
-        };
-        let scale = equilibrate.then(|| equilibrate_in_place(pattern, &mut vals));
-        let mat = SparseColMat::new(pattern.to_owned().expect("a valid pattern"), vals);
-        let (lu, bytes) = ssm_kernel::heap::held(|| {
-            Lu::try_new_with_symbolic(
-                self.lu_symbolic.clone().expect("computed above"),
-                mat.as_ref(),
-            )
-        });
-        let lu = lu.map_err(|e| HomologicalError::Singular {
-            detail: format!("sparse LU of Lambda B - A at Lambda = {sigma:.4e} failed: {e:?}"),
-        })?;
-        Ok(self.counted(t, Kernel::Lu(Box::new(lu)), scale, sigma, bytes))
-    }
-
-    /// A factorization begun at `t` counted, with the heap it holds.
-    fn counted(
-        &mut self,
-        t: Instant,
-        lu: Kernel,
-        scale: Option<(Vec<f64>, Vec<f64>)>,
-        sigma: C64,
-        bytes: Option<usize>,
-    ) -> Factor {
-        self.stats.factorizations += 1;
-        self.stats.factor_s += t.elapsed().as_secs_f64();
-        if let Some(b) = bytes {
-            let held = self.held_factor_bytes() + b;
-            self.stats.factor_bytes = Some(self.stats.factor_bytes.unwrap_or(0).max(held));
-        }
-        Factor {
-            lu,
-            scale,
-            sigma,
-            bytes: bytes.unwrap_or(0),
-        }
-    }
-
-    /// Heap the factors kept now hold (cached values and band anchors), as
-    /// counted when they were made; 0 where the allocator does not count.
-    pub(crate) fn held_factor_bytes(&self) -> usize {
-        self.numeric.values().map(|f| f.bytes).sum::<usize>()
-            + self.anchors.iter().map(|a| a.lu.bytes).sum::<usize>()
-            + self.condensed.as_ref().map_or(0, |c| c.mass_bytes)
     }
 
     /// The value factorized for `lambda` with resonant set `set`: `lambda`

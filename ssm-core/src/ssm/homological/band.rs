@@ -359,6 +359,37 @@ impl Homological<'_> {
         self.anchors.retain(|a| a.at != anchor);
     }
 
+    /// The factorizations at those of `anchors` not yet held, made side by
+    /// side ([`Homological::fresh_lus`]) and kept for
+    /// [`Homological::series_anchor`]: the anchors a non-autonomous order's
+    /// series need, known before any of them runs. Anchors a master
+    /// eigenvalue would shift are left out (their series are not run).
+    ///
+    /// # Errors
+    /// A factorization failed.
+    pub(crate) fn prefactor_anchors(&mut self, anchors: &[C64]) -> Result<(), HomologicalError> {
+        let all: Vec<usize> = (0..self.lambda.len()).collect();
+        let mut missing: Vec<C64> = Vec::new();
+        for &a in anchors {
+            let held = self.anchors.iter().any(|x| x.at == a) || missing.contains(&a);
+            if !held && self.factorized_at(a, &all) == a {
+                missing.push(a);
+            }
+        }
+        if missing.len() < 2 {
+            return Ok(());
+        }
+        let factors = self.fresh_lus(&missing)?;
+        for (at, lu) in missing.into_iter().zip(factors) {
+            self.anchors.push(AnchorLu {
+                at,
+                lu,
+                border: None,
+            });
+        }
+        Ok(())
+    }
+
     /// The cached factorization at `anchor` with the border of `set`,
     /// computed when missing: at `anchor`, or shifted off a master
     /// eigenvalue it hits (as in [`Homological::solve`]).

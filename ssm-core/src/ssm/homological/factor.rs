@@ -2,10 +2,17 @@
 //! an LU (of the equilibrated matrix where band solves run), or the real
 //! form's `L B L^T` of a symmetric condensed pencil.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::Lu;
-use ssm_kernel::sparse_sym::ComplexSymFactor;
+use std::sync::Arc;
+use std::time::Instant;
 
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::SparseColMat;
+use faer::Par;
+use rayon::prelude::*;
+use ssm_kernel::sparse_sym::{ComplexSymFactor, SymbolicComplexSym};
+
+use super::{Homological, HomologicalError};
 use crate::C64;
 
 /// A sparse LU of `M = sigma B - A`, or of `D_r M D_c` with the diagonal
@@ -119,4 +126,171 @@ pub(super) fn symmetric_equilibrate(
         }
     }
     d
+}
+
+/// A numeric factorization as [`Homological::factorization`] makes it,
+/// before it is counted.
+struct Made {
+    lu: Kernel,
+    scale: Option<(Vec<f64>, Vec<f64>)>,
+    sigma: C64,
+}
+
+impl Homological<'_> {
+    /// A new factorization of `sigma B - A` (counted); where band solves
+    /// run, of the equilibrated matrix (see [`Factor`]).
+    pub(super) fn fresh_lu(&mut self, sigma: C64) -> Result<Factor, HomologicalError> {
+        let t = Instant::now();
+        let equilibrate = self.analyzed()?;
+        let (made, bytes) =
+            ssm_kernel::heap::held(|| self.factorization(sigma, equilibrate, Some(Par::Seq)));
+        let made = made?;
+        Ok(self.counted(t.elapsed().as_secs_f64(), made, bytes, 0))
+    }
+
+    /// New factorizations at each of `sigmas`, made side by side (one per
+    /// core, each on one thread) where they are symmetric `L B L^T`s, whose
+    /// numeric phase runs mostly on one thread whatever it is given; one by
+    /// one otherwise. Counted in order, with the wall time and the heap of
+    /// the batch shared out evenly (factors of one symbolic analysis hold
+    /// the same entries).
+    pub(super) fn fresh_lus(&mut self, sigmas: &[C64]) -> Result<Vec<Factor>, HomologicalError> {
+        let t = Instant::now();
+        let equilibrate = self.analyzed()?;
+        if self.sym_symbolic.is_none() || sigmas.len() < 2 {
+            return sigmas.iter().map(|&s| self.fresh_lu(s)).collect();
+        }
+        let (made, bytes) = ssm_kernel::heap::held(|| {
+            let this = &*self;
+            sigmas
+                .par_iter()
+                .map(|&s| this.factorization(s, equilibrate, Some(Par::Seq)))
+                .collect::<Result<Vec<Made>, HomologicalError>>()
+        });
+        let made = made?;
+        let count = made.len().max(1);
+        let secs = t.elapsed().as_secs_f64() / count as f64;
+        let each = bytes.map(|b| b / count);
+        let mut factors = Vec::with_capacity(count);
+        for m in made {
+            // the batch's factors are all held once it returns
+            let pending = factors.iter().map(|f: &Factor| f.bytes).sum();
+            factors.push(self.counted(secs, m, each, pending));
+        }
+        Ok(factors)
+    }
+
+    /// The symbolic analysis every factorization shares, made once
+    /// (counted): the real form's `L B L^T` where the condensed pencil is
+    /// symmetric and the factors dear, an LU's otherwise. Returns whether
+    /// the factorizations equilibrate (where band solves run).
+    fn analyzed(&mut self) -> Result<bool, HomologicalError> {
+        let equilibrate = self.iterative();
+        if equilibrate && !self.sym_checked {
+            self.sym_checked = true;
+            if let Some(c) = self.condensed.as_ref().filter(|c| c.is_symmetric()) {
+                let sym = SymbolicComplexSym::analyze(c.symbolic.as_ref()).map_err(|e| {
+                    HomologicalError::Singular {
+                        detail: format!("symbolic L B L^T failed: {e:?}"),
+                    }
+                })?;
+                self.sym_symbolic = Some(Arc::new(sym));
+                self.stats.symbolic += 1;
+            }
+        }
+        if self.sym_symbolic.is_none() && self.lu_symbolic.is_none() {
+            let pattern = match &self.condensed {
+                Some(c) => c.symbolic.as_ref(),
+                None => self.symbolic.as_ref(),
+            };
+            let sym = SymbolicLu::try_new(pattern).map_err(|e| HomologicalError::Singular {
+                detail: format!("symbolic LU failed: {e:?}"),
+            })?;
+            self.lu_symbolic = Some(sym);
+            self.stats.symbolic += 1;
+        }
+        Ok(equilibrate)
+    }
+
+    /// The numeric factorization at `sigma` once [`Homological::analyzed`]
+    /// ran, reading the solver alone; `par` is the `L B L^T`'s parallelism
+    /// (faer's global one where `None`).
+    fn factorization(
+        &self,
+        sigma: C64,
+        equilibrate: bool,
+        par: Option<Par>,
+    ) -> Result<Made, HomologicalError> {
+        let pattern = match &self.condensed {
+            Some(c) => c.symbolic.as_ref(),
+            None => self.symbolic.as_ref(),
+        };
+        if let Some(sym) = self.sym_symbolic.clone() {
+            let mut vals = self
+                .condensed
+                .as_ref()
+                .expect("symmetric: condensed")
+                .values(sigma);
+            let scale = symmetric_equilibrate(pattern, &mut vals);
+            let par = par.unwrap_or_else(faer::get_global_parallelism);
+            let f = ComplexSymFactor::factor(sym, &vals, par);
+            return Ok(Made {
+                lu: Kernel::Symmetric(f),
+                scale: Some((scale.clone(), scale)),
+                sigma,
+            });
+        }
+        let mut vals: Vec<C64> = match &self.condensed {
+            Some(c) => c.values(sigma),
+            None => self
+                .a_val
+                .iter()
+                .zip(&self.b_val)
+                .map(|(&a, &b)| sigma * b - a)
+                .collect(),
+        };
+        let scale = equilibrate.then(|| equilibrate_in_place(pattern, &mut vals));
+        let mat = SparseColMat::new(pattern.to_owned().expect("a valid pattern"), vals);
+        let lu =
+            Lu::try_new_with_symbolic(self.lu_symbolic.clone().expect("analyzed"), mat.as_ref())
+                .map_err(|e| HomologicalError::Singular {
+                    detail: format!(
+                        "sparse LU of Lambda B - A at Lambda = {sigma:.4e} failed: {e:?}"
+                    ),
+                })?;
+        Ok(Made {
+            lu: Kernel::Lu(Box::new(lu)),
+            scale,
+            sigma,
+        })
+    }
+
+    /// A factorization that took `secs` counted, with the heap it holds
+    /// (`bytes`) and that of the factors made with it and not yet kept
+    /// (`pending`).
+    fn counted(&mut self, secs: f64, made: Made, bytes: Option<usize>, pending: usize) -> Factor {
+        if matches!(made.lu, Kernel::Symmetric(_)) {
+            self.stats.symmetric_factorizations += 1;
+        }
+        self.stats.factorizations += 1;
+        self.stats.factor_s += secs;
+        if let Some(b) = bytes {
+            let held = self.held_factor_bytes() + pending + b;
+            self.stats.factor_bytes = Some(self.stats.factor_bytes.unwrap_or(0).max(held));
+        }
+        Factor {
+            lu: made.lu,
+            scale: made.scale,
+            sigma: made.sigma,
+            bytes: bytes.unwrap_or(0),
+        }
+    }
+
+    /// Heap the factors kept now hold (cached values and band anchors), as
+    /// counted when they were made; 0 where the allocator does not count.
+    pub(crate) fn held_factor_bytes(&self) -> usize {
+        self.numeric.values().map(|f| f.bytes).sum::<usize>()
+            + self.anchors.iter().map(|a| a.lu.bytes).sum::<usize>()
+            + self.condensed.as_ref().map_or(0, |c| c.mass_bytes)
+    }
 }

@@ -203,6 +203,15 @@ impl ForcedSsm<'_> {
             // the order's systems: their right-hand sides come from the
             // lower orders alone
             let mut jobs = Vec::new();
+            // the order's factorizations first, side by side
+            let needed: Vec<C64> = set
+                .of_order(k)
+                .filter_map(|idx| {
+                    let big = C64::new(0.0, multiple * center) + shift_of(set.exponents(idx));
+                    anchor_for(anchors, big)
+                })
+                .collect();
+            self.solver.prefactor_anchors(&needed)?;
             for idx in set.of_order(k) {
                 let e = set.exponents(idx).to_vec();
                 let shift = shift_of(&e);
@@ -271,23 +280,29 @@ impl ForcedSsm<'_> {
                 }
                 runs
             };
-            for (job, run) in jobs.into_iter().zip(runs) {
+            let mut solved = Vec::with_capacity(jobs.len());
+            for run in runs {
                 let Some((series, floor)) = self.solver.series_counted(run) else {
                     return Ok(None);
                 };
                 let (w, r): (Vec<Vec<C64>>, Vec<Vec<C64>>) = series.into_iter().unzip();
-                // every frequency asked for: its value solves its system
-                let (big, set_res, rhs) = (job.big, &job.set_res, &job.rhs);
-                let missed = ts.iter().any(|&t| {
-                    let (wt, rt, bt) = (horner(&w, t), horner(&r, t), horner(rhs, t));
-                    let error = self
-                        .solver
-                        .backward_error(big + slope * t, set_res, &wt, &rt, &bt);
-                    error.is_nan() || error > series_accept(floor)
-                });
-                if missed {
-                    return Ok(None);
-                }
+                solved.push((w, r, floor));
+            }
+            // every frequency asked for: its value solves its system (the
+            // checks are independent: one per core)
+            let solver = &self.solver;
+            let missed = (0..jobs.len() * ts.len()).into_par_iter().any(|i| {
+                let (job, (w, r, floor)) = (&jobs[i / ts.len()], &solved[i / ts.len()]);
+                let t = ts[i % ts.len()];
+                let (wt, rt, bt) = (horner(w, t), horner(r, t), horner(&job.rhs, t));
+                let error = solver.backward_error(job.big + slope * t, &job.set_res, &wt, &rt, &bt);
+                error.is_nan() || error > series_accept(*floor)
+            });
+            if missed {
+                return Ok(None);
+            }
+            for (job, (w, r, _)) in jobs.into_iter().zip(solved) {
+                let set_res = &job.set_res;
                 ss[job.idx] = r
                     .into_iter()
                     .map(|rv| {
