@@ -33,6 +33,7 @@ use crate::ssm::analysis::{invariance_error, polar, Polar};
 use crate::ssm::forced::{table_warning, ForcedSsm};
 use crate::ssm::modal_residual::ModalResidual;
 use crate::ssm::nonautonomous::NaSeries;
+use crate::ssm::nonautonomous::NonAutonomous;
 use crate::ssm::SsmExpansion;
 use crate::C64;
 use rayon::prelude::*;
@@ -415,9 +416,16 @@ impl Context<'_> {
                 let band = table
                     .and_then(|t| t.series.as_ref())
                     .filter(|s| s.contains(pk.omega));
-                let mut one = match band {
-                    Some(s) => vec![s.at(pk.omega)],
-                    None => forced.expansions(ssm, sys, &[pk.omega], k_eff, Some(mid))?,
+                // the leading order's: the output table's series where it
+                // holds the peak's frequency (it solves the system there)
+                let leading = (k_eff == 0)
+                    .then(|| forced.at_series(pk.omega))
+                    .flatten()
+                    .map(|x0| NonAutonomous::leading(x0, ssm.dim()));
+                let mut one = match (band, leading) {
+                    (Some(s), _) => vec![s.at(pk.omega)],
+                    (None, Some(x0)) => vec![x0],
+                    (None, None) => forced.expansions(ssm, sys, &[pk.omega], k_eff, Some(mid))?,
                 };
                 let na = one.pop().expect("one frequency, one expansion");
                 // the orbit's samples are independent: one per core

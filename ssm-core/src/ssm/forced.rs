@@ -179,6 +179,20 @@ fn at_origin(p: &PolyVector, n: usize) -> Vec<f64> {
     v
 }
 
+/// The whole `X0`, `S0` over the band `center +- half_width` as Taylor
+/// series in `t = (Omega - center) / half_width`: per harmonic the term
+/// lists of `x` and of the resonant coordinates' `s`, and the floor their
+/// refined solves reached.
+struct X0Series {
+    center: f64,
+    half_width: f64,
+    harmonics: Vec<HarmonicSeries>,
+}
+
+/// One harmonic's terms of `x` and of `s` on the resonant coordinates, and
+/// their floor.
+type HarmonicSeries = (Vec<Vec<C64>>, Vec<Vec<C64>>, f64);
+
 /// The leading-order periodic SSM of one system and master set, evaluated at
 /// any forcing frequency; one symbolic LU serves every frequency.
 pub struct ForcedSsm<'a> {
@@ -191,6 +205,9 @@ pub struct ForcedSsm<'a> {
     coord_ratios: Vec<f64>,
     outputs: Vec<Vec<(usize, f64)>>,
     table: Option<Table>,
+    /// The whole `X0`, `S0` of the output table's series, where they were
+    /// accepted ([`ForcedSsm::at_series`]).
+    x0_series: Option<X0Series>,
     /// The frequency whose factorization preconditions the solves of
     /// [`ForcedSsm::at`] (see [`ForcedSsm::anchor_at`]).
     anchor: Option<f64>,
@@ -254,6 +271,7 @@ impl<'a> ForcedSsm<'a> {
             coord_ratios,
             outputs: Vec::new(),
             table: None,
+            x0_series: None,
             anchor: None,
         })
     }
@@ -414,7 +432,7 @@ impl<'a> ForcedSsm<'a> {
     ///
     /// # Errors
     /// A failed solve at a node.
-    pub(crate) fn tabulate_outputs(
+    pub fn tabulate_outputs(
         &mut self,
         a: f64,
         b: f64,
@@ -422,6 +440,7 @@ impl<'a> ForcedSsm<'a> {
     ) -> Result<f64, ForcedError> {
         self.outputs = weights.iter().map(|w| w.to_vec()).collect();
         self.table = None;
+        self.x0_series = None;
         let series = if self.solver.iterative() {
             self.output_series(a, b)?
         } else {
@@ -472,6 +491,11 @@ impl<'a> ForcedSsm<'a> {
             return Ok(None);
         }
         let mut terms: Vec<Vec<C64>> = Vec::new();
+        let mut whole = X0Series {
+            center,
+            half_width,
+            harmonics: Vec::with_capacity(self.forcing.len()),
+        };
         for (k, (multiple, f, set)) in self.forcing.iter().enumerate() {
             let anchor = C64::new(0.0, multiple * center);
             let slope = C64::new(0.0, multiple * half_width);
@@ -509,12 +533,46 @@ impl<'a> ForcedSsm<'a> {
                         .map(|o| o.iter().map(|&(s, v)| xm[s] * v).sum::<C64>()),
                 );
             }
+            whole.harmonics.push((w, r, floor));
         }
+        self.x0_series = Some(whole);
         let width = self.forcing.len() * self.outputs.len();
         terms
             .iter_mut()
             .for_each(|row| row.resize(width, C64::new(0.0, 0.0)));
         Ok(Some((center, half_width, terms)))
+    }
+
+    /// `X0`, `S0` at `omega` from the Taylor series of
+    /// [`ForcedSsm::tabulate_outputs`] (a polynomial evaluation in place of
+    /// a band solve), where `omega` lies in its band and the value solves
+    /// each harmonic's bordered system there to the backward error the
+    /// series was accepted with (`series_accept`); `None` otherwise.
+    pub fn at_series(&self, omega: f64) -> Option<ForcedTerms> {
+        let x0 = self.x0_series.as_ref()?;
+        let t = (omega - x0.center) / x0.half_width;
+        if t.is_nan() || t.abs() > 1.0 + 1e-12 {
+            return None;
+        }
+        let mut harmonics = Vec::with_capacity(self.forcing.len());
+        for ((multiple, f, set), (w, r, floor)) in self.forcing.iter().zip(&x0.harmonics) {
+            let (x, rt) = (horner(w, t), horner(r, t));
+            let big = C64::new(0.0, multiple * omega);
+            let error = self.solver.backward_error(big, set, &x, &rt, f);
+            if error.is_nan() || error > series_accept(*floor) {
+                return None;
+            }
+            let mut s = vec![C64::new(0.0, 0.0); self.n_coords];
+            for (&j, v) in set.iter().zip(rt) {
+                s[j] = v;
+            }
+            harmonics.push(ForcedHarmonic {
+                multiple: *multiple,
+                x,
+                s,
+            });
+        }
+        Some(ForcedTerms { omega, harmonics })
     }
 
     /// The outputs of [`ForcedSsm::tabulate_outputs`] at `omega`:

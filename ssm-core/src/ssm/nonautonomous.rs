@@ -24,11 +24,12 @@
 //! 110 (2022), Sect. 3.2 and Appendix B (non-autonomous expansion);
 //! M. Li, S. Jain, G. Haller, Nonlinear Dyn. 111 (2023), eq. (60).
 
-use super::forced::{ForcedError, ForcedSsm};
+use super::forced::{ForcedError, ForcedSsm, ForcedTerms};
 use super::SsmExpansion;
 use crate::model::system::System;
 use crate::spectrum::modes::spmv;
 use crate::C64;
+use rayon::prelude::*;
 use ssm_kernel::poly::MultiIndexSet;
 
 mod series;
@@ -416,11 +417,35 @@ pub(super) fn jacobian_series(
                 .flatten()
         })
         .collect();
+    // the entries (equation, variable) of DF, one per term and factor,
+    // numbered in order: each contribution is then summed into its entry's
+    // series in the terms' order (no list of every contribution and
+    // multi-index is held and sorted)
+    let keys: Vec<u64> = sys
+        .nonlinearity
+        .terms
+        .iter()
+        .flat_map(|t| {
+            t.factors
+                .iter()
+                .map(move |f| (u64::from(t.eq) << 32) | u64::from(f.var))
+        })
+        .collect();
+    let mut entries = keys.clone();
+    entries.par_sort_unstable();
+    entries.dedup();
+    let slot: Vec<u32> = keys
+        .par_iter()
+        .map(|k| entries.binary_search(k).expect("every key is an entry") as u32)
+        .collect();
+    drop(keys);
+    let mut values = vec![zero; entries.len() * len];
     let mut factor = vec![zero; len];
-    let mut terms: Vec<Vec<(usize, usize, C64)>> = vec![Vec::new(); len];
+    let mut series = vec![zero; len];
+    let mut next = 0;
     for t in sys.nonlinearity.terms.iter() {
         for (fi, fv) in t.factors.iter().enumerate() {
-            let mut series = vec![zero; len];
+            series.iter_mut().for_each(|c| *c = zero);
             series[0] = C64::new(t.coeff * f64::from(fv.power), 0.0);
             for (gi, gv) in t.factors.iter().enumerate() {
                 let pw = if gi == fi { gv.power - 1 } else { gv.power };
@@ -435,28 +460,52 @@ pub(super) fn jacobian_series(
                     series = mul_series(&product, &series, &factor);
                 }
             }
-            for (entries, v) in terms.iter_mut().zip(series) {
-                if v != zero {
-                    entries.push((t.eq as usize, fv.var as usize, v));
-                }
+            let at = slot[next] as usize * len;
+            next += 1;
+            for (v, c) in values[at..at + len].iter_mut().zip(&series) {
+                *v += c;
             }
         }
     }
-    for entries in &mut terms {
-        entries.sort_unstable_by_key(|&(eq, var, _)| (eq, var));
-        entries.dedup_by(|later, kept| {
-            let same = (later.0, later.1) == (kept.0, kept.1);
-            if same {
-                kept.2 += later.2;
-            }
-            same
-        });
-        entries.shrink_to_fit();
-    }
+    let terms: Vec<Vec<(usize, usize, C64)>> = (0..len)
+        .map(|m| {
+            entries
+                .iter()
+                .enumerate()
+                .filter(|&(e, _)| values[e * len + m] != zero)
+                .map(|(e, &key)| {
+                    (
+                        (key >> 32) as usize,
+                        (key & 0xffff_ffff) as usize,
+                        values[e * len + m],
+                    )
+                })
+                .collect()
+        })
+        .collect();
     JacobianSeries { terms }
 }
 
 impl NonAutonomous {
+    /// The expansion of order 0 in `p` (`nvar` reduced coordinates) that
+    /// the leading-order terms `X0`, `S0` are.
+    pub fn leading(terms: ForcedTerms, nvar: usize) -> Self {
+        Self {
+            omega: terms.omega,
+            order: 0,
+            set: MultiIndexSet::new(nvar, 0),
+            harmonics: terms
+                .harmonics
+                .into_iter()
+                .map(|h| NaHarmonic {
+                    multiple: h.multiple,
+                    x: vec![h.x],
+                    s: vec![h.s],
+                })
+                .collect(),
+        }
+    }
+
     /// Residual of the invariance equation (60) of the periodic SSM (autonomous
     /// part truncated at `order`, this non-autonomous part at its own order),
     /// at reduced point `p` (conjugate pairs) and phase `phi`:
