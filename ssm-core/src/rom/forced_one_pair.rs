@@ -38,7 +38,7 @@ use crate::ssm::SsmExpansion;
 use crate::C64;
 use rayon::prelude::*;
 use ssm_kernel::poly::MultiIndexSet;
-use ssm_kernel::search::first_true;
+use ssm_kernel::search::first_true_par;
 
 /// Exact non-autonomous data at the Chebyshev nodes in `Omega`.
 struct NaTable {
@@ -212,7 +212,17 @@ pub(crate) fn forced_response_one_pair(
     let mut rows = Vec::new();
     let mut curves = Vec::new();
     let weights: Vec<&[(usize, f64)]> = outputs.iter().map(|o| o.weights.as_slice()).collect();
-    let table_error = ctx.forced.tabulate_outputs(range.0, range.1, &weights)?;
+    // its series over the non-autonomous nodes' band, which the table's
+    // multi-index 0 then reuses
+    let band = ctx
+        .nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &w| {
+            (lo.min(w), hi.max(w))
+        });
+    let table_error = ctx
+        .forced
+        .tabulate_outputs_within(range.0, range.1, band, &weights)?;
     if let Some(w) = table_warning(table_error, range) {
         warnings.push(w);
     }
@@ -499,7 +509,7 @@ const SCAN_RATIO: f64 = 1.02;
 /// amplitude, so it crosses the limit once within such a step, and the
 /// scan costs about 67 estimates an order instead of 2000, each `O(N)` (a
 /// modal residual on a circle): on large models this scan was most of the
-/// forced response's time. [`first_true`] finds what the full scan finds
+/// forced response's time. [`first_true_par`] finds what the full scan finds
 /// when the estimate crosses the limit once within a stride.
 const SCAN_STRIDE: usize = 32;
 
@@ -561,7 +571,7 @@ fn default_rho_max(
         // the backbone estimate costs O(N) (a modal residual on a circle),
         // the reduced model's reach O(1): the first diverged amplitude is
         // found on every SCAN_STRIDE-th one and bisected in between
-        let first = first_true(grid.len(), SCAN_STRIDE, |k| {
+        let first = first_true_par(grid.len(), SCAN_STRIDE, |k| {
             accuracy::backbone_error(ssm, &modal, master.lambda, grid[k], order)
                 .is_some_and(|e| e.is_nan() || e > CONVERGENCE_LIMIT)
         });

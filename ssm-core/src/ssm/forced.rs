@@ -438,13 +438,38 @@ impl<'a> ForcedSsm<'a> {
         b: f64,
         weights: &[&[(usize, f64)]],
     ) -> Result<f64, ForcedError> {
+        self.tabulate_outputs_within(a, b, (a, b), weights)
+    }
+
+    /// [`ForcedSsm::tabulate_outputs`] with the outputs' Taylor series (where
+    /// band solves run) expanded over `band`, which holds `[a, b]` and has
+    /// its middle: the band of the non-autonomous table's nodes, whose
+    /// multi-index 0 then takes the same series ([`ForcedSsm::x0_terms`]);
+    /// over `[a, b]` where the series does not converge over `band`.
+    ///
+    /// # Errors
+    /// A failed solve at a node.
+    pub fn tabulate_outputs_within(
+        &mut self,
+        a: f64,
+        b: f64,
+        band: (f64, f64),
+        weights: &[&[(usize, f64)]],
+    ) -> Result<f64, ForcedError> {
         self.outputs = weights.iter().map(|w| w.to_vec()).collect();
         self.table = None;
         self.x0_series = None;
-        let series = if self.solver.iterative() {
-            self.output_series(a, b)?
-        } else {
+        let wide = band.0 <= a && band.1 >= b && band != (a, b);
+        let series = if !self.solver.iterative() {
             None
+        } else if let Some(s) = wide
+            .then(|| self.output_series(band.0, band.1))
+            .transpose()?
+            .flatten()
+        {
+            Some(s)
+        } else {
+            self.output_series(a, b)?
         };
         let table = match series {
             // the outputs' Taylor series in Omega, tabulated
@@ -573,6 +598,44 @@ impl<'a> ForcedSsm<'a> {
             });
         }
         Some(ForcedTerms { omega, harmonics })
+    }
+
+    /// The terms of harmonic `h`'s `X0` and `S0` (resonant coordinates) as
+    /// a Taylor series in `t = (Omega - center) / half_width`, with their
+    /// floor: the output table's series, whose band has the same middle and
+    /// holds this one, rescaled (`a_m (half_width / h_0)^m` for its half
+    /// width `h_0`, exact); `None` without such a series.
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn x0_terms(
+        &self,
+        h: usize,
+        center: f64,
+        half_width: f64,
+    ) -> Option<(Vec<Vec<C64>>, Vec<Vec<C64>>, f64)> {
+        let x0 = self.x0_series.as_ref()?;
+        let same_middle = (x0.center - center).abs() <= 1e-12 * center.abs().max(x0.half_width);
+        if !(same_middle && half_width > 0.0 && half_width <= x0.half_width) {
+            return None;
+        }
+        let (w, r, floor) = x0.harmonics.get(h)?;
+        let ratio = half_width / x0.half_width;
+        let scaled = |terms: &[Vec<C64>]| -> Vec<Vec<C64>> {
+            let mut f = 1.0;
+            terms
+                .iter()
+                .map(|t| {
+                    let v = t.iter().map(|c| c * f).collect();
+                    f *= ratio;
+                    v
+                })
+                .collect()
+        };
+        Some((scaled(w), scaled(r), *floor))
+    }
+
+    /// The forcing set (resonant coordinates) of harmonic `h`.
+    pub(crate) fn forcing_set(&self, h: usize) -> &[usize] {
+        &self.forcing[h].2
     }
 
     /// The outputs of [`ForcedSsm::tabulate_outputs`] at `omega`:

@@ -487,10 +487,11 @@ fn default_grid_finds_the_response_of_a_lightly_damped_duffing() {
 /// bounds a forced response's amplitudes where its backbone estimate
 /// diverges) finds what a test of every index finds whenever the test
 /// switches once, for every length, stride and switching point up to 80, in
-/// at most `n / stride + log2(stride) + 2` evaluations.
+/// at most `n / stride + log2(stride) + 2` evaluations; its batched form
+/// (`first_true_par`, the tests of a batch one per thread) finds the same.
 #[test]
 fn the_strided_search_finds_the_first_failing_index_of_a_full_scan() {
-    use ssm_kernel::search::first_true;
+    use ssm_kernel::search::{first_true, first_true_par};
     for n in 0..=80usize {
         for stride in 1..=40usize {
             for switch in 0..=n {
@@ -501,6 +502,11 @@ fn the_strided_search_finds_the_first_failing_index_of_a_full_scan() {
                 });
                 let full = (0..n).find(|&k| k >= switch);
                 assert_eq!(found, full, "n {n}, stride {stride}, switch {switch}");
+                let batched = first_true_par(n, stride, |k| k >= switch);
+                assert_eq!(
+                    batched, full,
+                    "batched: n {n}, stride {stride}, switch {switch}"
+                );
                 let bound = n / stride + (stride as f64).log2().ceil() as usize + 2;
                 assert!(
                     calls <= bound,

@@ -261,7 +261,16 @@ impl ForcedSsm<'_> {
                 jobs.iter()
                     .all(|b| a.slot != b.slot || a.set_res == b.set_res)
             });
-            let runs: Vec<SeriesRun> = if shared {
+            // multi-index 0 of the first harmonic solves what the output
+            // table's series solved: its terms, rescaled to this band, are
+            // taken (and checked at the nodes below)
+            let reused = (k == 0 && jobs.len() == 1)
+                .then(|| self.x0_terms(h, center, half_width))
+                .flatten()
+                .filter(|_| jobs[0].rhs.len() == 1 && jobs[0].set_res == self.forcing_set(h));
+            let runs: Vec<SeriesRun> = if reused.is_some() {
+                Vec::new()
+            } else if shared {
                 let solver = &self.solver;
                 jobs.par_iter()
                     .map(|j| solver.series_at(j.slot, j.big, slope, &j.set_res, &j.rhs, &j.known))
@@ -281,6 +290,7 @@ impl ForcedSsm<'_> {
                 runs
             };
             let mut solved = Vec::with_capacity(jobs.len());
+            solved.extend(reused);
             for run in runs {
                 let Some((series, floor)) = self.solver.series_counted(run) else {
                     return Ok(None);
