@@ -422,12 +422,12 @@ impl<'a> ForcedSsm<'a> {
     }
 
     /// Tabulates the outputs `weights` of `X0` over `[a, b]` for
-    /// [`ForcedSsm::outputs_at`]: each `c_{h,o}(Omega)` is analytic there
+    /// `ForcedSsm::outputs_at`: each `c_{h,o}(Omega)` is analytic there
     /// unless a non-master eigenvalue sits at `i kappa_h Omega` (the master
     /// resonances are removed by the bordering of eq. 60), so Chebyshev
     /// interpolation converges geometrically and a few dozen sparse solves
     /// serve every point of a curve. Returns the table's relative error
-    /// estimate; when it exceeds [`OUTPUT_TABLE_ACCEPT`] the table is
+    /// estimate; when it exceeds `OUTPUT_TABLE_ACCEPT` the table is
     /// dropped and every frequency is solved exactly.
     ///
     /// # Errors
@@ -444,7 +444,7 @@ impl<'a> ForcedSsm<'a> {
     /// [`ForcedSsm::tabulate_outputs`] with the outputs' Taylor series (where
     /// band solves run) expanded over `band`, which holds `[a, b]` and has
     /// its middle: the band of the non-autonomous table's nodes, whose
-    /// multi-index 0 then takes the same series ([`ForcedSsm::x0_terms`]);
+    /// multi-index 0 then takes the same series;
     /// over `[a, b]` where the series does not converge over `band`.
     ///
     /// # Errors
