@@ -331,6 +331,27 @@ pub fn compute(
         compose_s += tc.elapsed().as_secs_f64();
         solver.clear_numeric();
         let factorizations_before = solver.stats.factorizations;
+        // the order's factorizations first, side by side: its systems'
+        // values are known before any right-hand side is (an outer
+        // resonance is left to the check below, and a failed factorization
+        // to the solve that meets it, which names its multi-index)
+        let systems: Vec<(C64, Vec<usize>)> = set
+            .of_order(k)
+            .filter(|&idx| set.conj(idx) >= idx)
+            .map(|idx| lambda_of(dynamics, &lambda, set.exponents(idx)))
+            .filter(|&big| {
+                others.iter().all(|&ev| {
+                    (big - ev).norm() / ev.norm().max(f64::MIN_POSITIVE) > EXACT_RESONANCE
+                })
+            })
+            .map(|big| {
+                let resonant = (0..nvar)
+                    .filter(|&i| inner_resonant(dynamics, big, lambda[i], opts.resonance_tol))
+                    .collect();
+                (big, resonant)
+            })
+            .collect();
+        let _ = solver.prefactor(&systems);
         let mut new_terms = Vec::new();
         for idx in set.of_order(k) {
             let cidx = set.conj(idx);

@@ -180,6 +180,37 @@ impl Homological<'_> {
         Ok(factors)
     }
 
+    /// The factorizations [`Homological::solve`] will need for each value
+    /// `lambda` with resonant set `set` of `systems` (those of one order,
+    /// known before any is solved), made side by side where not cached
+    /// ([`Homological::fresh_lus`]) and cached for it.
+    ///
+    /// # Errors
+    /// A factorization failed.
+    pub(crate) fn prefactor(
+        &mut self,
+        systems: &[(C64, Vec<usize>)],
+    ) -> Result<(), HomologicalError> {
+        let key = |s: C64| (s.re.to_bits(), s.im.to_bits());
+        let mut missing: Vec<C64> = Vec::new();
+        for (lambda, set) in systems {
+            let sigma = self.factorized_at(*lambda, set);
+            if !self.numeric.contains_key(&key(sigma))
+                && !missing.iter().any(|&m| key(m) == key(sigma))
+            {
+                missing.push(sigma);
+            }
+        }
+        if missing.len() < 2 {
+            return Ok(());
+        }
+        let factors = self.fresh_lus(&missing)?;
+        for (sigma, f) in missing.into_iter().zip(factors) {
+            self.numeric.insert(key(sigma), f);
+        }
+        Ok(())
+    }
+
     /// The symbolic analysis every factorization shares, made once
     /// (counted): the real form's `L B L^T` where the condensed pencil is
     /// symmetric and the factors dear, an LU's otherwise. Returns whether
