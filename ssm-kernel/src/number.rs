@@ -21,6 +21,16 @@ pub fn list(xs: &[f64]) -> String {
     format!("[{}]", parts.join(", "))
 }
 
+/// The power of two nearest below `1 / m` (`1` for a zero or non-finite
+/// `m`): a scale that rounds nothing.
+pub fn inverse_power_of_two(m: f64) -> f64 {
+    if m > 0.0 && m.is_finite() {
+        (-m.log2().ceil()).exp2()
+    } else {
+        1.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

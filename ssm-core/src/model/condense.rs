@@ -505,6 +505,13 @@ impl ShiftInvert {
         })
     }
 
+    /// Whether `S(sigma)` is symmetric at every `sigma` (as
+    /// [`Condensed::is_symmetric`]).
+    pub(crate) fn is_symmetric(&self) -> bool {
+        let [a, b, m] = &self.vals;
+        symmetric(self.symbolic.as_ref(), &[a, b, m])
+    }
+
     /// `S(sigma)` for a real shift.
     pub(crate) fn real(&self, sigma: f64) -> SparseColMat<usize, f64> {
         let [a, b, m] = &self.vals;

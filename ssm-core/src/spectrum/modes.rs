@@ -21,7 +21,9 @@
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
-use faer::Mat;
+use faer::{Mat, Par};
+use ssm_kernel::sparse_sym::{symmetric_equilibrate, ComplexSymFactor, SymbolicComplexSym};
+use std::sync::Arc;
 
 use super::sparse::pseudo_random;
 use super::Normalization;
@@ -141,6 +143,37 @@ pub fn master_modes(
         .collect()
 }
 
+/// The factorization of [`refine`]'s `S(sigma)` (or `A - sigma B`).
+enum ShiftedFactor {
+    Lu(Box<faer::sparse::linalg::solvers::Lu<usize, C64>>),
+    /// The `L B L^T` of `D S D` and `D`.
+    Symmetric(ComplexSymFactor, Vec<f64>),
+}
+
+impl ShiftedFactor {
+    /// `S^{-1} r`, or `S^{-H} r` (`adjoint`): for a symmetric `S`,
+    /// `S^{-H} r = conj(S^{-1} conj(r))`, and `S^{-1} = D (D S D)^{-1} D`.
+    fn solve(&self, r: Vec<C64>, adjoint: bool) -> Vec<C64> {
+        match self {
+            Self::Lu(lu) => {
+                let mut m = Mat::<C64>::from_fn(r.len(), 1, |i, _| r[i]);
+                if adjoint {
+                    lu.solve_adjoint_in_place(m.as_mut());
+                } else {
+                    lu.solve_in_place(m.as_mut());
+                }
+                (0..r.len()).map(|i| m[(i, 0)]).collect()
+            }
+            Self::Symmetric(f, d) => {
+                let turn = |c: C64| if adjoint { c.conj() } else { c };
+                let mut x: Vec<C64> = r.iter().zip(d).map(|(&c, &di)| turn(c) * di).collect();
+                f.solve_in_place(&mut x);
+                x.iter().zip(d).map(|(&c, &di)| turn(c * di)).collect()
+            }
+        }
+    }
+}
+
 fn refine(
     sys: &System,
     lambda0: C64,
@@ -153,13 +186,33 @@ fn refine(
         detail,
     };
     let sigma = lambda0 + C64::new(1.0, 1.0) * (1e-10 * lambda0.norm().max(1e-300));
-    // a mechanical pencil: the LU of the condensed S(sigma), half the size
+    // a mechanical pencil: the condensed S(sigma), half the size, as the
+    // real form's L B L^T of its equilibrated D S D where it is symmetric
+    // and the model past the dense path's size (the homological solves'
+    // kernel; a small model's LU costs nothing, and its digits are kept),
+    // an LU otherwise
     let condensed = sys.velocities().and_then(|r| ShiftInvert::detect(a, b, r));
     let lu = match &condensed {
-        Some(c) => c.complex(sigma).sp_lu(),
-        None => shifted(sys, sigma).sp_lu(),
-    }
-    .map_err(|e| fail(format!("sparse LU of A - lambda B failed: {e:?}")))?;
+        Some(c) if n > super::DENSE_LIMIT && c.is_symmetric() => {
+            let s = c.complex(sigma);
+            let mut vals = s.val().to_vec();
+            let scale = symmetric_equilibrate(s.symbolic(), &mut vals);
+            let symbolic = SymbolicComplexSym::analyze(s.symbolic())
+                .map_err(|e| fail(format!("symbolic L B L^T of A - lambda B failed: {e:?}")))?;
+            let f = ComplexSymFactor::factor(Arc::new(symbolic), &vals, Par::Seq);
+            ShiftedFactor::Symmetric(f, scale)
+        }
+        other => {
+            let m = match other {
+                Some(c) => c.complex(sigma),
+                None => shifted(sys, sigma),
+            };
+            let lu = m
+                .sp_lu()
+                .map_err(|e| fail(format!("sparse LU of A - lambda B failed: {e:?}")))?;
+            ShiftedFactor::Lu(Box::new(lu))
+        }
+    };
     // (A - sigma B)^{-1} y, or (A - sigma B)^{-H} y, for y = B z (B^T z)
     let solves = std::cell::Cell::new(0usize);
     let solve = |y: Vec<C64>, z: &[C64], adjoint: bool| -> Vec<C64> {
@@ -169,13 +222,7 @@ fn refine(
             Some(c) => c.rhs(&y, s),
             None => y,
         };
-        let mut m = Mat::<C64>::from_fn(r.len(), 1, |i, _| r[i]);
-        if adjoint {
-            lu.solve_adjoint_in_place(m.as_mut());
-        } else {
-            lu.solve_in_place(m.as_mut());
-        }
-        let x: Vec<C64> = (0..r.len()).map(|i| m[(i, 0)]).collect();
+        let x = lu.solve(r, adjoint);
         match &condensed {
             Some(c) => c.expand(&x, z, s),
             None => x,

@@ -2,8 +2,10 @@
 //!
 //! The finite eigenvalues `lambda` of `(A, B)` nearest a real shift `sigma` are
 //! the largest-magnitude eigenvalues `theta = 1 / (lambda - sigma)` of
-//! `T = (A - sigma B)^{-1} B` (of a mechanical pencil, through the LU of its
-//! condensed `S(sigma)`, half the size: `crate::model::condense`). Infinite
+//! `T = (A - sigma B)^{-1} B` (of a mechanical pencil, through the
+//! factorization of its condensed `S(sigma)`, half the size:
+//! `crate::model::condense`; Cholesky where that is symmetric positive
+//! definite). Infinite
 //! eigenvalues map to `theta = 0`, so they
 //! are never among the wanted ones; the start vector is purified by applying `T`
 //! twice so that Krylov vectors carry no constraint-mode components. `T` is
@@ -26,15 +28,34 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
 use faer::{Accum, Col, Mat, MatMut, MatRef, Par};
+use ssm_kernel::sparse_sym::SpdFactor;
 
 use super::{krylov, SpectrumError};
 use crate::model::condense;
 use crate::C64;
 
+/// The factorization the shift-invert operator solves with: the Cholesky
+/// factor of a symmetric positive definite condensed `S(sigma)` (a
+/// finite-element model's stiffness at the default shift 0: a fraction of
+/// an LU's entries and work, solved on one thread), an LU otherwise.
+enum ShiftFactor {
+    Lu(Lu<usize, f64>),
+    Spd(SpdFactor),
+}
+
+impl ShiftFactor {
+    fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        match self {
+            Self::Lu(lu) => lu.solve_in_place(rhs),
+            Self::Spd(f) => f.solve_in_place(rhs),
+        }
+    }
+}
+
 /// The operator `(A - sigma B)^{-1} B`: through the LU of `A - sigma B`,
 /// or of a mechanical pencil's condensed `S(sigma)` (half the size).
 struct ShiftInvert<'a> {
-    lu: Lu<usize, f64>,
+    lu: ShiftFactor,
     b: SparseColMatRef<'a, usize, f64>,
     condensed: Option<(condense::ShiftInvert, f64)>,
 }
@@ -142,11 +163,20 @@ pub(crate) fn eigenvalues_near_shift(
         Some(c) => c.real(shift),
         None => combine(a, b, -shift),
     };
-    let lu = shifted.sp_lu().map_err(|e| SpectrumError::SingularShift {
-        shift,
-        detail: lu_failure(&e),
-        suggestion: None,
-    })?;
+    // symmetric positive definite (tried where the condensed pencil is
+    // symmetric): Cholesky; otherwise, or where it is not definite, an LU
+    let spd = condensed
+        .as_ref()
+        .filter(|c| n > super::DENSE_LIMIT && c.is_symmetric())
+        .and_then(|_| SpdFactor::factor(shifted.as_ref()));
+    let lu = match spd {
+        Some(f) => ShiftFactor::Spd(f),
+        None => ShiftFactor::Lu(shifted.sp_lu().map_err(|e| SpectrumError::SingularShift {
+            shift,
+            detail: lu_failure(&e),
+            suggestion: None,
+        })?),
+    };
     drop(shifted);
     let op = ShiftInvert {
         lu,

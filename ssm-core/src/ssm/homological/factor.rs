@@ -10,7 +10,8 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::SparseColMat;
 use faer::Par;
 use rayon::prelude::*;
-use ssm_kernel::sparse_sym::{ComplexSymFactor, SymbolicComplexSym};
+use ssm_kernel::number::inverse_power_of_two;
+use ssm_kernel::sparse_sym::{symmetric_equilibrate, ComplexSymFactor, SymbolicComplexSym};
 
 use super::{Homological, HomologicalError};
 use crate::C64;
@@ -45,16 +46,6 @@ pub(in crate::ssm) struct Factor {
 pub(super) enum Kernel {
     Lu(Box<Lu<usize, C64>>),
     Symmetric(ComplexSymFactor),
-}
-
-/// The power of two nearest below `1 / m` (`1` for a zero or non-finite
-/// `m`).
-fn inverse_power_of_two(m: f64) -> f64 {
-    if m > 0.0 && m.is_finite() {
-        (-m.log2().ceil()).exp2()
-    } else {
-        1.0
-    }
 }
 
 /// Scales `vals` (the values of `pattern`) to `D_r M D_c` and returns `(D_r,
@@ -98,34 +89,6 @@ pub(super) fn kernel_solve(lu: &Kernel, mut x: Vec<C64>) -> Vec<C64> {
         Kernel::Symmetric(f) => f.solve_in_place(&mut x),
     }
     x
-}
-
-/// Scales the values `vals` of the symmetric `pattern` to `D S D` and
-/// returns `D`: powers of two near `m_i^(-1/2)`, `m_i` the largest entry of
-/// row `i`, so that `|(D S D)_ij| <= 1` and scaling rounds nothing (the
-/// symmetric counterpart of [`equilibrate_in_place`]).
-pub(super) fn symmetric_equilibrate(
-    pattern: faer::sparse::SymbolicSparseColMatRef<'_, usize>,
-    vals: &mut [C64],
-) -> Vec<f64> {
-    let n = pattern.nrows();
-    let mut row_max = vec![0.0f64; n];
-    for j in 0..pattern.ncols() {
-        for k in pattern.col_range(j) {
-            let i = pattern.row_idx()[k];
-            row_max[i] = row_max[i].max(vals[k].norm());
-        }
-    }
-    let d: Vec<f64> = row_max
-        .into_iter()
-        .map(|m| inverse_power_of_two(m.sqrt()))
-        .collect();
-    for j in 0..pattern.ncols() {
-        for k in pattern.col_range(j) {
-            vals[k] *= d[pattern.row_idx()[k]] * d[j];
-        }
-    }
-    d
 }
 
 /// A numeric factorization as [`Homological::factorization`] makes it,
