@@ -14,16 +14,7 @@ pub fn first_true(n: usize, stride: usize, mut pred: impl FnMut(usize) -> bool) 
     let mut k = 0;
     while k < n {
         if pred(k) {
-            let mut hi = k;
-            while start < hi {
-                let mid = start + (hi - start) / 2;
-                if pred(mid) {
-                    hi = mid;
-                } else {
-                    start = mid + 1;
-                }
-            }
-            return Some(hi);
+            return Some(bisect(start, k, pred));
         }
         start = k + 1;
         k = if k + 1 == n {
@@ -66,18 +57,23 @@ pub fn first_true_par(
             if pos > 0 {
                 start = group[pos - 1] + 1;
             }
-            let mut hi = group[pos];
-            while start < hi {
-                let mid = start + (hi - start) / 2;
-                if pred(mid) {
-                    hi = mid;
-                } else {
-                    start = mid + 1;
-                }
-            }
-            return Some(hi);
+            return Some(bisect(start, group[pos], pred));
         }
         start = group[group.len() - 1] + 1;
     }
     None
+}
+
+/// The first index of `start ..= hi` where `pred` holds, given that it holds
+/// at `hi` and switches once in between.
+fn bisect(mut start: usize, mut hi: usize, mut pred: impl FnMut(usize) -> bool) -> usize {
+    while start < hi {
+        let mid = start + (hi - start) / 2;
+        if pred(mid) {
+            hi = mid;
+        } else {
+            start = mid + 1;
+        }
+    }
+    hi
 }

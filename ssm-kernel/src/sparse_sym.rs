@@ -283,22 +283,27 @@ impl SpdFactor {
     }
 }
 
+/// The largest `|S_ij|` of each row `i` of the values `vals` on `pattern`.
+pub fn row_max(pattern: SymbolicSparseColMatRef<'_, usize>, vals: &[C64]) -> Vec<f64> {
+    let mut m = vec![0.0f64; pattern.nrows()];
+    for j in 0..pattern.ncols() {
+        for k in pattern.col_range(j) {
+            let i = pattern.row_idx()[k];
+            m[i] = m[i].max(vals[k].norm());
+        }
+    }
+    m
+}
+
 /// Scales the values `vals` of the symmetric `pattern` to `D S D` and
 /// returns `D`: powers of two near `m_i^(-1/2)`, `m_i` the largest entry of
-/// row `i`, so that `|(D S D)_ij| <= 1` and scaling rounds nothing (the symmetric counterpart of a row and column equilibration).
+/// row `i`, so that `|(D S D)_ij| <= 1` and scaling rounds nothing (the symmetric
+/// counterpart of a row and column equilibration).
 pub fn symmetric_equilibrate(
     pattern: SymbolicSparseColMatRef<'_, usize>,
     vals: &mut [C64],
 ) -> Vec<f64> {
-    let n = pattern.nrows();
-    let mut row_max = vec![0.0f64; n];
-    for j in 0..pattern.ncols() {
-        for k in pattern.col_range(j) {
-            let i = pattern.row_idx()[k];
-            row_max[i] = row_max[i].max(vals[k].norm());
-        }
-    }
-    let d: Vec<f64> = row_max
+    let d: Vec<f64> = row_max(pattern, vals)
         .into_iter()
         .map(|m| crate::number::inverse_power_of_two(m.sqrt()))
         .collect();

@@ -211,7 +211,7 @@ impl ForcedSsm<'_> {
                             let forcing = (k == 0).then_some(f.as_slice());
                             let x: Vec<&[C64]> = xs[node].iter().map(Vec::as_slice).collect();
                             let s: Vec<&[C64]> = ss[node].iter().map(Vec::as_slice).collect();
-                            cx.rhs(&e, done, &below, &x, &s, forcing)
+                            cx.rhs_known(&e, done, &below, &x, &s, forcing).0
                         })
                         .collect();
                     let bigs: Vec<C64> = omegas
@@ -301,22 +301,11 @@ impl<'s> Rhs<'s> {
     /// lower orders' `x` (an empty vector: zero) and `s`, with the forcing
     /// `F_h` at `k = 0`: `F_h delta_{k0} + [DF(W) X]_k - B [DX R_nl + DW_nl
     /// S]_k` (module docs). Linear in `x` and `s` but for the forcing.
-    pub fn rhs(
-        &self,
-        e: &[u16],
-        done: usize,
-        below: &[(usize, usize)],
-        x: &[&[C64]],
-        s: &[&[C64]],
-        forcing: Option<&[C64]>,
-    ) -> Vec<C64> {
-        self.rhs_known(e, done, below, x, s, forcing).0
-    }
-
-    /// [`Rhs::rhs`], with `M^{-1} rhs_V` where the model is mechanical and
-    /// the part of the right-hand side that `B` does not multiply has no
-    /// velocity rows: then `rhs_V = -(B c)_V = -M c_x` for the correction
-    /// `c`, and `M^{-1} rhs_V = -c_x` without a solve.
+    ///
+    /// With it, `M^{-1} rhs_V` where the model is mechanical and the part of
+    /// the right-hand side that `B` does not multiply has no velocity rows:
+    /// then `rhs_V = -(B c)_V = -M c_x` for the correction `c`, and `M^{-1}
+    /// rhs_V = -c_x` without a solve.
     pub(crate) fn rhs_known(
         &self,
         e: &[u16],

@@ -11,7 +11,9 @@ use faer::sparse::SparseColMat;
 use faer::Par;
 use rayon::prelude::*;
 use ssm_kernel::number::inverse_power_of_two;
-use ssm_kernel::sparse_sym::{symmetric_equilibrate, ComplexSymFactor, SymbolicComplexSym};
+use ssm_kernel::sparse_sym::{
+    row_max, symmetric_equilibrate, ComplexSymFactor, SymbolicComplexSym,
+};
 
 use super::{Homological, HomologicalError};
 use crate::C64;
@@ -54,15 +56,10 @@ pub(super) fn equilibrate_in_place(
     pattern: faer::sparse::SymbolicSparseColMatRef<'_, usize>,
     vals: &mut [C64],
 ) -> (Vec<f64>, Vec<f64>) {
-    let n = pattern.nrows();
-    let mut row_max = vec![0.0f64; n];
-    for j in 0..pattern.ncols() {
-        for k in pattern.col_range(j) {
-            let i = pattern.row_idx()[k];
-            row_max[i] = row_max[i].max(vals[k].norm());
-        }
-    }
-    let row: Vec<f64> = row_max.into_iter().map(inverse_power_of_two).collect();
+    let row: Vec<f64> = row_max(pattern, vals)
+        .into_iter()
+        .map(inverse_power_of_two)
+        .collect();
     let mut col = vec![1.0f64; pattern.ncols()];
     for (j, cj) in col.iter_mut().enumerate() {
         let mut m = 0.0f64;
