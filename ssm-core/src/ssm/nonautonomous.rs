@@ -423,9 +423,9 @@ pub(super) fn jacobian_series(
     let mut entries = keys.clone();
     entries.par_sort_unstable();
     entries.dedup();
-    let slot: Vec<u32> = keys
+    let slot: Vec<usize> = keys
         .par_iter()
-        .map(|k| entries.binary_search(k).expect("every key is an entry") as u32)
+        .map(|k| entries.binary_search(k).expect("every key is an entry"))
         .collect();
     drop(keys);
     let mut values = vec![zero; entries.len() * len];
@@ -449,7 +449,7 @@ pub(super) fn jacobian_series(
                     series = mul_series(&product, &series, &factor);
                 }
             }
-            let at = slot[next] as usize * len;
+            let at = slot[next] * len;
             next += 1;
             for (v, c) in values[at..at + len].iter_mut().zip(&series) {
                 *v += c;

