@@ -21,6 +21,8 @@ use ssm_core::ssm::{self, SsmOptions};
 use ssm_tests::system;
 
 fn plate(c: &mut Criterion) {
+    // as the engine runs: freed factors reused, not faulted in afresh
+    ssm_kernel::heap::retain_freed_memory();
     let n: usize = std::env::var("PLATE_BENCH_N")
         .ok()
         .and_then(|v| v.parse().ok())
