@@ -478,15 +478,118 @@ pub fn eval_poly(f: &PolyVector, z: &[C64], out: &mut [C64]) {
     for t in f.terms.iter() {
         let mut v = C64::new(t.coeff, 0.0);
         for vp in t.factors.iter() {
-            v *= z[vp.var as usize].powu(vp.power);
+            let x = z[vp.var as usize];
+            // the powers of mechanical nonlinearities (1 to 3) multiplied
+            // out as `powu`'s squaring does (the same bits, no call)
+            v *= match vp.power {
+                1 => x,
+                2 => x * x,
+                3 => x * (x * x),
+                p => x.powu(p),
+            };
         }
         out[t.eq as usize] += v;
+    }
+}
+
+/// [`eval_poly`] at several points at once: `outs[k] += f(zs[k])` with one
+/// pass over the terms for all of them (the points' values side by side,
+/// so that a term's factors are read once), the same bits as a call per
+/// point. Every point has `f`'s variables, every output its equations.
+///
+/// # Panics
+/// If `outs` and `zs` differ in length.
+pub fn eval_poly_many(f: &PolyVector, zs: &[&[C64]], outs: &mut [Vec<C64>]) {
+    assert_eq!(zs.len(), outs.len(), "eval_poly_many: one output per point");
+    let k = zs.len();
+    let (Some(first), Some(out0)) = (zs.first(), outs.first()) else {
+        return;
+    };
+    let (n, m) = (first.len(), out0.len());
+    let zero = C64::new(0.0, 0.0);
+    // point-minor: z[var * k + point], o[eq * k + point]
+    let mut z = vec![zero; n * k];
+    for (p, zp) in zs.iter().enumerate() {
+        for (v, x) in zp.iter().enumerate() {
+            z[v * k + p] = *x;
+        }
+    }
+    let mut o = vec![zero; m * k];
+    for (p, op) in outs.iter().enumerate() {
+        for (e, x) in op.iter().enumerate() {
+            o[e * k + p] = *x;
+        }
+    }
+    let mut v = vec![zero; k];
+    for t in f.terms.iter() {
+        v.iter_mut().for_each(|x| *x = C64::new(t.coeff, 0.0));
+        for vp in t.factors.iter() {
+            let at = vp.var as usize * k;
+            let xs = &z[at..at + k];
+            // as eval_poly multiplies them out
+            match vp.power {
+                1 => v.iter_mut().zip(xs).for_each(|(a, &x)| *a *= x),
+                2 => v.iter_mut().zip(xs).for_each(|(a, &x)| *a *= x * x),
+                3 => v.iter_mut().zip(xs).for_each(|(a, &x)| *a *= x * (x * x)),
+                pw => v.iter_mut().zip(xs).for_each(|(a, &x)| *a *= x.powu(pw)),
+            }
+        }
+        let at = t.eq as usize * k;
+        for (a, b) in o[at..at + k].iter_mut().zip(&v) {
+            *a += b;
+        }
+    }
+    for (p, op) in outs.iter_mut().enumerate() {
+        for (e, x) in op.iter_mut().enumerate() {
+            *x = o[e * k + p];
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn many_points_at_once_give_the_bits_of_one_at_a_time() {
+        use ssm_api::{PolyTerm, VarPower};
+        let term = |eq: u32, coeff: f64, f: &[(u32, u32)]| PolyTerm {
+            eq,
+            coeff,
+            factors: f
+                .iter()
+                .map(|&(var, power)| VarPower { var, power })
+                .collect::<Vec<_>>()
+                .into(),
+        };
+        let f = PolyVector {
+            n_eq: 3,
+            n_vars: 3,
+            terms: vec![
+                term(0, 1.5, &[(0, 2), (1, 1)]),
+                term(2, -0.7, &[(2, 3)]),
+                term(1, 2.0, &[(0, 1), (1, 4)]),
+                term(0, 0.3, &[]),
+                term(2, 1e-3, &[(1, 5), (2, 1)]),
+            ]
+            .into(),
+        };
+        let points: Vec<Vec<C64>> = (0..5)
+            .map(|p| {
+                (0..3)
+                    .map(|v| C64::new(0.3 * p as f64 - 0.1 * v as f64, 0.7 - 0.2 * v as f64))
+                    .collect()
+            })
+            .collect();
+        let refs: Vec<&[C64]> = points.iter().map(Vec::as_slice).collect();
+        let mut many = vec![vec![C64::new(0.25, -1.0); 3]; 5];
+        eval_poly_many(&f, &refs, &mut many);
+        for (z, got) in points.iter().zip(&many) {
+            let mut one = vec![C64::new(0.25, -1.0); 3];
+            eval_poly(&f, z, &mut one);
+            assert_eq!(&one, got);
+        }
+    }
 
     fn binom(n: usize, k: usize) -> usize {
         (0..k).fold(1, |acc, i| acc * (n - i) / (i + 1))

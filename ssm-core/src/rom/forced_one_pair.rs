@@ -36,7 +36,6 @@ use crate::ssm::nonautonomous::NaSeries;
 use crate::ssm::nonautonomous::NonAutonomous;
 use crate::ssm::SsmExpansion;
 use crate::C64;
-use rayon::prelude::*;
 use ssm_kernel::poly::MultiIndexSet;
 use ssm_kernel::search::first_true_par;
 
@@ -438,13 +437,18 @@ impl Context<'_> {
                     (None, None) => forced.expansions(ssm, sys, &[pk.omega], k_eff, Some(mid))?,
                 };
                 let na = one.pop().expect("one frequency, one expansion");
-                // the orbit's samples are independent: one per core
-                let samples: Vec<(f64, C64)> = (0..ORBIT_SAMPLES)
-                    .into_par_iter()
+                // the orbit's samples, in groups one per core
+                let orbit: Vec<(Vec<C64>, f64)> = (0..ORBIT_SAMPLES)
                     .map(|k| {
                         let phi = 2.0 * std::f64::consts::PI * k as f64 / ORBIT_SAMPLES as f64;
                         let q = C64::from_polar(pk.rho, pk.theta + phi);
-                        let r = na.residual(ssm, sys, eps, &[q, q.conj()], phi, order);
+                        (vec![q, q.conj()], phi)
+                    })
+                    .collect();
+                let samples: Vec<(f64, C64)> = na
+                    .residuals(ssm, sys, eps, &orbit, order)
+                    .into_iter()
+                    .map(|r| {
                         let norm = r.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
                         let modal = masters[0]
                             .left
@@ -618,14 +622,33 @@ fn nonautonomous_table(
     mid: f64,
 ) -> Result<NaTable, FrcError> {
     let series = if forced.iterative() {
+        // the output table's factorization is not needed beside these
+        forced.drop_anchor_factors();
         forced.expansion_series(ssm, sys, nodes, k, mid)?
     } else {
         None
     };
-    let expansions = match &series {
-        Some(s) => nodes.iter().map(|&w| s.at(w)).collect(),
-        None => forced.expansions_solved(ssm, sys, nodes, k, Some(mid))?,
-    };
+    if let Some(s) = series {
+        // the reduced coefficients and outputs from their series alone
+        return Ok(NaTable {
+            coeffs: nodes
+                .iter()
+                .map(|&w| s.rotating_frame_coefficients_at(w))
+                .collect(),
+            xs: nodes
+                .iter()
+                .map(|&w| {
+                    outputs
+                        .iter()
+                        .flat_map(|o| s.outputs_at(w, &o.weights))
+                        .collect()
+                })
+                .collect(),
+            set: s.set.clone(),
+            series: Some(s),
+        });
+    }
+    let expansions = forced.expansions_solved(ssm, sys, nodes, k, Some(mid))?;
     let mut coeffs = Vec::with_capacity(nodes.len());
     let mut xs = Vec::with_capacity(nodes.len());
     for na in &expansions {
@@ -646,7 +669,7 @@ fn nonautonomous_table(
         coeffs,
         xs,
         set: expansions[0].set.clone(),
-        series,
+        series: None,
     })
 }
 

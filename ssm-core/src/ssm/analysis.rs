@@ -22,7 +22,6 @@
 //! (39)-(42); R. Szalai, D. Ehrhardt, G. Haller, Proc. R. Soc. A 473 (2017),
 //! eqs. (6.3)-(6.7).
 
-use rayon::prelude::*;
 use std::f64::consts::PI;
 
 use super::{Dynamics, SsmExpansion};
@@ -241,18 +240,13 @@ pub fn invariance_error(
 ) -> f64 {
     let points = sphere_points(ssm.dim() / 2, radius, n_alpha, n_theta);
     let n = ssm.n_states() as f64;
-    // sample points are independent: spread them over the cores, then sum
-    // in the points' order (the same bits on any number of threads and in
-    // every run)
-    let norms: Vec<f64> = points
-        .par_iter()
-        .map(|p| {
-            ssm.residual(sys, p, order)
-                .iter()
-                .map(|c| c.norm_sqr())
-                .sum::<f64>()
-                .sqrt()
-        })
+    // sample points are independent: spread over the cores in groups
+    // (SsmExpansion::residuals), then summed in the points' order (the same
+    // bits on any number of threads and in every run)
+    let norms: Vec<f64> = ssm
+        .residuals(sys, &points, order)
+        .iter()
+        .map(|r| r.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt())
         .collect();
     norms.iter().sum::<f64>() / (n * points.len() as f64)
 }

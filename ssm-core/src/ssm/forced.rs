@@ -351,6 +351,20 @@ impl<'a> ForcedSsm<'a> {
         }
     }
 
+    /// Forgets the factorizations at the anchor of [`ForcedSsm::anchor_at`]
+    /// (kept for the output table and the leading order), the anchor
+    /// itself kept: a later solve there factorizes it again (counted). For
+    /// the expansions of higher order, whose multi-index 0 takes the output
+    /// table's series and whose other multi-indices have anchors of their
+    /// own: their factors then do not sit beside it.
+    pub fn drop_anchor_factors(&mut self) {
+        if let Some(c) = self.anchor {
+            for (multiple, _, _) in &self.forcing {
+                self.solver.release_anchor(C64::new(0.0, multiple * c));
+            }
+        }
+    }
+
     /// Solves [`ForcedSsm::at`] through one factorization at `omega` (the
     /// middle of a frequency band) for every frequency
     /// (`Homological::solve_band`), instead of a factorization per

@@ -56,7 +56,8 @@ pub use homological::{
     SERIES_TERMS,
 };
 use homological::{Homological, HomologicalError};
-use ssm_kernel::poly::{eval_poly, Composition, MultiIndexSet};
+use rayon::prelude::*;
+use ssm_kernel::poly::{eval_poly_many, Composition, MultiIndexSet};
 
 /// Continuous or discrete time.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -569,6 +570,30 @@ impl SsmExpansion {
     /// Invariance residual (eq. 42 for flows; `B W(R(p)) - A W(p) - F(W(p))`
     /// for maps) of the expansion truncated at `order`, at the point `p`.
     pub fn residual(&self, sys: &System, p: &[C64], order: usize) -> Vec<C64> {
+        let mut one = self.residuals(sys, std::slice::from_ref(&p.to_vec()), order);
+        one.pop().expect("one point, one residual")
+    }
+
+    /// [`SsmExpansion::residual`] at each of `points`: groups of
+    /// [`RESIDUAL_GROUP`] points evaluate the nonlinearity together (one
+    /// pass over its terms, [`eval_poly_many`]), one group per core; the
+    /// same bits as a call per point.
+    pub fn residuals(&self, sys: &System, points: &[Vec<C64>], order: usize) -> Vec<Vec<C64>> {
+        points
+            .par_chunks(RESIDUAL_GROUP)
+            .flat_map_iter(|group| {
+                let parts: Vec<(Vec<C64>, Vec<C64>)> = group
+                    .iter()
+                    .map(|p| self.residual_parts(p, order))
+                    .collect();
+                finish_residuals(sys, &parts, |_, _| {})
+            })
+            .collect()
+    }
+
+    /// `(B`-side, state) of [`SsmExpansion::residual`] at `p`: `DW(p) R(p)`
+    /// (`W(R(p))` for maps) and `W(p)`.
+    fn residual_parts(&self, p: &[C64], order: usize) -> (Vec<C64>, Vec<C64>) {
         let order = order.min(self.order);
         let mono = self.set.monomials(p, order);
         let z = self.w_at(&mono, order);
@@ -589,13 +614,39 @@ impl SsmExpansion {
                 self.w_at(&mono_r, order)
             }
         };
-        let mut res = spmv(sys.b.as_ref(), &lhs_state);
-        let az = spmv(sys.a.as_ref(), &z);
-        let mut fz = vec![C64::new(0.0, 0.0); z.len()];
-        eval_poly(&sys.nonlinearity, &z, &mut fz);
-        for i in 0..res.len() {
-            res[i] -= az[i] + fz[i];
-        }
-        res
+        (lhs_state, z)
     }
+}
+
+/// Points of a residual evaluation whose nonlinearity is evaluated
+/// together ([`eval_poly_many`]): its terms are read once per group.
+pub const RESIDUAL_GROUP: usize = 8;
+
+/// `B l - A z - F(z) - g` for each `(l, z)` of `parts` (one group of
+/// points), where `extra(k, F)` adds point `k`'s `g` to its `F(z)` (the
+/// external forcing of a non-autonomous residual): the nonlinearity of the
+/// whole group in one pass ([`eval_poly_many`]).
+pub(crate) fn finish_residuals(
+    sys: &System,
+    parts: &[(Vec<C64>, Vec<C64>)],
+    extra: impl Fn(usize, &mut [C64]),
+) -> Vec<Vec<C64>> {
+    let zero = C64::new(0.0, 0.0);
+    let zs: Vec<&[C64]> = parts.iter().map(|(_, z)| z.as_slice()).collect();
+    let mut fz: Vec<Vec<C64>> = parts.iter().map(|(_, z)| vec![zero; z.len()]).collect();
+    eval_poly_many(&sys.nonlinearity, &zs, &mut fz);
+    parts
+        .iter()
+        .zip(fz)
+        .enumerate()
+        .map(|(k, ((lhs, z), mut f))| {
+            extra(k, &mut f);
+            let mut res = spmv(sys.b.as_ref(), lhs);
+            let az = spmv(sys.a.as_ref(), z);
+            for i in 0..res.len() {
+                res[i] -= az[i] + f[i];
+            }
+            res
+        })
+        .collect()
 }

@@ -25,12 +25,12 @@
 //! M. Li, S. Jain, G. Haller, Nonlinear Dyn. 111 (2023), eq. (60).
 
 use super::forced::{ForcedError, ForcedSsm, ForcedTerms};
-use super::SsmExpansion;
+use super::{finish_residuals, SsmExpansion, RESIDUAL_GROUP};
 use crate::model::system::System;
 use crate::spectrum::modes::spmv;
 use crate::C64;
 use rayon::prelude::*;
-use ssm_kernel::poly::MultiIndexSet;
+use ssm_kernel::poly::{eval_poly, MultiIndexSet};
 
 mod series;
 pub use series::NaSeries;
@@ -510,8 +510,60 @@ impl NonAutonomous {
         phi: f64,
         order: usize,
     ) -> Vec<C64> {
-        let order = order.min(ssm.order);
+        let mut one = self.residuals(ssm, sys, eps, &[(p.to_vec(), phi)], order);
+        one.pop().expect("one point, one residual")
+    }
+
+    /// [`NonAutonomous::residual`] at each `(p, phi)` of `points`: groups
+    /// of [`RESIDUAL_GROUP`] points evaluate the nonlinearity together, one
+    /// group per core; the same bits as a call per point.
+    pub fn residuals(
+        &self,
+        ssm: &SsmExpansion,
+        sys: &System,
+        eps: f64,
+        points: &[(Vec<C64>, f64)],
+        order: usize,
+    ) -> Vec<Vec<C64>> {
         let n = sys.n_states();
+        points
+            .par_chunks(RESIDUAL_GROUP)
+            .flat_map_iter(|group| {
+                let parts: Vec<(Vec<C64>, Vec<C64>)> = group
+                    .iter()
+                    .map(|(p, phi)| self.residual_parts(ssm, eps, p, *phi, order))
+                    .collect();
+                // the external forcing at each point's phase
+                let forcing = |k: usize, fz: &mut [C64]| {
+                    let (z, phi) = (&parts[k].1, group[k].1);
+                    for h in &sys.forcing {
+                        let (c, s) = ((h.multiple * phi).cos(), (h.multiple * phi).sin());
+                        let mut fc = vec![C64::new(0.0, 0.0); n];
+                        let mut fs = vec![C64::new(0.0, 0.0); n];
+                        eval_poly(&h.cos, z, &mut fc);
+                        eval_poly(&h.sin, z, &mut fs);
+                        for i in 0..n {
+                            fz[i] += eps * (c * fc[i] + s * fs[i]);
+                        }
+                    }
+                };
+                finish_residuals(sys, &parts, forcing)
+            })
+            .collect()
+    }
+
+    /// `(B`-side, state) of [`NonAutonomous::residual`] at `(p, phi)`:
+    /// `D_p W_eps R_eps + Omega D_phi W_eps` and `W_eps`.
+    fn residual_parts(
+        &self,
+        ssm: &SsmExpansion,
+        eps: f64,
+        p: &[C64],
+        phi: f64,
+        order: usize,
+    ) -> (Vec<C64>, Vec<C64>) {
+        let order = order.min(ssm.order);
+        let n = ssm.n_states();
         let nvar = p.len();
         let mono = self.set.monomials(p, self.order);
         // reduced dynamics with forcing
@@ -556,24 +608,7 @@ impl NonAutonomous {
                 lhs[i] += 2.0 * eps * self.omega * (xp[i] * e * C64::new(0.0, h.multiple)).re;
             }
         }
-        let mut res = spmv(sys.b.as_ref(), &lhs);
-        let az = spmv(sys.a.as_ref(), &z);
-        let mut fz = vec![C64::new(0.0, 0.0); n];
-        ssm_kernel::poly::eval_poly(&sys.nonlinearity, &z, &mut fz);
-        for h in &sys.forcing {
-            let (c, s) = ((h.multiple * phi).cos(), (h.multiple * phi).sin());
-            let mut fc = vec![C64::new(0.0, 0.0); n];
-            let mut fs = vec![C64::new(0.0, 0.0); n];
-            ssm_kernel::poly::eval_poly(&h.cos, &z, &mut fc);
-            ssm_kernel::poly::eval_poly(&h.sin, &z, &mut fs);
-            for i in 0..n {
-                fz[i] += eps * (c * fc[i] + s * fs[i]);
-            }
-        }
-        for i in 0..n {
-            res[i] -= az[i] + fz[i];
-        }
-        res
+        (lhs, z)
     }
 }
 
@@ -584,28 +619,30 @@ impl NonAutonomous {
     /// `tau_b = conj(s_{(b,b+2)})` of `conj p` (the conjugate harmonic's terms
     /// in the equation of `p`).
     pub fn rotating_frame_coefficients(&self) -> (Vec<C64>, Vec<C64>) {
-        let h = &self.harmonics[0];
-        let mut sigma = Vec::new();
-        let mut tau = Vec::new();
-        for a in 0..=(self.order / 2) as u16 {
-            sigma.push(
-                self.set
-                    .index(&[a, a])
-                    .map_or(C64::new(0.0, 0.0), |i| h.s[i][0]),
-            );
-            if 2 * a + 2 <= self.order as u16 {
-                tau.push(
-                    self.set
-                        .index(&[a, a + 2])
-                        .map_or(C64::new(0.0, 0.0), |i| h.s[i][1].conj()),
-                );
-            }
-        }
-        if tau.is_empty() {
-            tau.push(C64::new(0.0, 0.0));
-        }
-        (sigma, tau)
+        rotating_frame(&self.set, self.order, &|i, c| self.harmonics[0].s[i][c])
     }
+}
+
+/// [`NonAutonomous::rotating_frame_coefficients`] of the expansion to
+/// `order` over `set` whose first harmonic's `s_{k,c}` is `s(k, c)`.
+fn rotating_frame(
+    set: &MultiIndexSet,
+    order: usize,
+    s: &dyn Fn(usize, usize) -> C64,
+) -> (Vec<C64>, Vec<C64>) {
+    let zero = C64::new(0.0, 0.0);
+    let mut sigma = Vec::new();
+    let mut tau = Vec::new();
+    for a in 0..=(order / 2) as u16 {
+        sigma.push(set.index(&[a, a]).map_or(zero, |i| s(i, 0)));
+        if 2 * a + 2 <= order as u16 {
+            tau.push(set.index(&[a, a + 2]).map_or(zero, |i| s(i, 1).conj()));
+        }
+    }
+    if tau.is_empty() {
+        tau.push(zero);
+    }
+    (sigma, tau)
 }
 
 /// The anchors `at(k)` of the multi-indices `k` of `set` (values equal up

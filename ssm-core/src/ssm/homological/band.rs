@@ -376,7 +376,7 @@ impl Homological<'_> {
                 missing.push(a);
             }
         }
-        if missing.len() < 2 {
+        if missing.is_empty() {
             return Ok(());
         }
         let factors = self.fresh_lus(&missing)?;

@@ -96,6 +96,22 @@ struct Made {
     sigma: C64,
 }
 
+impl Made {
+    /// The heap it holds where its own structure tells (a symmetric `L B
+    /// L^T` and its scaling), so that it can be made beside other work;
+    /// `None` for an LU (measured by the counting allocator instead).
+    fn known_bytes(&self) -> Option<usize> {
+        let Kernel::Symmetric(f) = &self.lu else {
+            return None;
+        };
+        let scale = self
+            .scale
+            .as_ref()
+            .map_or(0, |(r, c)| 8 * (r.len() + c.len()));
+        Some(f.heap_bytes() + scale)
+    }
+}
+
 impl Homological<'_> {
     /// A new factorization of `sigma B - A` (counted); where band solves
     /// run, of the equilibrated matrix (see [`Factor`]).
@@ -105,37 +121,46 @@ impl Homological<'_> {
         let (made, bytes) =
             ssm_kernel::heap::held(|| self.factorization(sigma, equilibrate, Some(Par::Seq)));
         let made = made?;
+        let bytes = made.known_bytes().or(bytes);
         Ok(self.counted(t.elapsed().as_secs_f64(), made, bytes, 0))
+    }
+
+    /// Whether the factorizations are symmetric `L B L^T`s (the symbolic
+    /// analysis made first), which [`Homological::fresh_lus`] makes side by
+    /// side and measures from their own structure: other work may then run
+    /// beside them.
+    ///
+    /// # Errors
+    /// The symbolic analysis failed.
+    pub(crate) fn factors_concurrent(&mut self) -> Result<bool, HomologicalError> {
+        self.analyzed()?;
+        Ok(self.sym_symbolic.is_some())
     }
 
     /// New factorizations at each of `sigmas`, made side by side (one per
     /// core, each on one thread) where they are symmetric `L B L^T`s, whose
     /// numeric phase runs mostly on one thread whatever it is given; one by
-    /// one otherwise. Counted in order, with the wall time and the heap of
-    /// the batch shared out evenly (factors of one symbolic analysis hold
-    /// the same entries).
+    /// one otherwise. Counted in order, with the wall time of the batch
+    /// shared out evenly and each factor's heap from its structure.
     pub(super) fn fresh_lus(&mut self, sigmas: &[C64]) -> Result<Vec<Factor>, HomologicalError> {
         let t = Instant::now();
         let equilibrate = self.analyzed()?;
         if self.sym_symbolic.is_none() || sigmas.len() < 2 {
             return sigmas.iter().map(|&s| self.fresh_lu(s)).collect();
         }
-        let (made, bytes) = ssm_kernel::heap::held(|| {
-            let this = &*self;
-            sigmas
-                .par_iter()
-                .map(|&s| this.factorization(s, equilibrate, Some(Par::Seq)))
-                .collect::<Result<Vec<Made>, HomologicalError>>()
-        });
-        let made = made?;
+        let this = &*self;
+        let made = sigmas
+            .par_iter()
+            .map(|&s| this.factorization(s, equilibrate, Some(Par::Seq)))
+            .collect::<Result<Vec<Made>, HomologicalError>>()?;
         let count = made.len().max(1);
         let secs = t.elapsed().as_secs_f64() / count as f64;
-        let each = bytes.map(|b| b / count);
         let mut factors = Vec::with_capacity(count);
         for m in made {
             // the batch's factors are all held once it returns
             let pending = factors.iter().map(|f: &Factor| f.bytes).sum();
-            factors.push(self.counted(secs, m, each, pending));
+            let bytes = m.known_bytes();
+            factors.push(self.counted(secs, m, bytes, pending));
         }
         Ok(factors)
     }

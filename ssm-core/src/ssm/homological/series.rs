@@ -86,6 +86,14 @@ pub(crate) struct SeriesRun {
     seconds: f64,
 }
 
+impl SeriesRun {
+    /// The terms and floor where the series converged, taken out (its work
+    /// stays, for [`Homological::series_counted`]).
+    pub(crate) fn take(&mut self) -> Option<(Vec<Solution>, f64)> {
+        self.solved.take()
+    }
+}
+
 fn size(s: &Solution) -> f64 {
     s.0.iter()
         .chain(&s.1)

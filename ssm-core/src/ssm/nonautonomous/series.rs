@@ -27,11 +27,12 @@
 //! eq. (60).
 
 use super::{
-    anchor_for, band_anchors, resonant_set, shift, sub_index, NaHarmonic, NonAutonomous, Rhs,
+    anchor_for, band_anchors, resonant_set, rotating_frame, shift, sub_index, NaHarmonic,
+    NonAutonomous, Rhs,
 };
 use crate::model::system::System;
 use crate::ssm::forced::{ForcedError, ForcedSsm};
-use crate::ssm::homological::{horner, series_accept, HomologicalError, SeriesRun};
+use crate::ssm::homological::{horner, series_accept, Homological, HomologicalError, SeriesRun};
 use crate::ssm::SsmExpansion;
 use crate::C64;
 use rayon::prelude::*;
@@ -87,6 +88,34 @@ impl NaSeries {
     /// Whether `omega` lies in the band.
     pub fn contains(&self, omega: f64) -> bool {
         (omega - self.center).abs() <= self.half_width * (1.0 + 1e-12)
+    }
+
+    /// [`NonAutonomous::rotating_frame_coefficients`] of the expansion at
+    /// `omega` (in the band), from the reduced coefficients' series alone.
+    pub fn rotating_frame_coefficients_at(&self, omega: f64) -> (Vec<C64>, Vec<C64>) {
+        let t = (omega - self.center) / self.half_width;
+        let s: Vec<Vec<C64>> = self.harmonics[0]
+            .s
+            .iter()
+            .map(|terms| horner(terms, t))
+            .collect();
+        rotating_frame(&self.set, self.order, &|i, c| s[i][c])
+    }
+
+    /// The output `sum_s weights_s x_{k,s}` of the first harmonic's
+    /// coefficient of each multi-index `k` at `omega` (in the band): a
+    /// polynomial in `omega` per multi-index, without the states.
+    pub fn outputs_at(&self, omega: f64, weights: &[(usize, f64)]) -> Vec<C64> {
+        let t = (omega - self.center) / self.half_width;
+        self.harmonics[0]
+            .x
+            .iter()
+            .map(|terms| {
+                terms.iter().rev().fold(C64::new(0.0, 0.0), |acc, xm| {
+                    acc * t + weights.iter().map(|&(s, w)| xm[s] * w).sum::<C64>()
+                })
+            })
+            .collect()
     }
 
     /// The expansion at `omega` (in the band: [`NaSeries::contains`]).
@@ -176,6 +205,13 @@ impl ForcedSsm<'_> {
 
     /// One harmonic's series, multi-index by multi-index (`None`: not
     /// converged or not accepted at a check point `ts`).
+    ///
+    /// An order's systems read only the lower orders: their right-hand
+    /// sides are built (every system and term apart) while the order's
+    /// factorizations are made, where those are symmetric `L B L^T`s that
+    /// may run beside other work ([`Homological::factors_concurrent`]);
+    /// then the series run side by side, each checked at every point as
+    /// soon as it is done.
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn harmonic_series(
         &mut self,
@@ -196,49 +232,46 @@ impl ForcedSsm<'_> {
         let shift_of = |e: &[u16]| shift(&lambda, e);
         let mut xs: Vec<Vec<Vec<C64>>> = vec![Vec::new(); set.len()];
         let mut ss: Vec<Vec<Vec<C64>>> = vec![Vec::new(); set.len()];
-        let empty: &[C64] = &[];
-        let zeros = vec![zero; nvar];
+        let concurrent = self.solver.factors_concurrent()?;
+        let slope = C64::new(0.0, multiple * half_width);
         for k in 0..=set.max_order() {
             let done = set.of_order(k).start;
-            // the order's systems: their right-hand sides come from the
-            // lower orders alone
-            let mut jobs = Vec::new();
-            // the order's factorizations first, side by side
-            let needed: Vec<C64> = set
-                .of_order(k)
-                .filter_map(|idx| {
-                    let big = C64::new(0.0, multiple * center) + shift_of(set.exponents(idx));
-                    anchor_for(anchors, big)
-                })
+            let indices: Vec<usize> = set.of_order(k).collect();
+            let big_of =
+                |idx: usize| C64::new(0.0, multiple * center) + shift_of(set.exponents(idx));
+            let needed: Vec<C64> = indices
+                .iter()
+                .filter_map(|&idx| anchor_for(anchors, big_of(idx)))
                 .collect();
-            self.solver.prefactor_anchors(&needed)?;
-            for idx in set.of_order(k) {
-                let e = set.exponents(idx).to_vec();
-                let shift = shift_of(&e);
-                let set_res = resonant_set(coord_ratio, multiple, &e);
-                let below: Vec<(usize, usize)> = (0..done)
-                    .filter_map(|j| sub_index(set, &e, set.exponents(j)).map(|t| (j, t)))
-                    .collect();
-                // the right-hand side's Taylor coefficients, of the lower
-                // series' degree
-                let terms = if k == 0 {
-                    1
+            // multi-index 0 of the first harmonic solves what the output
+            // table's series solved: its terms, rescaled to this band, are
+            // taken (and checked at the nodes below)
+            let reused = (k == 0 && indices.len() == 1)
+                .then(|| self.x0_terms(h, center, half_width))
+                .flatten()
+                .filter(|_| {
+                    resonant_set(coord_ratio, multiple, set.exponents(0)) == self.forcing_set(h)
+                });
+            let built = {
+                let (xs, ss) = (&xs, &ss);
+                let build = || order_rhs(cx, &indices, done, xs, ss, (k == 0).then_some(f), nvar);
+                if reused.is_some() {
+                    Vec::new()
+                } else if concurrent {
+                    let solver = &mut self.solver;
+                    let (factored, built) =
+                        rayon::join(|| solver.prefactor_anchors(&needed), build);
+                    factored?;
+                    built
                 } else {
-                    (0..done).map(|j| xs[j].len()).max().unwrap_or(1)
-                };
-                let (rhs, known): (Vec<Vec<C64>>, Vec<Option<Vec<C64>>>) = (0..terms)
-                    .map(|m| {
-                        let x: Vec<&[C64]> = (0..done)
-                            .map(|j| xs[j].get(m).map_or(empty, Vec::as_slice))
-                            .collect();
-                        let s: Vec<&[C64]> = (0..done)
-                            .map(|j| ss[j].get(m).map_or(zeros.as_slice(), Vec::as_slice))
-                            .collect();
-                        let forcing = (k == 0 && m == 0).then_some(f);
-                        cx.rhs_known(&e, done, &below, &x, &s, forcing)
-                    })
-                    .unzip();
-                let big = C64::new(0.0, multiple * center) + shift;
+                    self.solver.prefactor_anchors(&needed)?;
+                    build()
+                }
+            };
+            let mut jobs = Vec::with_capacity(indices.len());
+            for (&idx, (rhs, known)) in indices.iter().zip(built) {
+                let set_res = resonant_set(coord_ratio, multiple, set.exponents(idx));
+                let big = big_of(idx);
                 let at = anchor_for(anchors, big).expect("every multi-index has its anchor");
                 let Some(slot) = self.solver.series_anchor(at, &set_res)? else {
                     return Ok(None);
@@ -253,7 +286,6 @@ impl ForcedSsm<'_> {
                     slot,
                 });
             }
-            let slope = C64::new(0.0, multiple * half_width);
             // series through different factorizations (or through one with
             // one border) read the solver alone: one per core; a slot whose
             // border two resonant sets share is re-bordered before each
@@ -261,57 +293,77 @@ impl ForcedSsm<'_> {
                 jobs.iter()
                     .all(|b| a.slot != b.slot || a.set_res == b.set_res)
             });
-            // multi-index 0 of the first harmonic solves what the output
-            // table's series solved: its terms, rescaled to this band, are
-            // taken (and checked at the nodes below)
-            let reused = (k == 0 && jobs.len() == 1)
-                .then(|| self.x0_terms(h, center, half_width))
-                .flatten()
-                .filter(|_| jobs[0].rhs.len() == 1 && jobs[0].set_res == self.forcing_set(h));
-            let runs: Vec<SeriesRun> = if reused.is_some() {
-                Vec::new()
-            } else if shared {
-                let solver = &self.solver;
-                jobs.par_iter()
-                    .map(|j| solver.series_at(j.slot, j.big, slope, &j.set_res, &j.rhs, &j.known))
-                    .collect()
-            } else {
-                let mut runs = Vec::with_capacity(jobs.len());
-                for j in &jobs {
-                    let slot = self
-                        .solver
-                        .series_anchor(j.at, &j.set_res)?
-                        .expect("factorized above");
-                    runs.push(
-                        self.solver
-                            .series_at(slot, j.big, slope, &j.set_res, &j.rhs, &j.known),
-                    );
-                }
-                runs
-            };
-            let mut solved = Vec::with_capacity(jobs.len());
-            solved.extend(reused);
-            for run in runs {
-                let Some((series, floor)) = self.solver.series_counted(run) else {
-                    return Ok(None);
+            let mut solved: Vec<Solved> = Vec::with_capacity(jobs.len());
+            if let Some((w, r, floor)) = reused {
+                let rhs = vec![f.to_vec()];
+                let big = big_of(0);
+                let set_res = self.forcing_set(h).to_vec();
+                let series = Line {
+                    big,
+                    slope,
+                    set: &set_res,
+                    rhs: &rhs,
                 };
-                let (w, r): (Vec<Vec<C64>>, Vec<Vec<C64>>) = series.into_iter().unzip();
-                solved.push((w, r, floor));
+                if !series.accepted(&self.solver, ts, &w, &r, floor) {
+                    return Ok(None);
+                }
+                jobs.push(Job {
+                    idx: 0,
+                    set_res,
+                    rhs,
+                    known: Vec::new(),
+                    big,
+                    at: big,
+                    slot: usize::MAX,
+                });
+                solved.push((w, r));
+            } else {
+                // a series, and its terms where it converged and every
+                // frequency asked for is accepted
+                let run_one = |solver: &Homological, j: &Job, slot: usize| {
+                    let mut run =
+                        solver.series_at(slot, j.big, slope, &j.set_res, &j.rhs, &j.known);
+                    let line = Line {
+                        big: j.big,
+                        slope,
+                        set: &j.set_res,
+                        rhs: &j.rhs,
+                    };
+                    let terms = run.take().and_then(|(series, floor)| {
+                        let (w, r): Solved = series.into_iter().unzip();
+                        line.accepted(solver, ts, &w, &r, floor).then_some((w, r))
+                    });
+                    (run, terms)
+                };
+                let runs: Vec<(SeriesRun, Option<Solved>)> = if shared {
+                    let solver = &self.solver;
+                    jobs.par_iter()
+                        .map(|j| run_one(solver, j, j.slot))
+                        .collect()
+                } else {
+                    let mut runs = Vec::with_capacity(jobs.len());
+                    for j in &jobs {
+                        let slot = self
+                            .solver
+                            .series_anchor(j.at, &j.set_res)?
+                            .expect("factorized above");
+                        runs.push(run_one(&self.solver, j, slot));
+                    }
+                    runs
+                };
+                let mut missed = false;
+                for (run, terms) in runs {
+                    self.solver.series_counted(run);
+                    match terms {
+                        Some(t) => solved.push(t),
+                        None => missed = true,
+                    }
+                }
+                if missed {
+                    return Ok(None);
+                }
             }
-            // every frequency asked for: its value solves its system (the
-            // checks are independent: one per core)
-            let solver = &self.solver;
-            let missed = (0..jobs.len() * ts.len()).into_par_iter().any(|i| {
-                let (job, (w, r, floor)) = (&jobs[i / ts.len()], &solved[i / ts.len()]);
-                let t = ts[i % ts.len()];
-                let (wt, rt, bt) = (horner(w, t), horner(r, t), horner(&job.rhs, t));
-                let error = solver.backward_error(job.big + slope * t, &job.set_res, &wt, &rt, &bt);
-                error.is_nan() || error > series_accept(*floor)
-            });
-            if missed {
-                return Ok(None);
-            }
-            for (job, (w, r, _)) in jobs.into_iter().zip(solved) {
+            for (job, (w, r)) in jobs.into_iter().zip(solved) {
                 let set_res = &job.set_res;
                 ss[job.idx] = r
                     .into_iter()
@@ -331,4 +383,90 @@ impl ForcedSsm<'_> {
         }
         Ok(Some((xs, ss)))
     }
+}
+
+/// A series' terms of `x` and of `s` on its resonant set.
+type Solved = (Vec<Vec<C64>>, Vec<Vec<C64>>);
+
+/// One multi-index's bordered system along `Lambda(t) = big + slope t`:
+/// its resonant set and right-hand side's Taylor coefficients.
+struct Line<'a> {
+    big: C64,
+    slope: C64,
+    set: &'a [usize],
+    rhs: &'a [Vec<C64>],
+}
+
+impl Line<'_> {
+    /// Whether the series `w`, `r` (its refined solves' floor `floor`)
+    /// solves the system at every point of `ts` to the backward error of
+    /// `series_accept` (the points are independent: one per core).
+    fn accepted(
+        &self,
+        solver: &Homological,
+        ts: &[f64],
+        w: &[Vec<C64>],
+        r: &[Vec<C64>],
+        floor: f64,
+    ) -> bool {
+        !ts.par_iter().any(|&t| {
+            let (wt, rt, bt) = (horner(w, t), horner(r, t), horner(self.rhs, t));
+            let error = solver.backward_error(self.big + self.slope * t, self.set, &wt, &rt, &bt);
+            error.is_nan() || error > series_accept(floor)
+        })
+    }
+}
+
+/// The right-hand sides' Taylor coefficients of the systems `indices` (one
+/// order; the lower orders' multi-indices `..done`) from the lower orders'
+/// series `xs`, `ss`, with `M^{-1} rhs_V` where known (see
+/// [`Rhs::rhs_known`]), each of the lower series' degree; `forcing` at
+/// order 0. Every system and term is built apart, one per core.
+#[allow(clippy::type_complexity)]
+fn order_rhs(
+    cx: &Rhs,
+    indices: &[usize],
+    done: usize,
+    xs: &[Vec<Vec<C64>>],
+    ss: &[Vec<Vec<C64>>],
+    forcing: Option<&[C64]>,
+    nvar: usize,
+) -> Vec<(Vec<Vec<C64>>, Vec<Option<Vec<C64>>>)> {
+    let set = &cx.set;
+    let zeros = vec![C64::new(0.0, 0.0); nvar];
+    let empty: &[C64] = &[];
+    let terms = if forcing.is_some() {
+        1
+    } else {
+        (0..done).map(|j| xs[j].len()).max().unwrap_or(1)
+    };
+    let systems: Vec<(Vec<u16>, Vec<(usize, usize)>)> = indices
+        .iter()
+        .map(|&idx| {
+            let e = set.exponents(idx).to_vec();
+            // the lower multi-indices j with e - j in the set, and e - j
+            let below = (0..done)
+                .filter_map(|j| sub_index(set, &e, set.exponents(j)).map(|t| (j, t)))
+                .collect();
+            (e, below)
+        })
+        .collect();
+    let flat: Vec<(Vec<C64>, Option<Vec<C64>>)> = (0..systems.len() * terms)
+        .into_par_iter()
+        .map(|i| {
+            let ((e, below), m) = (&systems[i / terms], i % terms);
+            let x: Vec<&[C64]> = (0..done)
+                .map(|j| xs[j].get(m).map_or(empty, Vec::as_slice))
+                .collect();
+            let s: Vec<&[C64]> = (0..done)
+                .map(|j| ss[j].get(m).map_or(zeros.as_slice(), Vec::as_slice))
+                .collect();
+            cx.rhs_known(e, done, below, &x, &s, forcing.filter(|_| m == 0))
+        })
+        .collect();
+    let mut flat = flat.into_iter();
+    systems
+        .iter()
+        .map(|_| flat.by_ref().take(terms).unzip())
+        .collect()
 }
