@@ -12,6 +12,11 @@
 //!   `memory.limit_in_bytes` minus `memory.usage_in_bytes` for v1), the
 //!   cgroup named by `/proc/self/cgroup`.
 //!
+//! Each counts what the allocator holds free for this process's own later
+//! requests as used (a front end that keeps freed memory, as the engine
+//! does: `ssm_kernel::heap::retain_freed_memory`): that part is added back
+//! to each room (glibc's `mallinfo2().fordblks`).
+//!
 //! This is not part of the plugin ABI: each side compiles its own copy.
 
 use std::path::PathBuf;
@@ -48,7 +53,22 @@ pub fn memory_room() -> MemoryRoom {
         address_space_limit(),
         read("/proc/self/status").as_deref(),
         &cgroups,
+        reusable_heap(),
     )
+}
+
+/// Bytes the allocator holds free for this process's own later requests
+/// (glibc's `mallinfo2().fordblks`); 0 where it cannot be read.
+fn reusable_heap() -> f64 {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        // SAFETY: mallinfo2 only reads the allocator's statistics.
+        unsafe { libc::mallinfo2() }.fordblks as f64
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    {
+        0.0
+    }
 }
 
 /// The address space left under `RLIMIT_AS` (`ulimit -v`): the limit minus
@@ -62,7 +82,7 @@ pub fn address_space_room() -> Option<f64> {
         .as_deref()
         .and_then(|t| kib_field(t, "VmSize:"))
         .unwrap_or(0.0);
-    Some((limit - mapped).max(0.0))
+    Some((limit - mapped).max(0.0) + reusable_heap())
 }
 
 /// `RLIMIT_AS` in bytes; `None` when unlimited or unreadable.
@@ -77,12 +97,14 @@ fn address_space_limit() -> Option<f64> {
 }
 
 /// The smallest room from the texts of `/proc/meminfo`, `/proc/self/status`,
-/// the address-space limit and the `(limit, usage)` texts of the cgroups.
+/// the address-space limit and the `(limit, usage)` texts of the cgroups,
+/// each with the allocator's `reusable` bytes added back.
 fn smallest(
     meminfo: Option<&str>,
     rlimit_as: Option<f64>,
     status: Option<&str>,
     cgroups: &[(String, Option<String>)],
+    reusable: f64,
 ) -> MemoryRoom {
     let mut rooms = Vec::new();
     if let Some(b) = meminfo.and_then(|t| kib_field(t, "MemAvailable:")) {
@@ -103,7 +125,10 @@ fn smallest(
             bytes: ASSUMED,
             source: "assumed",
         },
-        |(bytes, source)| MemoryRoom { bytes, source },
+        |(bytes, source)| MemoryRoom {
+            bytes: bytes + reusable,
+            source,
+        },
     )
 }
 
@@ -223,23 +248,27 @@ mod tests {
     fn the_smallest_limit_decides() {
         let meminfo = Some("MemAvailable:   16777216 kB\n"); // 16 GiB
         let status = Some("VmSize:\t 1048576 kB\n"); // 1 GiB mapped
-        let none = smallest(meminfo, None, status, &[]);
+        let none = smallest(meminfo, None, status, &[], 0.0);
         assert_eq!(none.bytes, 16.0 * GIB);
         assert_eq!(none.source, "available memory (MemAvailable)");
         // ulimit -v 8 GiB with 1 GiB mapped leaves 7 GiB
-        let ulimit = smallest(meminfo, Some(8.0 * GIB), status, &[]);
+        let ulimit = smallest(meminfo, Some(8.0 * GIB), status, &[], 0.0);
         assert_eq!(ulimit.bytes, 7.0 * GIB);
         assert_eq!(ulimit.source, "address-space limit (ulimit -v)");
+        // half a GiB the allocator holds free for the process is room again
+        let kept = smallest(meminfo, Some(8.0 * GIB), status, &[], 0.5 * GIB);
+        assert_eq!(kept.bytes, 7.5 * GIB);
+        assert_eq!(kept.source, "address-space limit (ulimit -v)");
         // a 4 GiB cgroup with 1 GiB used leaves 3 GiB; "max" levels count for nothing
         let cg = [
             ("max\n".to_owned(), Some("123\n".to_owned())),
             ("4294967296\n".to_owned(), Some("1073741824\n".to_owned())),
             ("9223372036854771712\n".to_owned(), None),
         ];
-        let cgroup = smallest(meminfo, Some(8.0 * GIB), status, &cg);
+        let cgroup = smallest(meminfo, Some(8.0 * GIB), status, &cg, 0.0);
         assert_eq!(cgroup.bytes, 3.0 * GIB);
         assert_eq!(cgroup.source, "cgroup memory limit");
         // nothing readable
-        assert_eq!(smallest(None, None, None, &[]).bytes, ASSUMED);
+        assert_eq!(smallest(None, None, None, &[], 0.0).bytes, ASSUMED);
     }
 }
