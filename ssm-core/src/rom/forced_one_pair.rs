@@ -166,16 +166,6 @@ pub(crate) fn forced_response_one_pair(
     let eps_max = eps_list.iter().copied().fold(0.0, f64::max);
     let mut warnings = Vec::new();
     let mut cut_short = false;
-    let rho_max = match sec.rho_max {
-        Some(r) => r,
-        None => {
-            let (rho_max, cut) =
-                default_rho_max(ssm, sys, &masters[0], &pol, &orders, eps_max * s, range);
-            cut_short = cut.is_some();
-            warnings.extend(cut);
-            rho_max
-        }
-    };
     let points = sec.points;
     let series: Vec<Vec<C64>> = outputs
         .iter()
@@ -189,6 +179,42 @@ pub(crate) fn forced_response_one_pair(
         ));
     }
     let width = range.1 - range.0;
+    let nodes = ForcedCoefficients::nodes(
+        range.0 - 0.1 * width,
+        range.1 + 0.1 * width,
+        NONAUTONOMOUS_NODES,
+    );
+    let weights: Vec<&[(usize, f64)]> = outputs.iter().map(|o| o.weights.as_slice()).collect();
+    // the output table's series over the non-autonomous nodes' band, which
+    // the table's multi-index 0 then reuses
+    let band = nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &w| {
+            (lo.min(w), hi.max(w))
+        });
+    // the amplitude scan and the output table read different things: side
+    // by side (the table's series runs on one core)
+    let (scan, table_error) = rayon::join(
+        || {
+            sec.rho_max
+                .is_none()
+                .then(|| default_rho_max(ssm, sys, &masters[0], &pol, &orders, eps_max * s, range))
+        },
+        || forced.tabulate_outputs_within(range.0, range.1, band, &weights),
+    );
+    let rho_max = match (sec.rho_max, scan) {
+        (Some(r), _) => r,
+        (None, scan) => {
+            let (rho_max, cut) = scan.expect("scanned without [forcing] rho_max");
+            cut_short = cut.is_some();
+            warnings.extend(cut);
+            rho_max
+        }
+    };
+    let table_error = table_error?;
+    if let Some(w) = table_warning(table_error, range) {
+        warnings.push(w);
+    }
     let mut ctx = Context {
         ssm,
         sys,
@@ -201,30 +227,11 @@ pub(crate) fn forced_response_one_pair(
         points,
         range,
         series,
-        nodes: ForcedCoefficients::nodes(
-            range.0 - 0.1 * width,
-            range.1 + 0.1 * width,
-            NONAUTONOMOUS_NODES,
-        ),
+        nodes,
         tables: HashMap::new(),
     };
     let mut rows = Vec::new();
     let mut curves = Vec::new();
-    let weights: Vec<&[(usize, f64)]> = outputs.iter().map(|o| o.weights.as_slice()).collect();
-    // its series over the non-autonomous nodes' band, which the table's
-    // multi-index 0 then reuses
-    let band = ctx
-        .nodes
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &w| {
-            (lo.min(w), hi.max(w))
-        });
-    let table_error = ctx
-        .forced
-        .tabulate_outputs_within(range.0, range.1, band, &weights)?;
-    if let Some(w) = table_warning(table_error, range) {
-        warnings.push(w);
-    }
     for (&order, &eps) in orders
         .iter()
         .flat_map(|o| eps_list.iter().map(move |e| (o, e)))

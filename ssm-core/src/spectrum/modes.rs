@@ -62,6 +62,32 @@ pub fn spmv(m: SparseColMatRef<'_, usize, f64>, x: &[C64]) -> Vec<C64> {
     y
 }
 
+/// [`spmv`] of each of `xs` with one pass over `M` for all of them (the
+/// vectors side by side, so that each entry is read once): the same bits as
+/// a call per vector.
+pub fn spmv_many(m: SparseColMatRef<'_, usize, f64>, xs: &[&[C64]]) -> Vec<Vec<C64>> {
+    let k = xs.len();
+    let zero = C64::new(0.0, 0.0);
+    let mut x = vec![zero; m.ncols() * k];
+    for (p, xp) in xs.iter().enumerate() {
+        for (j, v) in xp.iter().enumerate() {
+            x[j * k + p] = *v;
+        }
+    }
+    let mut y = vec![zero; m.nrows() * k];
+    for j in 0..m.ncols() {
+        let xj = &x[j * k..(j + 1) * k];
+        for (i, v) in m.row_idx_of_col(j).zip(m.val_of_col(j)) {
+            for (yy, xx) in y[i * k..(i + 1) * k].iter_mut().zip(xj) {
+                *yy += xx * v;
+            }
+        }
+    }
+    (0..k)
+        .map(|p| (0..m.nrows()).map(|i| y[i * k + p]).collect())
+        .collect()
+}
+
 /// `y = M^T x` for real sparse `M`, complex `x`.
 pub fn spmv_t(m: SparseColMatRef<'_, usize, f64>, x: &[C64]) -> Vec<C64> {
     (0..m.ncols())

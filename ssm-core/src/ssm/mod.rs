@@ -48,7 +48,7 @@ use std::time::Instant;
 use ssm_api::{PolyVector, TimeKind};
 
 use crate::model::system::System;
-use crate::spectrum::modes::spmv;
+use crate::spectrum::modes::{spmv, spmv_many};
 use crate::spectrum::MasterMode;
 use crate::C64;
 pub use homological::{
@@ -633,16 +633,17 @@ pub(crate) fn finish_residuals(
 ) -> Vec<Vec<C64>> {
     let zero = C64::new(0.0, 0.0);
     let zs: Vec<&[C64]> = parts.iter().map(|(_, z)| z.as_slice()).collect();
+    let lhs: Vec<&[C64]> = parts.iter().map(|(l, _)| l.as_slice()).collect();
     let mut fz: Vec<Vec<C64>> = parts.iter().map(|(_, z)| vec![zero; z.len()]).collect();
     eval_poly_many(&sys.nonlinearity, &zs, &mut fz);
-    parts
-        .iter()
+    let bl = spmv_many(sys.b.as_ref(), &lhs);
+    let az = spmv_many(sys.a.as_ref(), &zs);
+    bl.into_iter()
+        .zip(az)
         .zip(fz)
         .enumerate()
-        .map(|(k, ((lhs, z), mut f))| {
+        .map(|(k, ((mut res, az), mut f))| {
             extra(k, &mut f);
-            let mut res = spmv(sys.b.as_ref(), lhs);
-            let az = spmv(sys.a.as_ref(), z);
             for i in 0..res.len() {
                 res[i] -= az[i] + f[i];
             }
