@@ -30,7 +30,10 @@ pub fn run(
     let started = Instant::now();
     // what the scene asks, first: a mistake in an analysis's table is
     // reported before any model is built
-    plan::of_scene(scene)?;
+    let asked = plan::of_scene(scene)?;
+    // ... and an order that fits no model, before one is built
+    plan::budget::check_before_model(&asked, &Limits::of_machine())
+        .map_err(|e| JobError::Scene(e.in_scene(scene)))?;
     progress.stage("building model");
     let model = scene_model(scene, registry)?;
     let limits = Limits::of_machine();

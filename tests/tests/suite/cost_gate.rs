@@ -86,6 +86,31 @@ fn an_explicit_order_beyond_the_address_space_is_refused() {
     );
 }
 
+/// The chain of Fig. 13 scaled to 41,000 pendulums (409,995 states) with
+/// `order = 13000000000000` (a fuzz case): the order cannot fit even the
+/// smallest model of one master pair (2 states: 8e25 multi-indices), so it
+/// is refused before the model is built, where it had the chain assembled
+/// and its spectrum computed (12.7 s on the CI machine) before the same
+/// refusal. The message names the lower bound it used (the zoo scene itself,
+/// at order 13, runs in `scenes`).
+#[test]
+fn an_order_that_fits_no_model_is_refused_before_the_model_is_built() {
+    let scene = zoo_scene(
+        "pendulum_chain_fig13.toml",
+        None,
+        "order = 13",
+        "order = 13000000000000",
+    )
+    .replacen("n = 41", "n = 41000", 1);
+    let (line, message) = scene_error(&scene);
+    assert_eq!(line, 21, "{message}");
+    assert!(
+        message.starts_with("ssm.order: ")
+            && message.contains("even of the smallest model (2 states)"),
+        "{message}"
+    );
+}
+
 /// Three master pairs with `n_alpha = n_theta = 40`: `40^2 40^3` = 1.0e8
 /// points of 160 bytes, 16.4 GB, accepted against `MemAvailable` and
 /// aborted under an 8 GB address-space limit.

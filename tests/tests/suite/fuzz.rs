@@ -34,10 +34,12 @@ const SEED: u64 = 20_261_123;
 const CASES: u32 = 256;
 /// Milliseconds a single case may take (forked) before it counts as a hang:
 /// twice the slowest legitimate case. That is a chain scaled to 41,000
-/// pendulums (409,995 states), built and its spectrum computed before its
-/// scaled order is refused: 12.7 s alone on the 2-core CI machine, two
-/// thirds of it the kernel zeroing fresh pages, and 15.2 s beside the
-/// suite's other tests.
+/// pendulums (409,995 states), built and its spectrum computed before an
+/// order it cannot afford is refused: 12.7 s alone on the 2-core CI
+/// machine, two thirds of it the kernel zeroing fresh pages, and 15.2 s
+/// beside the suite's other tests (where the order could fit no model, it is
+/// now refused before the build:
+/// `cost_gate::an_order_that_fits_no_model_is_refused_before_the_model_is_built`).
 const CASE_TIMEOUT_MS: u32 = 30_000;
 /// The work budget of one run in minutes (the engine refuses larger requests).
 pub(crate) const WORK_MINUTES: &str = "0.05";

@@ -413,6 +413,40 @@ fn order_cost(plan: &Plan, sizes: &Sizes, pairs: usize, order: usize) -> Cost {
     ssm
 }
 
+/// The scene's explicit SSM order against `limits` before the model is
+/// built: its cost on the smallest model the master pairs allow (their own
+/// `2 pairs` states, no nonlinearity) is a lower bound on its cost on any,
+/// so an order that cannot fit even there is refused without building a
+/// model or computing its spectrum (an order of `1e13` typed for 13).
+///
+/// # Errors
+/// The order does not fit, naming `ssm.order`.
+pub fn check_before_model(plan: &Plan, limits: &Limits) -> Result<(), PlanError> {
+    let Some(order) = plan.ssm.order else {
+        return Ok(());
+    };
+    let pairs = plan.ssm.master_pairs.len().max(1);
+    let states = 2.0 * pairs as f64;
+    let smallest = Sizes {
+        states,
+        nnz: states,
+        factors: 0.0,
+        lu_bytes: 0.0,
+        spectrum_lu_bytes: 0.0,
+        mass_lu_bytes: 0.0,
+    };
+    let cost = order_cost(plan, &smallest, pairs, order);
+    ensure(
+        "ssm.order",
+        format!(
+            "an SSM of order {order} with {pairs} master pair(s), even of the smallest model ({states} states),"
+        ),
+        &cost,
+        limits,
+        "lower the order",
+    )
+}
+
 /// The SSM order against the limits, with `pairs` master pairs.
 fn check_order(
     plan: &Plan,
