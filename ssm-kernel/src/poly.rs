@@ -355,58 +355,68 @@ pub struct Composition {
     terms: Vec<(usize, f64, usize)>,
 }
 
+/// The trie of the monomials of `f` (a node per distinct prefix of a
+/// monomial's sorted factors, powers repeated, and a root per variable, the
+/// factor its children multiply by) and the `(eq, coeff, node)` of each
+/// term.
+#[allow(clippy::type_complexity)]
+fn trie(f: &PolyVector) -> (Vec<Node>, Vec<(usize, f64, usize)>) {
+    let mut nodes: Vec<Node> = Vec::new();
+    // the root of each variable, and each node's children (few: the
+    // variables that follow it in some monomial), found without hashing
+    let mut roots = vec![usize::MAX; f.n_vars as usize];
+    let mut children: Vec<Vec<(usize, usize)>> = Vec::new();
+    let mut terms = Vec::with_capacity(f.terms.len());
+    let mut vars: Vec<usize> = Vec::new();
+    for t in f.terms.iter() {
+        vars.clear();
+        for vp in t.factors.iter() {
+            vars.extend(std::iter::repeat_n(vp.var as usize, vp.power as usize));
+        }
+        vars.sort_unstable();
+        let mut node: Option<usize> = None;
+        for &v in &vars {
+            if roots[v] == usize::MAX {
+                roots[v] = nodes.len();
+                nodes.push(Node {
+                    parent: None,
+                    var: v,
+                    leaf: nodes.len(),
+                });
+                children.push(Vec::new());
+            }
+            let leaf = roots[v];
+            let next = match node {
+                None => leaf,
+                Some(parent) => match children[parent].iter().find(|c| c.0 == v) {
+                    Some(&(_, c)) => c,
+                    None => {
+                        let id = nodes.len();
+                        nodes.push(Node {
+                            parent: Some(parent),
+                            var: v,
+                            leaf,
+                        });
+                        children.push(Vec::new());
+                        children[parent].push((v, id));
+                        id
+                    }
+                },
+            };
+            node = Some(next);
+        }
+        if let Some(node) = node {
+            terms.push((t.eq as usize, t.coeff, node));
+        }
+    }
+    (nodes, terms)
+}
+
 impl Composition {
     /// Builds the trie of the monomials of `f`, with series storage for
     /// `n_index` multi-indices.
     pub fn new(f: &PolyVector, n_index: usize) -> Self {
-        let mut nodes: Vec<Node> = Vec::new();
-        // the root of each variable, and each node's children (few: the
-        // variables that follow it in some monomial), found without hashing
-        let mut roots = vec![usize::MAX; f.n_vars as usize];
-        let mut children: Vec<Vec<(usize, usize)>> = Vec::new();
-        let mut terms = Vec::with_capacity(f.terms.len());
-        let mut vars: Vec<usize> = Vec::new();
-        for t in f.terms.iter() {
-            vars.clear();
-            for vp in t.factors.iter() {
-                vars.extend(std::iter::repeat_n(vp.var as usize, vp.power as usize));
-            }
-            vars.sort_unstable();
-            let mut node: Option<usize> = None;
-            for &v in &vars {
-                if roots[v] == usize::MAX {
-                    roots[v] = nodes.len();
-                    nodes.push(Node {
-                        parent: None,
-                        var: v,
-                        leaf: nodes.len(),
-                    });
-                    children.push(Vec::new());
-                }
-                let leaf = roots[v];
-                let next = match node {
-                    None => leaf,
-                    Some(parent) => match children[parent].iter().find(|c| c.0 == v) {
-                        Some(&(_, c)) => c,
-                        None => {
-                            let id = nodes.len();
-                            nodes.push(Node {
-                                parent: Some(parent),
-                                var: v,
-                                leaf,
-                            });
-                            children.push(Vec::new());
-                            children[parent].push((v, id));
-                            id
-                        }
-                    },
-                };
-                node = Some(next);
-            }
-            if let Some(node) = node {
-                terms.push((t.eq as usize, t.coeff, node));
-            }
-        }
+        let (nodes, terms) = trie(f);
         let leaves = nodes
             .iter()
             .enumerate()
@@ -420,6 +430,13 @@ impl Composition {
             leaves,
             terms,
         }
+    }
+
+    /// The trie nodes [`Composition::new`] makes for `f` (each holds one
+    /// series of the multi-indices), without their series: what a cost
+    /// gate reads before the composition is allocated.
+    pub fn nodes_of(f: &PolyVector) -> usize {
+        trie(f).0.len()
     }
 
     /// Number of distinct monomials (trie nodes).
@@ -549,6 +566,55 @@ pub fn eval_poly_many(f: &PolyVector, zs: &[&[C64]], outs: &mut [Vec<C64>]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_composition_has_a_node_per_prefix_of_a_sorted_monomial_and_per_variable() {
+        use ssm_api::{PolyTerm, VarPower};
+        use std::collections::BTreeSet;
+        let monomials: [&[(u32, u32)]; 6] = [
+            &[(1, 1), (0, 2)],
+            &[(0, 1), (1, 1)],
+            &[(0, 3)],
+            &[(2, 1), (1, 1)],
+            &[(0, 1), (1, 1)],
+            &[(3, 2)],
+        ];
+        let f = PolyVector {
+            n_eq: 2,
+            n_vars: 4,
+            terms: monomials
+                .iter()
+                .enumerate()
+                .map(|(k, m)| PolyTerm {
+                    eq: (k % 2) as u32,
+                    coeff: 1.0 + k as f64,
+                    factors: m
+                        .iter()
+                        .map(|&(var, power)| VarPower { var, power })
+                        .collect::<Vec<_>>()
+                        .into(),
+                })
+                .collect::<Vec<_>>()
+                .into(),
+        };
+        // every prefix of each monomial's variables, sorted with repeats,
+        // and every variable alone (the factor a node multiplies by)
+        let mut prefixes = BTreeSet::new();
+        for m in monomials {
+            let mut vars: Vec<u32> = m
+                .iter()
+                .flat_map(|&(v, p)| std::iter::repeat_n(v, p as usize))
+                .collect();
+            vars.sort_unstable();
+            for k in 1..=vars.len() {
+                prefixes.insert(vars[..k].to_vec());
+            }
+            prefixes.extend(vars.iter().map(|&v| vec![v]));
+        }
+        assert_eq!(prefixes.len(), 10);
+        assert_eq!(Composition::nodes_of(&f), prefixes.len());
+        assert_eq!(Composition::new(&f, 3).n_nodes(), prefixes.len());
+    }
 
     #[test]
     fn many_points_at_once_give_the_bits_of_one_at_a_time() {

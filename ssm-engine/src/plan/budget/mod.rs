@@ -161,8 +161,12 @@ struct Sizes {
     states: f64,
     /// Entries of `A` and `B`.
     nnz: f64,
-    /// Factors of all monomials of `F` (a bound on the composition's nodes).
+    /// Factors of all monomials of `F` (what composing `F` with `W` costs).
     factors: f64,
+    /// Nodes of the composition's trie (`Composition::nodes_of`), each one
+    /// series of the multi-indices; `factors` (a bound) until
+    /// [`Sizes::with_factors`] counts them.
+    nodes: f64,
     /// Heap of one sparse LU of the pencil and of the mass matrix's LU held
     /// with them ([`lu_bytes_estimate`]; 0 until [`Sizes::with_factors`]
     /// computes it).
@@ -184,6 +188,7 @@ impl Sizes {
             states: system.n_states() as f64,
             nnz: (system.a.compute_nnz() + system.b.compute_nnz()) as f64,
             factors: factors as f64,
+            nodes: factors as f64,
             lu_bytes: 0.0,
             spectrum_lu_bytes: 0.0,
             mass_lu_bytes: 0.0,
@@ -191,10 +196,12 @@ impl Sizes {
     }
 
     /// [`Sizes::of`] with the estimate of one sparse LU's heap (a symbolic
-    /// Cholesky analysis of the pattern).
+    /// Cholesky analysis of the pattern) and the composition's nodes counted
+    /// (its trie built without its series).
     fn with_factors(system: &System) -> Self {
         let lu = lu_bytes_estimate(system.a.as_ref(), system.b.as_ref(), system.velocities());
         Self {
+            nodes: ssm_kernel::poly::Composition::nodes_of(&system.nonlinearity) as f64,
             lu_bytes: lu.map_or(0.0, |f| f.each),
             spectrum_lu_bytes: lu.map_or(0.0, |f| f.lu),
             mass_lu_bytes: lu.map_or(0.0, |f| f.shared),
@@ -431,6 +438,7 @@ pub fn check_before_model(plan: &Plan, limits: &Limits) -> Result<(), PlanError>
         states,
         nnz: states,
         factors: 0.0,
+        nodes: 0.0,
         lu_bytes: 0.0,
         spectrum_lu_bytes: 0.0,
         mass_lu_bytes: 0.0,
@@ -495,11 +503,15 @@ fn ssm_cost(sizes: &Sizes, pairs: usize, order: usize, forced: bool) -> Cost {
     let held = (binomial(nvar - 1, order) / 2.0).ceil().max(1.0);
     let once = Cost {
         ops: 4.0 * sizes.factors * products + 0.5 * n_idx * sizes.sparse_solve(),
-        // the series product table holds one 8-byte entry per product (the
-        // split pairs of every multi-index, allocated exactly); the index
-        // set some 100 + 8 nvar bytes per multi-index (exponents, hash
-        // lookup, conjugates, lower neighbours)
-        bytes: 16.0 * n_idx * (2.0 * sizes.states + sizes.factors + nvar as f64)
+        // the composition one series of the multi-indices per trie node
+        // (with 48 bytes of node and vector header) and 24 bytes per term
+        // (at most one per factor); the series product table one 8-byte
+        // entry per product (the split pairs of every multi-index, allocated
+        // exactly); the index set some 100 + 8 nvar bytes per multi-index
+        // (exponents, hash lookup, conjugates, lower neighbours)
+        bytes: 16.0 * n_idx * (2.0 * sizes.states + sizes.nodes + nvar as f64)
+            + 48.0 * sizes.nodes
+            + 24.0 * sizes.factors
             + n_idx * (100.0 + 8.0 * nvar as f64)
             + 8.0 * products,
     };
