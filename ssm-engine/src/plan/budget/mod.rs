@@ -429,7 +429,9 @@ fn order_cost(plan: &Plan, sizes: &Sizes, pairs: usize, order: usize) -> Cost {
 /// # Errors
 /// The order does not fit, naming `ssm.order`.
 pub fn check_before_model(plan: &Plan, limits: &Limits) -> Result<(), PlanError> {
-    let Some(order) = plan.ssm.order else {
+    // where the dense kernels' buffers do not fit, nothing does: the first
+    // gate of the model's own computations says so at its key
+    let Some(order) = plan.ssm.order.filter(|_| workspace_note(limits).is_none()) else {
         return Ok(());
     };
     let pairs = plan.ssm.master_pairs.len().max(1);
